@@ -1,0 +1,39 @@
+/* Accumulation buffer: per-pixel double RGB sums and sample counts (28 bytes a pixel). */
+#ifndef AO_ACCUM_H
+#define AO_ACCUM_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "vec3.h"
+
+/* Running sums; owned by the render thread, workers write disjoint pixels. */
+struct ao_accum {
+    int width, height;
+    double *sum;        /* 3 per pixel */
+    uint32_t *count;    /* samples per pixel */
+};
+
+/* Allocates zeroed sums for width x height; false (with a message) when out of memory. */
+bool ao_accum_init(struct ao_accum *a, int width, int height);
+
+/* Frees the sums; accepts a zeroed accumulator. */
+void ao_accum_finish(struct ao_accum *a);
+
+/* Zeroes every sum and count (a restart). */
+void ao_accum_reset(struct ao_accum *a);
+
+/* Adds the sum of n samples to pixel p. */
+static inline void ao_accum_add(struct ao_accum *a, size_t p, struct ao_vec3 sum, uint32_t n)
+{
+    a->sum[3 * p + 0] += sum.x;
+    a->sum[3 * p + 1] += sum.y;
+    a->sum[3 * p + 2] += sum.z;
+    a->count[p] += n;
+}
+
+/* Writes the running average as 3 floats per pixel, top row first (0 where no sample yet). */
+void ao_accum_resolve(const struct ao_accum *a, float *rgb);
+
+#endif

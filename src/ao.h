@@ -1,0 +1,51 @@
+/* The ambient-occlusion estimator: eye ray, hit, shading normal, occlusion rays, one value. */
+#ifndef AO_AO_H
+#define AO_AO_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "camera.h"
+#include "sampling.h"
+#include "scene.h"
+#include "tracer.h"
+#include "vec3.h"
+
+/* Everything one pass's pixel samples share; read-only while a pass runs. */
+struct ao_context {
+    const struct ao_scene *scene;
+    const struct ao_tracer *tracer;
+    struct ao_view view;
+    enum ao_sampling sampling;
+    bool aa;                 /* jitter eye rays inside the pixel */
+    float ao_distance;       /* occlusion rays longer than this do not occlude */
+    uint64_t seed;
+};
+
+/* A shading point: unit normals turned to face the eye ray, and the ray-origin offset. */
+struct ao_surface {
+    struct ao_vec3 position, ng, ns, albedo;
+    float offset;            /* distance along ng that clears the position's rounding error */
+};
+
+/* The offset that lifts occlusion rays off a surface at `position` reached by a ray of length t
+ * from `origin`: a few ulps of the largest magnitude involved, so it holds at any scene scale. */
+float ao_surface_offset(struct ao_vec3 origin, float t, struct ao_vec3 position);
+
+/* Shades the eye ray org + t dir's hit into *s (exact sphere normal, Phong-interpolated mesh
+ * normal); false when the hit has no usable normal. */
+bool ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,
+                         const struct ao_hit *hit, struct ao_surface *s);
+
+/* Sum over `count` AO samples (numbered first_sample, ...) at s of albedo * V * weight, whose
+ * mean estimates AO; `pixel` keys the random streams. Any thread. */
+struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao_surface *s,
+                                   uint64_t pixel, uint64_t first_sample, int count);
+
+/* One pass at pixel (i, j): one eye ray (jittered with AA) and `count` AO samples; returns the sum
+ * of their values (background on a miss) and adds the rays traced to *eye_rays / *shadow_rays. */
+struct ao_vec3 ao_estimate_pixel(const struct ao_context *ctx, int i, int j, uint64_t pass,
+                                 uint64_t first_sample, int count, uint64_t *eye_rays,
+                                 uint64_t *shadow_rays);
+
+#endif

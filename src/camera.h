@@ -1,0 +1,41 @@
+/* Pinhole camera (SPEC.md's convention) and the orbit / pan / zoom moves of the viewer. */
+#ifndef AO_CAMERA_H
+#define AO_CAMERA_H
+
+#include <stdbool.h>
+
+#include "vec3.h"
+
+/* A pinhole camera as the scene file states it; fov is vertical, in degrees. */
+struct ao_camera {
+    struct ao_vec3 eye, target, up;
+    float fov;
+};
+
+/* A camera prepared for one image size: everything an eye ray needs. */
+struct ao_view {
+    struct ao_vec3 eye, forward, right, up;
+    float tan_half_fov, aspect;
+    int width, height;
+};
+
+/* Precomputes the view of camera c for a width x height image; false when the camera is
+ * degenerate (eye on target, up parallel to the view direction, fov outside (0, 180)). */
+bool ao_camera_view(const struct ao_camera *c, int width, int height, struct ao_view *v);
+
+/* Unit eye-ray direction through image position (x, y) = (i + u, j + v), in pixels. */
+struct ao_vec3 ao_camera_ray(const struct ao_view *v, float x, float y);
+
+/* Orbits the eye about the target by yaw and pitch radians, keeping it off the poles. */
+void ao_camera_orbit(struct ao_camera *c, float yaw, float pitch);
+
+/* Moves eye and target sideways and up by fractions of the view's height at the target. */
+void ao_camera_pan(struct ao_camera *c, float dx, float dy);
+
+/* Moves the eye towards the target by factor (< 1 zooms in), never onto it. */
+void ao_camera_zoom(struct ao_camera *c, float factor);
+
+/* Points the camera at a bounding box from the front, slightly above, so that it fills the view. */
+void ao_camera_frame_box(struct ao_camera *c, struct ao_vec3 lo, struct ao_vec3 hi);
+
+#endif

@@ -1,0 +1,39 @@
+/* Command line: argv to an options struct, or one message naming the option at fault. No I/O. */
+#ifndef AO_CLI_H
+#define AO_CLI_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "sampling.h"
+
+/* Everything SPEC.md's command line can say; strings point into argv. */
+struct ao_options {
+    const char *scene_path;   /* NULL: the built-in default scene */
+    bool headless;
+    const char *output;       /* NULL: aoview.png when headless */
+    uint32_t spp;             /* default 256 */
+    uint32_t spppp;           /* default 1 */
+    enum ao_sampling sampling;/* default cosine */
+    bool aa;                  /* default on */
+    int width, height;        /* 0: the scene's image size, else 640x480 */
+    int threads;              /* 0: number of cores */
+    uint64_t seed;            /* default 1 */
+    float ao_distance;        /* NAN: the scene's, else infinite */
+    const char *stats_path;
+    const char *reference_path;
+    bool quiet, help, version;
+};
+
+/* Largest accepted image side, and largest pixel count (so buffers stay far from size_t limits). */
+enum { AO_CLI_MAX_SIDE = 16384, AO_CLI_MAX_PIXELS = 16384 * 16384 / 4 };
+
+/* Parses argv into *opts (defaults first). On a usage error writes one line such as
+ * "--spp: expected a whole number from 1 to ..., got '0'" into msg and returns false. */
+bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, size_t msg_size);
+
+/* The --help text. */
+const char *ao_cli_usage(void);
+
+#endif

@@ -1,0 +1,31 @@
+/* Image files: PNG (8-bit sRGB) and PFM (linear float RGB) writing, reading for tests and
+ * references, and the sRGB transfer curve shared with the display shader. */
+#ifndef AO_IMAGE_H
+#define AO_IMAGE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+/* The sRGB encoding of one linear value, clamped to [0, 1]. */
+float ao_image_srgb_encode(float linear);
+
+/* Encodes count linear floats to 8-bit sRGB, rounding to nearest (the display shader's curve). */
+void ao_image_encode_srgb8(const float *linear, size_t count, uint8_t *out);
+
+/* Writes an RGB8 PNG, rows top to bottom, via a temporary file renamed into place; on failure
+ * prints one line naming path and returns false. */
+bool ao_image_write_png(const char *path, const uint8_t *rgb, int width, int height);
+
+/* Writes a little-endian PFM (rows stored bottom to top as the format says) from rows given top to
+ * bottom, via a temporary file renamed into place; on failure prints one line and returns false. */
+bool ao_image_write_pfm(const char *path, const float *rgb, int width, int height);
+
+/* Reads a colour PFM (either endianness) into a malloc'd top-to-bottom RGB float buffer the
+ * caller frees; on failure prints one line naming path and returns false. */
+bool ao_image_read_pfm(const char *path, float **rgb, int *width, int *height);
+
+/* Reads a PNG into a malloc'd top-to-bottom RGB8 buffer the caller frees; false on failure. */
+bool ao_image_read_png(const char *path, uint8_t **rgb, int *width, int *height);
+
+#endif

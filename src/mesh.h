@@ -1,0 +1,32 @@
+/* Triangle meshes from OBJ and PLY files: indexed triangles with one normal per vertex. */
+#ifndef AO_MESH_H
+#define AO_MESH_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "vec3.h"
+
+/* An indexed triangle mesh; the caller owns it (ao_mesh_load fills it, ao_mesh_finish frees it). */
+struct ao_mesh {
+    struct ao_vec3 *positions;  /* vertex_count positions */
+    struct ao_vec3 *normals;    /* vertex_count unit normals (zero where none can be defined) */
+    size_t vertex_count;
+    uint32_t *indices;          /* 3 * triangle_count vertex indices */
+    size_t triangle_count;
+    size_t degenerate_count;    /* zero-area triangles skipped while loading */
+};
+
+/* Loads an .obj or .ply file (chosen by extension) into mesh; computes vertex normals when the
+ * file has none. On failure prints one "path:line: message" line to stderr, leaves mesh empty
+ * and returns false. Any thread. */
+bool ao_mesh_load(struct ao_mesh *mesh, const char *path);
+
+/* Recomputes mesh->normals from the triangles (angle-weighted face normals). */
+bool ao_mesh_compute_normals(struct ao_mesh *mesh);
+
+/* Frees what ao_mesh_load allocated and zeroes mesh; accepts an empty mesh. */
+void ao_mesh_finish(struct ao_mesh *mesh);
+
+#endif

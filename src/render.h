@@ -1,0 +1,90 @@
+/* The render thread: progressive AO passes over tiles on worker threads into an accumulation
+ * buffer it alone owns, each finished pass published as a frame through a lock-free triple buffer. */
+#ifndef AO_RENDER_H
+#define AO_RENDER_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "camera.h"
+#include "sampling.h"
+#include "scene.h"
+#include "tracer.h"
+
+/* What the user can change while rendering. */
+struct ao_settings {
+    enum ao_sampling sampling;
+    bool aa;
+    int spppp;               /* AO samples per pixel per pass */
+    bool paused;
+    struct ao_camera camera;
+};
+
+/* Facts about one published frame (one finished pass). */
+struct ao_frame_info {
+    uint64_t restarts;       /* how many times accumulation restarted before this frame */
+    uint32_t pass;           /* passes since the last restart, this one included */
+    uint32_t spp;            /* AO samples per pixel since the last restart */
+    uint32_t target_spp;
+    double seconds;          /* wall time since the last restart */
+    uint64_t eye_rays, shadow_rays;
+    double rmse;             /* against the reference; NAN without one */
+    enum ao_sampling sampling;
+    bool aa;
+    bool done;               /* spp reached target_spp */
+};
+
+/* A published frame: the running average, 3 linear floats per pixel, top row first. */
+struct ao_frame {
+    struct ao_frame_info info;
+    int width, height;
+    float *rgb;
+};
+
+/* How to render; scene, tracer and reference must outlive the renderer. */
+struct ao_render_config {
+    const struct ao_scene *scene;
+    const struct ao_tracer *tracer;
+    int width, height;
+    int threads;
+    uint64_t seed;
+    uint32_t target_spp;
+    float ao_distance;
+    const float *reference;  /* width*height*3 linear floats, or NULL */
+    /* Called on the render thread after each published pass (stats rows, waking the GL thread). */
+    void (*on_pass)(const struct ao_frame_info *info, void *user);
+    void *user;
+};
+
+/* The renderer; opaque. */
+struct ao_render;
+
+/* Allocates buffers, starts the render thread and its workers with the initial settings; NULL with
+ * one message on stderr when memory or threads are short. Call from the main thread. */
+struct ao_render *ao_render_create(const struct ao_render_config *config,
+                                   const struct ao_settings *settings);
+
+/* Stops the pass in flight at the next tile, joins every thread, frees everything; accepts NULL. */
+void ao_render_destroy(struct ao_render *render);
+
+/* Copies the current settings into *out. Any thread. */
+void ao_render_get_settings(struct ao_render *render, struct ao_settings *out);
+
+/* Applies new settings: a change of sampling, AA or camera aborts the pass in flight and restarts
+ * accumulation; spppp and pause take effect at the next pass boundary. Any thread. */
+void ao_render_set_settings(struct ao_render *render, const struct ao_settings *settings);
+
+/* Restarts accumulation with the current settings, aborting the pass in flight. Any thread. */
+void ao_render_restart(struct ao_render *render);
+
+/* The newest frame published since the last call, or NULL when none is new; the frame stays valid
+ * until the next call. One consumer thread only (the GL thread, or main when headless). */
+const struct ao_frame *ao_render_take_frame(struct ao_render *render);
+
+/* Blocks until the target spp is reached (true) or ao_render_stop was called (false). */
+bool ao_render_wait(struct ao_render *render);
+
+/* Asks the render thread to stop at the next tile boundary and wakes ao_render_wait. Any thread. */
+void ao_render_stop(struct ao_render *render);
+
+#endif

@@ -1,0 +1,51 @@
+/* Scenes: the .scene file format of SPEC.md (or a bare mesh on a ground quad) turned into a camera,
+ * analytic spheres and one world-space triangle soup for every mesh and quad. */
+#ifndef AO_SCENE_H
+#define AO_SCENE_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "camera.h"
+#include "vec3.h"
+
+/* An analytic sphere with its diffuse albedo. */
+struct ao_sphere {
+    struct ao_vec3 center;
+    float radius;
+    struct ao_vec3 albedo;
+};
+
+/* A whole scene; the caller owns it (ao_scene_load fills it, ao_scene_finish frees it). */
+struct ao_scene {
+    char name[64];                /* file name without directory, for titles */
+    struct ao_camera camera;
+    int width, height;            /* the file's `image` size, 0 when not given */
+    struct ao_vec3 background;    /* value of eye rays that miss */
+    float ao_distance;            /* occlusion range; INFINITY when not given */
+    struct ao_sphere *spheres;
+    size_t sphere_count;
+    struct ao_vec3 *positions;    /* all triangles of all meshes and quads, world space */
+    struct ao_vec3 *normals;      /* per vertex, unit or zero */
+    size_t vertex_count;
+    uint32_t *indices;            /* 3 per triangle */
+    uint32_t *triangle_albedo;    /* per triangle, index into albedos */
+    size_t triangle_count;
+    struct ao_vec3 *albedos;
+    size_t albedo_count;
+    size_t degenerate_count;      /* zero-area triangles skipped by the mesh loaders */
+};
+
+/* Loads a .scene file, or an .obj/.ply mesh placed on a ground quad with a framing camera.
+ * On failure prints one "file:line: message" line to stderr, leaves scene empty, returns false. */
+bool ao_scene_load(struct ao_scene *scene, const char *path);
+
+/* Parses scene text as if read from path (relative mesh paths resolve against its directory);
+ * same reporting as ao_scene_load. */
+bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path);
+
+/* Frees everything the scene owns and zeroes it; accepts an empty scene. */
+void ao_scene_finish(struct ao_scene *scene);
+
+#endif

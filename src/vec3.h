@@ -1,0 +1,106 @@
+/* Inline 3-vector math and orthonormal bases; header only, used by every module. */
+#ifndef AO_VEC3_H
+#define AO_VEC3_H
+
+#include <math.h>
+
+/* A point, direction or RGB triple in single precision. */
+struct ao_vec3 {
+    float x, y, z;
+};
+
+/* An orthonormal basis whose third axis is a given unit normal. */
+struct ao_basis {
+    struct ao_vec3 t, b, n;
+};
+
+/* Builds a vector from its components. */
+static inline struct ao_vec3 ao_vec3_make(float x, float y, float z)
+{
+    struct ao_vec3 v = {x, y, z};
+    return v;
+}
+
+/* Component-wise a + b. */
+static inline struct ao_vec3 ao_vec3_add(struct ao_vec3 a, struct ao_vec3 b)
+{
+    return ao_vec3_make(a.x + b.x, a.y + b.y, a.z + b.z);
+}
+
+/* Component-wise a - b. */
+static inline struct ao_vec3 ao_vec3_sub(struct ao_vec3 a, struct ao_vec3 b)
+{
+    return ao_vec3_make(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+
+/* a scaled by s. */
+static inline struct ao_vec3 ao_vec3_scale(struct ao_vec3 a, float s)
+{
+    return ao_vec3_make(a.x * s, a.y * s, a.z * s);
+}
+
+/* Component-wise product a * b. */
+static inline struct ao_vec3 ao_vec3_mul(struct ao_vec3 a, struct ao_vec3 b)
+{
+    return ao_vec3_make(a.x * b.x, a.y * b.y, a.z * b.z);
+}
+
+/* Dot product. */
+static inline float ao_vec3_dot(struct ao_vec3 a, struct ao_vec3 b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+/* Cross product a x b. */
+static inline struct ao_vec3 ao_vec3_cross(struct ao_vec3 a, struct ao_vec3 b)
+{
+    return ao_vec3_make(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+
+/* Euclidean length. */
+static inline float ao_vec3_length(struct ao_vec3 a)
+{
+    return sqrtf(ao_vec3_dot(a, a));
+}
+
+/* a / |a|; the zero vector stays zero (callers that need a direction check the length). */
+static inline struct ao_vec3 ao_vec3_normalize(struct ao_vec3 a)
+{
+    float len2 = ao_vec3_dot(a, a);
+    return len2 > 0.0f ? ao_vec3_scale(a, 1.0f / sqrtf(len2)) : a;
+}
+
+/* Largest absolute component, the scale of a position's rounding error. */
+static inline float ao_vec3_max_abs(struct ao_vec3 a)
+{
+    return fmaxf(fabsf(a.x), fmaxf(fabsf(a.y), fabsf(a.z)));
+}
+
+/* True when every component is finite. */
+static inline int ao_vec3_is_finite(struct ao_vec3 a)
+{
+    return isfinite(a.x) && isfinite(a.y) && isfinite(a.z);
+}
+
+/* Orthonormal basis around unit n without a branch on the axis (Duff et al., JCGT 2017). */
+static inline struct ao_basis ao_basis_from_normal(struct ao_vec3 n)
+{
+    float sign = copysignf(1.0f, n.z);
+    float a = -1.0f / (sign + n.z);
+    float b = n.x * n.y * a;
+    struct ao_basis f;
+    f.t = ao_vec3_make(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+    f.b = ao_vec3_make(b, sign + n.y * n.y * a, -n.y);
+    f.n = n;
+    return f;
+}
+
+/* The world direction of local coordinates (x, y, z) in basis f. */
+static inline struct ao_vec3 ao_basis_to_world(const struct ao_basis *f, float x, float y, float z)
+{
+    return ao_vec3_make(f->t.x * x + f->b.x * y + f->n.x * z,
+                        f->t.y * x + f->b.y * y + f->n.y * z,
+                        f->t.z * x + f->b.z * y + f->n.z * z);
+}
+
+#endif
