@@ -1,0 +1,45 @@
+/* Accumulation buffer; see accum.h. */
+#include "accum.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+bool ao_accum_init(struct ao_accum *a, int width, int height)
+{
+    size_t pixels = (size_t)width * (size_t)height;
+    a->width = width;
+    a->height = height;
+    a->sum = calloc(3 * pixels, sizeof *a->sum);
+    a->count = calloc(pixels, sizeof *a->count);
+    if (!a->sum || !a->count) {
+        fprintf(stderr, "aoview: out of memory for a %dx%d accumulation buffer\n", width, height);
+        ao_accum_finish(a);
+        return false;
+    }
+    return true;
+}
+
+void ao_accum_finish(struct ao_accum *a)
+{
+    free(a->sum);
+    free(a->count);
+    memset(a, 0, sizeof *a);
+}
+
+void ao_accum_reset(struct ao_accum *a)
+{
+    size_t pixels = (size_t)a->width * (size_t)a->height;
+    memset(a->sum, 0, 3 * pixels * sizeof *a->sum);
+    memset(a->count, 0, pixels * sizeof *a->count);
+}
+
+void ao_accum_resolve(const struct ao_accum *a, float *rgb)
+{
+    size_t pixels = (size_t)a->width * (size_t)a->height;
+    for (size_t p = 0; p < pixels; p++) {
+        double inv = a->count[p] ? 1.0 / a->count[p] : 0.0;
+        for (int c = 0; c < 3; c++)
+            rgb[3 * p + c] = (float)(a->sum[3 * p + c] * inv);
+    }
+}

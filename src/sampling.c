@@ -1,0 +1,92 @@
+/* Direction samplers and their densities; see sampling.h. */
+#include "sampling.h"
+
+#include <string.h>
+
+static const float PI = 3.14159265358979323846f;
+
+static const char *const NAMES[] = {
+    [AO_SAMPLING_UNIFORM] = "uniform",
+    [AO_SAMPLING_HEMISPHERE] = "hemisphere",
+    [AO_SAMPLING_COSINE] = "cosine",
+};
+
+const char *ao_sampling_name(enum ao_sampling mode)
+{
+    return NAMES[mode];
+}
+
+bool ao_sampling_parse(const char *name, enum ao_sampling *mode)
+{
+    for (int m = 0; m < (int)(sizeof NAMES / sizeof NAMES[0]); m++) {
+        if (strcmp(name, NAMES[m]) == 0) {
+            *mode = (enum ao_sampling)m;
+            return true;
+        }
+    }
+    return false;
+}
+
+struct ao_vec3 ao_sample_uniform_sphere(float u1, float u2)
+{
+    float z = 2.0f * u1 - 1.0f;
+    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+    float phi = 2.0f * PI * u2;
+    return ao_vec3_make(r * cosf(phi), r * sinf(phi), z);
+}
+
+float ao_uniform_sphere_pdf(void)
+{
+    return 1.0f / (4.0f * PI);
+}
+
+struct ao_vec3 ao_sample_hemisphere(const struct ao_basis *f, float u1, float u2)
+{
+    /* cos(theta) uniform in (0, 1]: 1 - u1 keeps the direction off the horizon at u1 = 0. */
+    float z = 1.0f - u1;
+    float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
+    float phi = 2.0f * PI * u2;
+    return ao_basis_to_world(f, r * cosf(phi), r * sinf(phi), z);
+}
+
+float ao_hemisphere_pdf(struct ao_vec3 n, struct ao_vec3 w)
+{
+    return ao_vec3_dot(n, w) > 0.0f ? 1.0f / (2.0f * PI) : 0.0f;
+}
+
+struct ao_vec3 ao_sample_cosine(const struct ao_basis *f, float u1, float u2)
+{
+    /* normalize(n + s) for s = (r cos phi, r sin phi, z), z = 2 u1 - 1, in the basis of n:
+     * |n + s|^2 = r^2 + (1 + z)^2 = 2 (1 + z) = 4 u1, so the sum's components divided by 2 sqrt(u1)
+     * are (sqrt(1 - u1) cos phi, sqrt(1 - u1) sin phi, sqrt(u1)). Evaluated that way the
+     * construction cancels nothing: at s = -n (u1 = 0) it yields a unit horizon direction, the
+     * limit of its neighbours, instead of 0/0. The density is cos(theta)/pi (Malley's method). */
+    float z = sqrtf(u1);
+    float r = sqrtf(1.0f - u1);
+    float phi = 2.0f * PI * u2;
+    return ao_basis_to_world(f, r * cosf(phi), r * sinf(phi), z);
+}
+
+float ao_cosine_pdf(struct ao_vec3 n, struct ao_vec3 w)
+{
+    return fmaxf(0.0f, ao_vec3_dot(n, w)) / PI;
+}
+
+float ao_sample_direction(enum ao_sampling mode, const struct ao_basis *f, float u1, float u2,
+                          struct ao_vec3 *w)
+{
+    /* Weight max(0, n.w) / (pi p(w)) with each pdf substituted by hand, so that cosine sampling's
+     * weight is exactly 1 rather than a rounded cos/(pi cos/pi). */
+    switch (mode) {
+    case AO_SAMPLING_UNIFORM:
+        *w = ao_sample_uniform_sphere(u1, u2);
+        return 4.0f * fmaxf(0.0f, ao_vec3_dot(f->n, *w));
+    case AO_SAMPLING_HEMISPHERE:
+        *w = ao_sample_hemisphere(f, u1, u2);
+        return 2.0f * fmaxf(0.0f, ao_vec3_dot(f->n, *w));
+    case AO_SAMPLING_COSINE:
+        *w = ao_sample_cosine(f, u1, u2);
+        return 1.0f;
+    }
+    return 0.0f;
+}
