@@ -26,11 +26,8 @@ struct ao_options {
     bool quiet, help, version;
 };
 
-/* Largest accepted image side, and largest pixel count (so buffers stay far from size_t limits). */
-enum { AO_CLI_MAX_SIDE = 16384, AO_CLI_MAX_PIXELS = 16384 * 16384 / 4 };
-
-/* Parses argv into *opts (defaults first). On a usage error writes one line such as
- * "--spp: expected a whole number from 1 to ..., got '0'" into msg and returns false. */
+/* Parses argv into *opts (defaults first); --size obeys image.h's AO_IMAGE_MAX_SIDE/_PIXELS.
+ * On a usage error writes one line naming the option into msg and returns false. */
 bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, size_t msg_size);
 
 /* The --help text. */

@@ -7,6 +7,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
+/* Largest image side and pixel count accepted anywhere (so buffers stay far from size_t limits). */
+enum { AO_IMAGE_MAX_SIDE = 16384, AO_IMAGE_MAX_PIXELS = 16384 * 16384 / 4 };
+
 /* The sRGB encoding of one linear value, clamped to [0, 1]. */
 float ao_image_srgb_encode(float linear);
 
