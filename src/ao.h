@@ -32,15 +32,16 @@ struct ao_surface {
  * from `origin`: a few ulps of the largest magnitude involved, so it holds at any scene scale. */
 float ao_surface_offset(struct ao_vec3 origin, float t, struct ao_vec3 position);
 
-/* Shades the eye ray org + t dir's hit into *s (exact sphere normal, Phong-interpolated mesh
- * normal); false when the hit has no usable normal. */
-bool ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,
+/* Shades the eye ray org + t dir's hit into *s: exact sphere normal, Phong-interpolated mesh
+ * normal (the geometric one where the vertex normals cancel), both turned to the eye's side. */
+void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,
                          const struct ao_hit *hit, struct ao_surface *s);
 
 /* Sum over `count` AO samples (numbered first_sample, ...) at s of albedo * V * weight, whose
- * mean estimates AO; `pixel` keys the random streams. Any thread. */
+ * mean estimates AO; `pixel` keys the random streams; adds the rays traced to *shadow_rays. */
 struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao_surface *s,
-                                   uint64_t pixel, uint64_t first_sample, int count);
+                                   uint64_t pixel, uint64_t first_sample, int count,
+                                   uint64_t *shadow_rays);
 
 /* One pass at pixel (i, j): one eye ray (jittered with AA) and `count` AO samples; returns the sum
  * of their values (background on a miss) and adds the rays traced to *eye_rays / *shadow_rays. */

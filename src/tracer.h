@@ -27,6 +27,10 @@ struct ao_tracer *ao_tracer_create(const struct ao_scene *scene);
 /* Releases the Embree scene and device; accepts NULL. */
 void ao_tracer_destroy(struct ao_tracer *tracer);
 
+/* Sets the floating-point modes Embree wants (flush-to-zero, denormals-are-zero) on the calling
+ * thread; every thread that traces calls it once. */
+void ao_tracer_thread_init(void);
+
 /* Closest hit of the ray org + t dir, t in (0, inf); false on a miss. Any thread. */
 bool ao_tracer_intersect(const struct ao_tracer *tracer, struct ao_vec3 org, struct ao_vec3 dir,
                          struct ao_hit *hit);

@@ -1,0 +1,372 @@
+/* The render thread and its workers; see render.h and DESIGN.md's "Threads". */
+#include "render.h"
+
+#include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "accum.h"
+#include "ao.h"
+
+enum { TILE = 16, FRESH = 4 };
+
+struct ao_render {
+    struct ao_render_config config;
+    struct ao_accum accum;               /* render thread (and its workers, pixel-disjoint) only */
+
+    /* Triple buffer: the render thread owns frames[back], the consumer frames[front]; `middle`
+     * holds the third index, with FRESH set while it is newer than what the consumer has. */
+    struct ao_frame frames[3];
+    int back, front;
+    atomic_uint middle;
+
+    /* Settings and control, under `lock`. */
+    pthread_mutex_t lock;
+    pthread_cond_t wake;                 /* render thread: settings changed, resume, stop */
+    pthread_cond_t finished;             /* ao_render_wait: target reached or stopped */
+    struct ao_settings settings;
+    uint64_t restarts;
+    bool done, stop;
+    atomic_uint_fast64_t live_restarts;  /* copies of restarts and stop for the tile loop */
+    atomic_bool live_stop;
+
+    /* The pass in flight: written by the render thread before it starts the workers. */
+    pthread_mutex_t pass_lock;
+    pthread_cond_t pass_start, pass_end;
+    uint64_t pass_serial;                /* bumped to start a pass */
+    int busy;                            /* workers still in the pass */
+    bool quit;                           /* workers exit */
+    struct ao_context ctx;
+    uint64_t pass, first_sample, pass_restarts;
+    int samples, tiles_x, tile_count;
+    atomic_int next_tile;
+    atomic_uint_fast64_t eye_rays, shadow_rays;
+
+    pthread_t thread;
+    bool started;
+    pthread_t *workers;
+    int worker_count;
+};
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static bool aborted(struct ao_render *r)
+{
+    return atomic_load_explicit(&r->live_stop, memory_order_relaxed) ||
+           atomic_load_explicit(&r->live_restarts, memory_order_relaxed) != r->pass_restarts;
+}
+
+/* ---- tiles: run by the render thread and every worker ---- */
+
+static void render_tiles(struct ao_render *r)
+{
+    const struct ao_context *ctx = &r->ctx;
+    int width = ctx->view.width, height = ctx->view.height;
+    for (;;) {
+        int tile = atomic_fetch_add_explicit(&r->next_tile, 1, memory_order_relaxed);
+        if (tile >= r->tile_count || aborted(r))
+            return;
+        int x0 = (tile % r->tiles_x) * TILE, y0 = (tile / r->tiles_x) * TILE;
+        int x1 = x0 + TILE < width ? x0 + TILE : width, y1 = y0 + TILE < height ? y0 + TILE : height;
+        uint64_t eye = 0, shadow = 0;
+        for (int j = y0; j < y1; j++) {
+            for (int i = x0; i < x1; i++) {
+                struct ao_vec3 sum = ao_estimate_pixel(ctx, i, j, r->pass, r->first_sample, r->samples,
+                                                       &eye, &shadow);
+                ao_accum_add(&r->accum, (size_t)j * (size_t)width + (size_t)i, sum, (uint32_t)r->samples);
+            }
+        }
+        atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
+        atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
+    }
+}
+
+static void *worker_main(void *arg)
+{
+    struct ao_render *r = arg;
+    uint64_t seen = 0;
+    ao_tracer_thread_init();
+    pthread_mutex_lock(&r->pass_lock);
+    for (;;) {
+        while (r->pass_serial == seen && !r->quit)
+            pthread_cond_wait(&r->pass_start, &r->pass_lock);
+        if (r->quit)
+            break;
+        seen = r->pass_serial;
+        pthread_mutex_unlock(&r->pass_lock);
+        render_tiles(r);
+        pthread_mutex_lock(&r->pass_lock);
+        if (--r->busy == 0)
+            pthread_cond_signal(&r->pass_end);
+    }
+    pthread_mutex_unlock(&r->pass_lock);
+    return NULL;
+}
+
+/* Runs one pass on all threads; false when it was aborted by a restart or stop. */
+static bool run_pass(struct ao_render *r)
+{
+    pthread_mutex_lock(&r->pass_lock);
+    atomic_store(&r->next_tile, 0);
+    r->busy = r->worker_count;
+    r->pass_serial++;
+    pthread_cond_broadcast(&r->pass_start);
+    pthread_mutex_unlock(&r->pass_lock);
+    render_tiles(r);
+    pthread_mutex_lock(&r->pass_lock);
+    while (r->busy > 0)
+        pthread_cond_wait(&r->pass_end, &r->pass_lock);
+    pthread_mutex_unlock(&r->pass_lock);
+    return !aborted(r);
+}
+
+/* ---- publishing ---- */
+
+static double rmse(const float *image, const float *reference, size_t count)
+{
+    double sum = 0.0;
+    for (size_t k = 0; k < count; k++) {
+        double d = (double)image[k] - (double)reference[k];
+        sum += d * d;
+    }
+    return sqrt(sum / (double)count);
+}
+
+/* Resolves the running average into the back frame and swaps it into the middle slot. */
+static void publish(struct ao_render *r, const struct ao_frame_info *info)
+{
+    struct ao_frame *f = &r->frames[r->back];
+    size_t count = 3 * (size_t)f->width * (size_t)f->height;
+    ao_accum_resolve(&r->accum, f->rgb);
+    f->info = *info;
+    f->info.rmse = r->config.reference ? rmse(f->rgb, r->config.reference, count) : NAN;
+    unsigned previous = atomic_exchange(&r->middle, (unsigned)r->back | FRESH);
+    r->back = (int)(previous & ~(unsigned)FRESH);
+}
+
+const struct ao_frame *ao_render_take_frame(struct ao_render *render)
+{
+    if (!(atomic_load(&render->middle) & FRESH))
+        return NULL;
+    unsigned previous = atomic_exchange(&render->middle, (unsigned)render->front);
+    render->front = (int)(previous & ~(unsigned)FRESH);
+    return &render->frames[render->front];
+}
+
+/* ---- the render thread ---- */
+
+/* Waits until there is a pass to run; false on stop. Called with r->lock held. */
+static bool wait_for_work(struct ao_render *r, const struct ao_frame_info *info)
+{
+    while (!r->stop && (r->settings.paused || (info->restarts == r->restarts && r->done)))
+        pthread_cond_wait(&r->wake, &r->lock);
+    return !r->stop;
+}
+
+static void *render_main(void *arg)
+{
+    struct ao_render *r = arg;
+    struct ao_frame_info info = {.restarts = UINT64_MAX};
+    ao_tracer_thread_init();
+    pthread_mutex_lock(&r->lock);
+    while (wait_for_work(r, &info)) {
+        /* Take the settings; a restart clears the sums. */
+        struct ao_settings s = r->settings;
+        if (info.restarts != r->restarts) {
+            ao_accum_reset(&r->accum);
+            info = (struct ao_frame_info){.restarts = r->restarts, .target_spp = r->config.target_spp};
+            r->done = false;
+        }
+        pthread_mutex_unlock(&r->lock);
+
+        /* Run one pass. */
+        double start = now_seconds();
+        r->ctx.sampling = s.sampling;
+        r->ctx.aa = s.aa;
+        ao_camera_view(&s.camera, r->config.width, r->config.height, &r->ctx.view);
+        r->pass = info.pass;
+        r->first_sample = info.spp;
+        r->pass_restarts = info.restarts;
+        uint32_t left = info.target_spp - info.spp;
+        r->samples = (uint32_t)s.spppp < left ? s.spppp : (int)left;
+        atomic_store(&r->eye_rays, 0);
+        atomic_store(&r->shadow_rays, 0);
+        bool complete = run_pass(r);
+
+        /* Publish it. */
+        if (complete) {
+            info.pass++;
+            info.spp += (uint32_t)r->samples;
+            info.eye_rays += atomic_load(&r->eye_rays);
+            info.shadow_rays += atomic_load(&r->shadow_rays);
+            info.sampling = s.sampling;
+            info.aa = s.aa;
+            info.done = info.spp >= info.target_spp;
+            info.seconds += now_seconds() - start;
+            publish(r, &info);
+            if (r->config.on_pass)
+                r->config.on_pass(&info, r->config.user);
+        }
+        pthread_mutex_lock(&r->lock);
+        if (complete && info.done && info.restarts == r->restarts) {
+            r->done = true;
+            pthread_cond_broadcast(&r->finished);
+        }
+    }
+    pthread_mutex_unlock(&r->lock);
+    return NULL;
+}
+
+/* ---- life cycle and control ---- */
+
+static bool allocate(struct ao_render *r)
+{
+    size_t floats = 3 * (size_t)r->config.width * (size_t)r->config.height;
+    if (!ao_accum_init(&r->accum, r->config.width, r->config.height))
+        return false;
+    for (int k = 0; k < 3; k++) {
+        r->frames[k].width = r->config.width;
+        r->frames[k].height = r->config.height;
+        r->frames[k].rgb = calloc(floats, sizeof(float));
+        if (!r->frames[k].rgb) {
+            fprintf(stderr, "aoview: out of memory for %dx%d frames\n", r->config.width, r->config.height);
+            return false;
+        }
+    }
+    r->workers = calloc((size_t)r->config.threads, sizeof *r->workers);
+    if (!r->workers)
+        fprintf(stderr, "aoview: out of memory starting the renderer\n");
+    return r->workers != NULL;
+}
+
+struct ao_render *ao_render_create(const struct ao_render_config *config,
+                                   const struct ao_settings *settings)
+{
+    struct ao_render *r = calloc(1, sizeof *r);
+    if (!r) {
+        fprintf(stderr, "aoview: out of memory starting the renderer\n");
+        return NULL;
+    }
+    r->config = *config;
+    r->settings = *settings;
+    r->back = 0;
+    atomic_init(&r->middle, 1u);
+    r->front = 2;
+    r->ctx = (struct ao_context){.scene = config->scene, .tracer = config->tracer,
+                                 .ao_distance = config->ao_distance, .seed = config->seed};
+    r->tiles_x = (config->width + TILE - 1) / TILE;
+    r->tile_count = r->tiles_x * ((config->height + TILE - 1) / TILE);
+    pthread_mutex_init(&r->lock, NULL);
+    pthread_mutex_init(&r->pass_lock, NULL);
+    pthread_cond_init(&r->wake, NULL);
+    pthread_cond_init(&r->finished, NULL);
+    pthread_cond_init(&r->pass_start, NULL);
+    pthread_cond_init(&r->pass_end, NULL);
+    if (!allocate(r)) {
+        ao_render_destroy(r);
+        return NULL;
+    }
+    /* The render thread works tiles too, so threads - 1 workers join it. */
+    while (r->worker_count + 1 < config->threads &&
+           pthread_create(&r->workers[r->worker_count], NULL, worker_main, r) == 0)
+        r->worker_count++;
+    r->started = r->worker_count + 1 == config->threads &&
+                 pthread_create(&r->thread, NULL, render_main, r) == 0;
+    if (!r->started) {
+        fprintf(stderr, "aoview: could not start %d render threads\n", config->threads);
+        ao_render_destroy(r);
+        return NULL;
+    }
+    return r;
+}
+
+void ao_render_destroy(struct ao_render *render)
+{
+    if (!render)
+        return;
+    ao_render_stop(render);
+    if (render->started)
+        pthread_join(render->thread, NULL);
+    pthread_mutex_lock(&render->pass_lock);
+    render->quit = true;
+    pthread_cond_broadcast(&render->pass_start);
+    pthread_mutex_unlock(&render->pass_lock);
+    for (int k = 0; k < render->worker_count; k++)
+        pthread_join(render->workers[k], NULL);
+    pthread_cond_destroy(&render->pass_end);
+    pthread_cond_destroy(&render->pass_start);
+    pthread_cond_destroy(&render->finished);
+    pthread_cond_destroy(&render->wake);
+    pthread_mutex_destroy(&render->pass_lock);
+    pthread_mutex_destroy(&render->lock);
+    for (int k = 0; k < 3; k++)
+        free(render->frames[k].rgb);
+    free(render->workers);
+    ao_accum_finish(&render->accum);
+    free(render);
+}
+
+void ao_render_get_settings(struct ao_render *render, struct ao_settings *out)
+{
+    pthread_mutex_lock(&render->lock);
+    *out = render->settings;
+    pthread_mutex_unlock(&render->lock);
+}
+
+/* Bumps the restart counter so that the pass in flight aborts. Called with render->lock held. */
+static void restart_locked(struct ao_render *render)
+{
+    render->restarts++;
+    render->done = false;
+    atomic_store(&render->live_restarts, render->restarts);
+    pthread_cond_broadcast(&render->wake);
+}
+
+void ao_render_set_settings(struct ao_render *render, const struct ao_settings *settings)
+{
+    pthread_mutex_lock(&render->lock);
+    const struct ao_settings *old = &render->settings;
+    bool changes_estimate = old->sampling != settings->sampling || old->aa != settings->aa ||
+                            memcmp(&old->camera, &settings->camera, sizeof old->camera) != 0;
+    render->settings = *settings;
+    if (changes_estimate)
+        restart_locked(render);
+    pthread_cond_broadcast(&render->wake);
+    pthread_mutex_unlock(&render->lock);
+}
+
+void ao_render_restart(struct ao_render *render)
+{
+    pthread_mutex_lock(&render->lock);
+    restart_locked(render);
+    pthread_mutex_unlock(&render->lock);
+}
+
+bool ao_render_wait(struct ao_render *render)
+{
+    pthread_mutex_lock(&render->lock);
+    while (!render->done && !render->stop)
+        pthread_cond_wait(&render->finished, &render->lock);
+    bool done = render->done;
+    pthread_mutex_unlock(&render->lock);
+    return done;
+}
+
+void ao_render_stop(struct ao_render *render)
+{
+    pthread_mutex_lock(&render->lock);
+    render->stop = true;
+    atomic_store(&render->live_stop, true);
+    pthread_cond_broadcast(&render->wake);
+    pthread_cond_broadcast(&render->finished);
+    pthread_mutex_unlock(&render->lock);
+}
