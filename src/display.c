@@ -1,0 +1,193 @@
+#include "display.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "image.h"
+#include "shaders/ao_shaders.h"
+
+/* Letterbox bars: dark grey, so that they stay apart from fully occluded (black) pixels. */
+#define BAR_GREY 0.12f
+
+struct ao_display {
+    const struct ao_glapi *gl;
+    GLuint program, vao, texture;
+    int width, height;              /* of the uploaded image; 0 before the first upload */
+    GLuint fbo, colour;             /* offscreen 1:1 target for PNG files, made on first use */
+    int fbo_width, fbo_height;
+};
+
+struct ao_display *ao_display_create(const struct ao_glapi *gl)
+{
+    struct ao_display *d = calloc(1, sizeof *d);
+    if (!d) {
+        fprintf(stderr, "aoview: out of memory for the display\n");
+        return NULL;
+    }
+    d->gl = gl;
+    d->program = ao_glapi_program(gl, "display", ao_shader_display_vert, ao_shader_display_frag);
+    if (!d->program) {
+        free(d);
+        return NULL;
+    }
+    gl->UseProgram(d->program);
+    gl->Uniform1i(gl->GetUniformLocation(d->program, "image"), 0);
+
+    /* The triangle comes from gl_VertexID, but core profile still wants a vertex array bound. */
+    gl->GenVertexArrays(1, &d->vao);
+
+    /* Linear filtering: exact at 1:1 (fragments sample texel centres), smooth when scaled. */
+    gl->GenTextures(1, &d->texture);
+    gl->BindTexture(GL_TEXTURE_2D, d->texture);
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    return d;
+}
+
+void ao_display_destroy(struct ao_display *d)
+{
+    if (!d)
+        return;
+    const struct ao_glapi *gl = d->gl;
+    gl->DeleteFramebuffers(1, &d->fbo);
+    gl->DeleteRenderbuffers(1, &d->colour);
+    gl->DeleteTextures(1, &d->texture);
+    gl->DeleteVertexArrays(1, &d->vao);
+    gl->DeleteProgram(d->program);
+    free(d);
+}
+
+bool ao_display_upload(struct ao_display *d, const float *rgb, int width, int height)
+{
+    const struct ao_glapi *gl = d->gl;
+    gl->ActiveTexture(GL_TEXTURE0);
+    gl->BindTexture(GL_TEXTURE_2D, d->texture);
+    gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    /* Row 0 of the texture is the image's top row; the vertex shader's uv accounts for it. */
+    if (width == d->width && height == d->height) {
+        gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGB, GL_FLOAT, rgb);
+        return true;
+    }
+    GLint max = 0;
+    gl->GetIntegerv(GL_MAX_TEXTURE_SIZE, &max);
+    if (width > max || height > max) {
+        fprintf(stderr, "aoview: image %dx%d exceeds the OpenGL texture limit of %d pixels\n",
+                width, height, (int)max);
+        return false;
+    }
+    gl->TexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, width, height, 0, GL_RGB, GL_FLOAT, rgb);
+    d->width = width;
+    d->height = height;
+    return true;
+}
+
+struct ao_display_rect ao_display_fit(int image_width, int image_height, int fb_width, int fb_height)
+{
+    /* Compare fb_width / fb_height with the image's ratio in integers: the wider side gets bars. */
+    struct ao_display_rect r = {0, 0, fb_width, fb_height};
+    long long lhs = (long long)fb_width * image_height, rhs = (long long)fb_height * image_width;
+    if (lhs > rhs)
+        r.width = (int)(rhs / image_height);
+    else
+        r.height = (int)(lhs / image_width);
+    r.x = (fb_width - r.width) / 2;
+    r.y = (fb_height - r.height) / 2;
+    return r;
+}
+
+/* Draws the texture through the display shader into the given viewport. */
+static void draw_image(struct ao_display *d, struct ao_display_rect r)
+{
+    const struct ao_glapi *gl = d->gl;
+    gl->Viewport(r.x, r.y, r.width, r.height);
+    gl->Disable(GL_BLEND);
+    gl->UseProgram(d->program);
+    gl->ActiveTexture(GL_TEXTURE0);
+    gl->BindTexture(GL_TEXTURE_2D, d->texture);
+    gl->BindVertexArray(d->vao);
+    gl->DrawArrays(GL_TRIANGLES, 0, 3);
+}
+
+void ao_display_draw(struct ao_display *d, int fb_width, int fb_height)
+{
+    const struct ao_glapi *gl = d->gl;
+    gl->Viewport(0, 0, fb_width, fb_height);
+    gl->ClearColor(BAR_GREY, BAR_GREY, BAR_GREY, 1.0f);
+    gl->Clear(GL_COLOR_BUFFER_BIT);
+    if (d->width > 0 && fb_width > 0 && fb_height > 0)
+        draw_image(d, ao_display_fit(d->width, d->height, fb_width, fb_height));
+}
+
+/* Makes the offscreen framebuffer match the image size and binds it; false if GL refuses it. */
+static bool bind_offscreen(struct ao_display *d)
+{
+    const struct ao_glapi *gl = d->gl;
+    if (!d->fbo) {
+        gl->GenFramebuffers(1, &d->fbo);
+        gl->GenRenderbuffers(1, &d->colour);
+    }
+    gl->BindFramebuffer(GL_FRAMEBUFFER, d->fbo);
+    if (d->fbo_width != d->width || d->fbo_height != d->height) {
+        gl->BindRenderbuffer(GL_RENDERBUFFER, d->colour);
+        gl->RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, d->width, d->height);
+        gl->FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, d->colour);
+        d->fbo_width = d->width;
+        d->fbo_height = d->height;
+    }
+    if (gl->CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
+        fprintf(stderr, "aoview: OpenGL cannot render a %dx%d offscreen image\n", d->width, d->height);
+        gl->BindFramebuffer(GL_FRAMEBUFFER, 0);
+        return false;
+    }
+    return true;
+}
+
+/* GL reads the bottom row first; PNG rows go top first. Swaps rows in place. */
+static void flip_rows(uint8_t *pixels, size_t row, int height)
+{
+    for (int y = 0; y < height / 2; y++) {
+        uint8_t *a = pixels + row * (size_t)y, *b = pixels + row * (size_t)(height - 1 - y);
+        for (size_t i = 0; i < row; i++) {
+            uint8_t t = a[i];
+            a[i] = b[i];
+            b[i] = t;
+        }
+    }
+}
+
+bool ao_display_write_png(struct ao_display *d, const char *path)
+{
+    const struct ao_glapi *gl = d->gl;
+    if (d->width == 0) {
+        fprintf(stderr, "aoview: %s: no image to save yet\n", path);
+        return false;
+    }
+    size_t row = (size_t)d->width * 3;
+    uint8_t *pixels = malloc(row * (size_t)d->height);
+    if (!pixels) {
+        fprintf(stderr, "aoview: %s: out of memory\n", path);
+        return false;
+    }
+    if (!bind_offscreen(d)) {
+        free(pixels);
+        return false;
+    }
+
+    /* Draw at 1:1 and read back tightly packed (rows of 3 * width bytes). */
+    draw_image(d, (struct ao_display_rect){0, 0, d->width, d->height});
+    gl->PixelStorei(GL_PACK_ALIGNMENT, 1);
+    gl->ReadPixels(0, 0, d->width, d->height, GL_RGB, GL_UNSIGNED_BYTE, pixels);
+    gl->BindFramebuffer(GL_FRAMEBUFFER, 0);
+    flip_rows(pixels, row, d->height);
+
+    GLenum error = gl->GetError();
+    bool ok = error == GL_NO_ERROR;
+    if (!ok)
+        fprintf(stderr, "aoview: %s: OpenGL error 0x%x while reading the image back\n", path, error);
+    else
+        ok = ao_image_write_png(path, pixels, d->width, d->height);
+    free(pixels);
+    return ok;
+}

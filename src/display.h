@@ -1,0 +1,43 @@
+/* The image on screen: the running average in one float texture, drawn by a fullscreen triangle
+ * through the display shader (the sRGB curve), letterboxed into any framebuffer, and rendered at
+ * 1:1 offscreen for PNG files. Knows no window and no OSMesa: GL comes through struct ao_glapi. */
+#ifndef AO_DISPLAY_H
+#define AO_DISPLAY_H
+
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "glapi.h"
+
+/* A rectangle in framebuffer pixels, origin at the bottom left as glViewport takes it. */
+struct ao_display_rect {
+    int x, y, width, height;
+};
+
+/* The display's GL objects; opaque. */
+struct ao_display;
+
+/* Compiles the shaders (their info log printed with the shader's name on failure) and creates the
+ * GL objects in the current context; gl must outlive it. NULL with one message. GL thread. */
+struct ao_display *ao_display_create(const struct ao_glapi *gl);
+
+/* Deletes the GL objects (context still current) and frees; accepts NULL. GL thread. */
+void ao_display_destroy(struct ao_display *display);
+
+/* Copies a width x height linear RGB image, top row first, into the texture: glTexSubImage2D,
+ * or a new texture when the size changed; false with one message when the size exceeds GL's
+ * limit. GL thread. */
+bool ao_display_upload(struct ao_display *display, const float *rgb, int width, int height);
+
+/* The largest centred rectangle of the image's aspect ratio inside a framebuffer. Pure. */
+struct ao_display_rect ao_display_fit(int image_width, int image_height, int fb_width, int fb_height);
+
+/* Clears the bound framebuffer (fb_width x fb_height) to the letterbox colour and draws the
+ * uploaded image into ao_display_fit's rectangle; only clears before the first upload. GL thread. */
+void ao_display_draw(struct ao_display *display, int fb_width, int fb_height);
+
+/* Renders the uploaded image at 1:1 into an offscreen framebuffer and writes it as an 8-bit PNG
+ * (the displayed image without overlays); false with one message. GL thread. */
+bool ao_display_write_png(struct ao_display *display, const char *path);
+
+#endif
