@@ -1,0 +1,262 @@
+/* Command line parsing: a table of options, one switch that applies them, strict value checks. */
+#include "cli.h"
+
+#include "image.h"
+
+#include <ctype.h>
+#include <inttypes.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+
+enum { MAX_SPP = 1 << 30, MAX_SPPPP = 65536, MAX_THREADS = 256 };
+
+enum option_id {
+    OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
+    OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
+    OPT_VERSION,
+};
+
+/* One row of the option table: long name, short name (or 0), whether it takes a value. */
+struct option_spec {
+    const char *name;
+    char short_name;
+    bool has_value;
+    enum option_id id;
+};
+
+static const struct option_spec specs[] = {
+    {"--headless", 0, false, OPT_HEADLESS},
+    {"--output", 'o', true, OPT_OUTPUT},
+    {"--spp", 0, true, OPT_SPP},
+    {"--spppp", 0, true, OPT_SPPPP},
+    {"--sampling", 0, true, OPT_SAMPLING},
+    {"--aa", 0, false, OPT_AA},
+    {"--no-aa", 0, false, OPT_NO_AA},
+    {"--size", 0, true, OPT_SIZE},
+    {"--threads", 0, true, OPT_THREADS},
+    {"--seed", 0, true, OPT_SEED},
+    {"--ao-distance", 0, true, OPT_AO_DISTANCE},
+    {"--stats", 0, true, OPT_STATS},
+    {"--reference", 0, true, OPT_REFERENCE},
+    {"--quiet", 'q', false, OPT_QUIET},
+    {"--help", 'h', false, OPT_HELP},
+    {"--version", 0, false, OPT_VERSION},
+};
+
+static const char usage[] =
+    "usage: aoview [OPTIONS] [SCENE]\n"
+    "Progressive Monte Carlo ambient occlusion. SCENE: a .scene, .obj or .ply file\n"
+    "(default: the built-in bunny scene).\n"
+    "\n"
+    "  --headless            render without a window, write -o, exit\n"
+    "  -o, --output FILE     .png (displayed image) or .pfm (linear float);\n"
+    "                        default aoview.png with --headless\n"
+    "  --spp N               total AO samples per pixel (default 256)\n"
+    "  --spppp N             AO samples per pixel per pass (default 1)\n"
+    "  --sampling M          uniform | hemisphere | cosine (default cosine)\n"
+    "  --aa, --no-aa         jittered eye rays on / off (default on)\n"
+    "  --size WxH            image size (default: the scene's, else 640x480)\n"
+    "  --threads N           render threads, 1 to 256 (default: number of cores)\n"
+    "  --seed N              random seed (default 1)\n"
+    "  --ao-distance D       occlusion range (default: the scene's, else infinite)\n"
+    "  --stats FILE          CSV row per finished pass (default none)\n"
+    "  --reference FILE.pfm  add per-pass RMSE against this image (default none)\n"
+    "  -q, --quiet           print nothing but errors\n"
+    "  -h, --help            show this help\n"
+    "  --version             show the version\n"
+    "\n"
+    "Window keys: U/H/C sampling, A anti-aliasing, Space pause, R restart,\n"
+    "+/- samples per pass, S screenshot, drag/wheel orbit, pan, zoom,\n"
+    "F1 or ? help, Esc/Q quit.\n";
+
+const char *ao_cli_usage(void)
+{
+    return usage;
+}
+
+/* Parses the digits in [s, end) as a decimal number without sign; false on anything else. */
+static bool parse_u64(const char *s, const char *end, uint64_t *out)
+{
+    uint64_t v = 0;
+    if (s == end)
+        return false;
+    for (; s < end; s++) {
+        if (*s < '0' || *s > '9' || v > (UINT64_MAX - (uint64_t)(*s - '0')) / 10)
+            return false;
+        v = v * 10 + (uint64_t)(*s - '0');
+    }
+    *out = v;
+    return true;
+}
+
+static bool parse_count(const char *name, const char *value, uint64_t lo, uint64_t hi,
+                        uint64_t *out, char *msg, size_t msg_size)
+{
+    if (parse_u64(value, value + strlen(value), out) && *out >= lo && *out <= hi)
+        return true;
+    snprintf(msg, msg_size, "%s: expected a whole number from %" PRIu64 " to %" PRIu64 ", got '%s'",
+             name, lo, hi, value);
+    return false;
+}
+
+static bool parse_size(const char *name, const char *value, struct ao_options *opts, char *msg,
+                       size_t msg_size)
+{
+    const char *x = strchr(value, 'x');
+    uint64_t w, h;
+    if (x && parse_u64(value, x, &w) && parse_u64(x + 1, x + 1 + strlen(x + 1), &h) &&
+        w >= 1 && w <= AO_IMAGE_MAX_SIDE && h >= 1 && h <= AO_IMAGE_MAX_SIDE &&
+        w * h <= AO_IMAGE_MAX_PIXELS) {
+        opts->width = (int)w;
+        opts->height = (int)h;
+        return true;
+    }
+    snprintf(msg, msg_size,
+             "%s: expected WxH with sides from 1 to %d and at most %d pixels, got '%s'", name,
+             AO_IMAGE_MAX_SIDE, AO_IMAGE_MAX_PIXELS, value);
+    return false;
+}
+
+static bool parse_distance(const char *name, const char *value, float *out, char *msg,
+                           size_t msg_size)
+{
+    char *end;
+    float d = strtof(value, &end);
+    if (!isspace((unsigned char)*value) && *end == '\0' && isfinite(d) && d > 0.0f) {
+        *out = d;
+        return true;
+    }
+    snprintf(msg, msg_size, "%s: expected a finite number greater than 0, got '%s'", name, value);
+    return false;
+}
+
+static bool has_suffix(const char *s, const char *suffix)
+{
+    size_t n = strlen(s), k = strlen(suffix);
+    return n >= k && strcasecmp(s + n - k, suffix) == 0;
+}
+
+static bool parse_path(const char *name, const char *value, bool image, const char **out,
+                       char *msg, size_t msg_size)
+{
+    if (image ? has_suffix(value, ".png") || has_suffix(value, ".pfm") : *value != '\0') {
+        *out = value;
+        return true;
+    }
+    snprintf(msg, msg_size, "%s: expected a file name%s, got '%s'", name,
+             image ? " ending in .png or .pfm" : "", value);
+    return false;
+}
+
+static bool parse_sampling(const char *name, const char *value, enum ao_sampling *out, char *msg,
+                           size_t msg_size)
+{
+    if (ao_sampling_parse(value, out))
+        return true;
+    snprintf(msg, msg_size, "%s: expected uniform, hemisphere or cosine, got '%s'", name, value);
+    return false;
+}
+
+/* Applies one option (value is NULL for flags) to opts. */
+static bool apply(const struct option_spec *spec, const char *value, struct ao_options *opts,
+                  char *msg, size_t msg_size)
+{
+    const char *name = spec->name;
+    uint64_t n;
+    switch (spec->id) {
+    case OPT_HEADLESS: opts->headless = true; return true;
+    case OPT_AA: opts->aa = true; return true;
+    case OPT_NO_AA: opts->aa = false; return true;
+    case OPT_QUIET: opts->quiet = true; return true;
+    case OPT_HELP: opts->help = true; return true;
+    case OPT_VERSION: opts->version = true; return true;
+    case OPT_OUTPUT: return parse_path(name, value, true, &opts->output, msg, msg_size);
+    case OPT_STATS: return parse_path(name, value, false, &opts->stats_path, msg, msg_size);
+    case OPT_REFERENCE: return parse_path(name, value, false, &opts->reference_path, msg, msg_size);
+    case OPT_SAMPLING: return parse_sampling(name, value, &opts->sampling, msg, msg_size);
+    case OPT_SIZE: return parse_size(name, value, opts, msg, msg_size);
+    case OPT_AO_DISTANCE: return parse_distance(name, value, &opts->ao_distance, msg, msg_size);
+    case OPT_SEED: return parse_count(name, value, 0, UINT64_MAX, &opts->seed, msg, msg_size);
+    case OPT_SPP:
+        if (!parse_count(name, value, 1, MAX_SPP, &n, msg, msg_size))
+            return false;
+        opts->spp = (uint32_t)n;
+        return true;
+    case OPT_SPPPP:
+        if (!parse_count(name, value, 1, MAX_SPPPP, &n, msg, msg_size))
+            return false;
+        opts->spppp = (uint32_t)n;
+        return true;
+    case OPT_THREADS:
+        if (!parse_count(name, value, 1, MAX_THREADS, &n, msg, msg_size))
+            return false;
+        opts->threads = (int)n;
+        return true;
+    }
+    return false;
+}
+
+/* The table row for arg's first name_len characters ("--name" or "-c"), or NULL. */
+static const struct option_spec *find_option(const char *arg, size_t name_len)
+{
+    for (size_t i = 0; i < sizeof specs / sizeof specs[0]; i++) {
+        const struct option_spec *s = &specs[i];
+        bool is_long = strlen(s->name) == name_len && strncmp(arg, s->name, name_len) == 0;
+        bool is_short = s->short_name && name_len == 2 && arg[1] == s->short_name;
+        if (is_long || is_short)
+            return s;
+    }
+    return NULL;
+}
+
+/* Handles the option at argv[*i], taking its value from "=value" or the next argument. */
+static bool parse_option(int argc, char **argv, int *i, struct ao_options *opts, char *msg,
+                         size_t msg_size)
+{
+    const char *arg = argv[*i];
+    const char *eq = arg[1] == '-' ? strchr(arg, '=') : NULL;
+    size_t name_len = eq ? (size_t)(eq - arg) : strlen(arg);
+    const struct option_spec *spec = find_option(arg, name_len);
+    if (!spec) {
+        snprintf(msg, msg_size, "unknown option '%.*s' (try --help)", (int)name_len, arg);
+        return false;
+    }
+    if (!spec->has_value && eq) {
+        snprintf(msg, msg_size, "%s: takes no value, got '%s'", spec->name, eq + 1);
+        return false;
+    }
+    const char *value = eq ? eq + 1 : NULL;
+    if (spec->has_value && !value) {
+        if (*i + 1 >= argc) {
+            snprintf(msg, msg_size, "%s: missing value", spec->name);
+            return false;
+        }
+        value = argv[++*i];
+    }
+    return apply(spec, value, opts, msg, msg_size);
+}
+
+bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, size_t msg_size)
+{
+    *opts = (struct ao_options){
+        .spp = 256, .spppp = 1, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
+        .ao_distance = NAN,
+    };
+    for (int i = 1; i < argc; i++) {
+        const char *arg = argv[i];
+        if (arg[0] == '-' && arg[1] != '\0') {
+            if (!parse_option(argc, argv, &i, opts, msg, msg_size))
+                return false;
+        } else if (opts->scene_path) {
+            snprintf(msg, msg_size, "unexpected argument '%s': the scene is already '%s'", arg,
+                     opts->scene_path);
+            return false;
+        } else {
+            opts->scene_path = arg;
+        }
+    }
+    return true;
+}

@@ -1,0 +1,323 @@
+/* PNG (through stb) and PFM files. Writes go to a temporary file in the target's directory that is
+ * renamed into place, so a reader never sees a partial image. */
+#include "image.h"
+
+#include <assert.h>
+#include <ctype.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <stb_image.h>
+#include <stb_image_write.h>
+
+static_assert(sizeof(float) == 4 && sizeof(uint32_t) == 4, "PFM needs 32-bit IEEE floats");
+
+/* Pixels handed to a writer; its element type depends on the format. */
+struct raster {
+    const void *pixels;
+    int width, height;
+};
+
+/* Why a read failed: a fixed reason and the errno behind it (0 for format errors). */
+struct failure {
+    const char *reason;
+    int err;
+};
+
+float ao_image_srgb_encode(float linear)
+{
+    float x = fminf(fmaxf(linear, 0.0f), 1.0f); /* fmaxf maps NaN to 0 */
+    return x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
+}
+
+void ao_image_encode_srgb8(const float *linear, size_t count, uint8_t *out)
+{
+    for (size_t i = 0; i < count; i++)
+        out[i] = (uint8_t)(255.0f * ao_image_srgb_encode(linear[i]) + 0.5f);
+}
+
+static void report(const char *path, const char *reason, int err)
+{
+    if (err)
+        fprintf(stderr, "%s: %s (%s)\n", path, reason, strerror(err));
+    else
+        fprintf(stderr, "%s: %s\n", path, reason);
+}
+
+static bool fail(struct failure *out, const char *reason, int err)
+{
+    out->reason = reason;
+    out->err = err;
+    return false;
+}
+
+/* Creates "<path>.tmp.<pid>.<n>" exclusively with mode 0666 less the umask (mkstemp would force
+ * 0600 onto the final file); on success *tmp is a malloc'd name the caller frees. */
+static FILE *create_temp(const char *path, char **tmp)
+{
+    static atomic_uint counter;
+    size_t size = strlen(path) + 64;
+    *tmp = malloc(size);
+    if (!*tmp)
+        return NULL;
+    int fd = -1;
+    for (int attempt = 0; fd < 0 && attempt < 100; attempt++) {
+        snprintf(*tmp, size, "%s.tmp.%ld.%u", path, (long)getpid(), atomic_fetch_add(&counter, 1));
+        fd = open(*tmp, O_WRONLY | O_CREAT | O_EXCL, 0666);
+        if (fd < 0 && errno != EEXIST)
+            break;
+    }
+    FILE *f = fd < 0 ? NULL : fdopen(fd, "wb");
+    if (fd >= 0 && !f) {
+        int err = errno;
+        close(fd);
+        unlink(*tmp);
+        errno = err;
+    }
+    return f;
+}
+
+/* Runs emit on a temporary file, syncs it and renames it over path; reports any failure once. */
+static bool write_atomically(const char *path, bool (*emit)(FILE *f, const struct raster *r),
+                             const struct raster *r)
+{
+    char *tmp = NULL;
+    FILE *f = create_temp(path, &tmp);
+    if (!f) {
+        report(path, "cannot create temporary file", errno);
+        free(tmp);
+        return false;
+    }
+    bool ok = emit(f, r) && fflush(f) == 0 && fsync(fileno(f)) == 0;
+    int err = errno;
+    if (fclose(f) != 0 && ok) {
+        ok = false;
+        err = errno;
+    }
+    const char *reason = ok ? NULL : "cannot write";
+    if (ok && rename(tmp, path) != 0) {
+        reason = "cannot rename temporary file into place";
+        err = errno;
+    }
+    if (reason) {
+        unlink(tmp);
+        report(path, reason, err);
+    }
+    free(tmp);
+    return !reason;
+}
+
+static void fwrite_callback(void *f, void *data, int size)
+{
+    fwrite(data, 1, (size_t)size, f);
+}
+
+static bool emit_png(FILE *f, const struct raster *r)
+{
+    return stbi_write_png_to_func(fwrite_callback, f, r->width, r->height, 3, r->pixels,
+                                  r->width * 3) && !ferror(f);
+}
+
+bool ao_image_write_png(const char *path, const uint8_t *rgb, int width, int height)
+{
+    assert(width > 0 && height > 0 && width <= AO_IMAGE_MAX_SIDE && height <= AO_IMAGE_MAX_SIDE);
+    struct raster r = {rgb, width, height};
+    return write_atomically(path, emit_png, &r);
+}
+
+static void encode_le(float v, unsigned char *b)
+{
+    uint32_t u;
+    memcpy(&u, &v, sizeof u);
+    for (int i = 0; i < 4; i++)
+        b[i] = (unsigned char)(u >> (8 * i));
+}
+
+static float decode(const unsigned char *b, bool little_endian)
+{
+    uint32_t u = 0;
+    for (int i = 0; i < 4; i++)
+        u |= (uint32_t)b[little_endian ? i : 3 - i] << (8 * i);
+    float v;
+    memcpy(&v, &u, sizeof v);
+    return v;
+}
+
+/* Writes count floats little-endian, a chunk at a time. */
+static bool put_floats(FILE *f, const float *v, size_t count)
+{
+    unsigned char chunk[4096];
+    size_t n = 0;
+    for (size_t i = 0; i < count; i++) {
+        encode_le(v[i], chunk + n);
+        n += 4;
+        if (n == sizeof chunk || i + 1 == count) {
+            if (fwrite(chunk, 1, n, f) != n)
+                return false;
+            n = 0;
+        }
+    }
+    return true;
+}
+
+static bool emit_pfm(FILE *f, const struct raster *r)
+{
+    const float *rgb = r->pixels;
+    size_t row_floats = (size_t)r->width * 3;
+    if (fprintf(f, "PF\n%d %d\n-1.0\n", r->width, r->height) < 0)
+        return false;
+    for (int row = r->height - 1; row >= 0; row--)
+        if (!put_floats(f, rgb + (size_t)row * row_floats, row_floats))
+            return false;
+    return true;
+}
+
+bool ao_image_write_pfm(const char *path, const float *rgb, int width, int height)
+{
+    assert(width > 0 && height > 0 && width <= AO_IMAGE_MAX_SIDE && height <= AO_IMAGE_MAX_SIDE);
+    struct raster r = {rgb, width, height};
+    return write_atomically(path, emit_pfm, &r);
+}
+
+/* Reads one whitespace-delimited header token into buf and consumes the one whitespace
+ * character after it; false when the token is missing, too long or not followed by whitespace. */
+static bool read_token(FILE *f, char *buf, size_t size)
+{
+    int c;
+    while ((c = getc(f)) != EOF && isspace(c)) {
+    }
+    size_t n = 0;
+    for (; c != EOF && !isspace(c); c = getc(f)) {
+        if (n + 1 == size)
+            return false;
+        buf[n++] = (char)c;
+    }
+    buf[n] = '\0';
+    return n > 0 && c != EOF;
+}
+
+static bool parse_side(const char *s, int *out)
+{
+    char *end;
+    errno = 0;
+    long v = strtol(s, &end, 10);
+    if (*end != '\0' || errno != 0 || v < 1 || v > AO_IMAGE_MAX_SIDE)
+        return false;
+    *out = (int)v;
+    return true;
+}
+
+/* Parses "PF w h scale"; the scale's sign gives the byte order, its magnitude is ignored. */
+static bool read_header(FILE *f, int *width, int *height, bool *little_endian,
+                        struct failure *why)
+{
+    char magic[8], w[16], h[16], scale[64];
+    if (!read_token(f, magic, sizeof magic))
+        return fail(why, "not a PFM file", 0);
+    if (strcmp(magic, "Pf") == 0)
+        return fail(why, "greyscale PFM (Pf) is not supported, expected colour (PF)", 0);
+    if (strcmp(magic, "PF") != 0)
+        return fail(why, "not a PFM file", 0);
+    if (!read_token(f, w, sizeof w) || !read_token(f, h, sizeof h) ||
+        !read_token(f, scale, sizeof scale))
+        return fail(why, "malformed header", 0);
+    if (!parse_side(w, width) || !parse_side(h, height) ||
+        (int64_t)*width * *height > AO_IMAGE_MAX_PIXELS)
+        return fail(why, "bad or too large width and height in header", 0);
+    char *end;
+    double s = strtod(scale, &end);
+    if (*end != '\0' || !isfinite(s) || s == 0.0)
+        return fail(why, "bad scale in header", 0);
+    *little_endian = s < 0.0;
+    return true;
+}
+
+/* Checks that exactly need bytes remain in f after the header. */
+static bool check_payload_size(FILE *f, uint64_t need, struct failure *why)
+{
+    struct stat st;
+    long pos = ftell(f);
+    if (pos < 0 || fstat(fileno(f), &st) != 0)
+        return fail(why, "cannot read", errno);
+    uint64_t left = st.st_size > pos ? (uint64_t)(st.st_size - pos) : 0;
+    if (left < need)
+        return fail(why, "truncated pixel data", 0);
+    if (left > need)
+        return fail(why, "unexpected data after the pixels", 0);
+    return true;
+}
+
+/* Reads the rows (stored bottom to top) into a malloc'd top-to-bottom buffer of finite floats. */
+static float *read_pixels(FILE *f, int width, int height, bool little_endian, struct failure *why)
+{
+    size_t row_floats = (size_t)width * 3, count = row_floats * (size_t)height;
+    if (!check_payload_size(f, (uint64_t)count * 4, why))
+        return NULL;
+    float *rgb = malloc(count * sizeof *rgb);
+    if (!rgb) {
+        fail(why, "cannot read", errno);
+        return NULL;
+    }
+    for (int row = height - 1; row >= 0; row--) {
+        if (fread(rgb + (size_t)row * row_floats, 4, row_floats, f) != row_floats) {
+            fail(why, "cannot read", ferror(f) ? errno : 0);
+            free(rgb);
+            return NULL;
+        }
+    }
+    for (size_t i = 0; i < count; i++) {
+        unsigned char b[4];
+        memcpy(b, rgb + i, 4);
+        rgb[i] = decode(b, little_endian);
+        if (!isfinite(rgb[i])) {
+            fail(why, "non-finite pixel value", 0);
+            free(rgb);
+            return NULL;
+        }
+    }
+    return rgb;
+}
+
+bool ao_image_read_pfm(const char *path, float **rgb, int *width, int *height)
+{
+    FILE *f = fopen(path, "rb");
+    if (!f) {
+        report(path, "cannot open", errno);
+        return false;
+    }
+    struct failure why = {NULL, 0};
+    bool little_endian;
+    int w, h;
+    float *pixels = read_header(f, &w, &h, &little_endian, &why)
+                        ? read_pixels(f, w, h, little_endian, &why) : NULL;
+    fclose(f);
+    if (!pixels) {
+        report(path, why.reason, why.err);
+        return false;
+    }
+    *rgb = pixels;
+    *width = w;
+    *height = h;
+    return true;
+}
+
+bool ao_image_read_png(const char *path, uint8_t **rgb, int *width, int *height)
+{
+    int w, h, channels;
+    uint8_t *pixels = stbi_load(path, &w, &h, &channels, 3);
+    if (!pixels) {
+        fprintf(stderr, "%s: cannot read PNG (%s)\n", path, stbi_failure_reason());
+        return false;
+    }
+    *rgb = pixels;
+    *width = w;
+    *height = h;
+    return true;
+}

@@ -1,0 +1,208 @@
+/* cli.c: defaults, every option in both spellings, and every kind of bad value. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <string.h>
+
+#include "cli.h"
+
+static char msg[256];
+
+/* Parses a NULL-terminated argument list (argv[0] is added). */
+static bool parse(struct ao_options *o, char **args)
+{
+    char *argv[32] = {"aoview"};
+    int argc = 1;
+    for (; args[argc - 1]; argc++)
+        argv[argc] = args[argc - 1];
+    msg[0] = '\0';
+    return ao_cli_parse(argc, argv, o, msg, sizeof msg);
+}
+
+#define PARSE(o, ...) parse(o, (char *[]){__VA_ARGS__, NULL})
+#define PARSE_NONE(o) parse(o, (char *[]){NULL})
+
+/* The arguments must fail with one message line that contains both needles. */
+#define REJECT(needle, value, ...)                                                         \
+    do {                                                                                   \
+        struct ao_options o_;                                                              \
+        assert_false(PARSE(&o_, __VA_ARGS__));                                             \
+        assert_non_null(strstr(msg, needle));                                              \
+        assert_non_null(strstr(msg, value));                                               \
+        assert_null(strchr(msg, '\n'));                                                    \
+    } while (0)
+
+static void test_defaults(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE_NONE(&o));
+    assert_null(o.scene_path);
+    assert_false(o.headless);
+    assert_null(o.output);
+    assert_int_equal(o.spp, 256);
+    assert_int_equal(o.spppp, 1);
+    assert_int_equal(o.sampling, AO_SAMPLING_COSINE);
+    assert_true(o.aa);
+    assert_int_equal(o.width, 0);
+    assert_int_equal(o.height, 0);
+    assert_int_equal(o.threads, 0);
+    assert_int_equal(o.seed, 1);
+    assert_true(isnan(o.ao_distance));
+    assert_null(o.stats_path);
+    assert_null(o.reference_path);
+    assert_false(o.quiet || o.help || o.version);
+}
+
+static void test_every_option(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE(&o, "--headless", "-o", "out.PNG", "--spp", "1073741824", "--spppp",
+                      "65536", "--sampling", "uniform", "--no-aa", "--size", "16384x4096",
+                      "--threads", "256", "--seed", "18446744073709551615", "--ao-distance",
+                      "2.5", "--stats", "s.csv", "--reference", "r.pfm", "-q", "-h",
+                      "--version", "scene.scene"));
+    assert_true(o.headless);
+    assert_string_equal(o.output, "out.PNG");
+    assert_int_equal(o.spp, 1u << 30);
+    assert_int_equal(o.spppp, 65536);
+    assert_int_equal(o.sampling, AO_SAMPLING_UNIFORM);
+    assert_false(o.aa);
+    assert_int_equal(o.width, 16384);
+    assert_int_equal(o.height, 4096);
+    assert_int_equal(o.threads, 256);
+    assert_true(o.seed == UINT64_MAX);
+    assert_float_equal(o.ao_distance, 2.5f, 0.0f);
+    assert_string_equal(o.stats_path, "s.csv");
+    assert_string_equal(o.reference_path, "r.pfm");
+    assert_true(o.quiet && o.help && o.version);
+    assert_string_equal(o.scene_path, "scene.scene");
+}
+
+static void test_equals_and_long_forms(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE(&o, "--output=a.pfm", "--spp=7", "--spppp=100", "--sampling=hemisphere",
+                      "--no-aa", "--aa", "--size=1x1", "--threads=3", "--seed=0",
+                      "--ao-distance=1e-3", "--stats=x", "--reference=y.pfm", "--quiet",
+                      "--help", "m.obj"));
+    assert_string_equal(o.output, "a.pfm");
+    assert_int_equal(o.spp, 7);
+    assert_int_equal(o.spppp, 100); /* more per pass than in total is fine: one pass */
+    assert_int_equal(o.sampling, AO_SAMPLING_HEMISPHERE);
+    assert_true(o.aa);                /* the last of --aa / --no-aa wins */
+    assert_int_equal(o.width, 1);
+    assert_int_equal(o.height, 1);
+    assert_int_equal(o.threads, 3);
+    assert_true(o.seed == 0);
+    assert_float_equal(o.ao_distance, 1e-3f, 0.0f);
+    assert_string_equal(o.stats_path, "x");
+    assert_string_equal(o.reference_path, "y.pfm");
+    assert_true(o.quiet && o.help);
+    assert_string_equal(o.scene_path, "m.obj");
+    assert_true(PARSE(&o, "--output", "x.Pfm", "--sampling", "cosine", "-"));
+    assert_string_equal(o.output, "x.Pfm");
+    assert_int_equal(o.sampling, AO_SAMPLING_COSINE);
+    assert_string_equal(o.scene_path, "-");
+}
+
+static void test_bad_counts(void **state)
+{
+    (void)state;
+    const char *bad[] = {"0", "-1", "+5", "", "abc", "12abc", " 5", "1.5", "1e3",
+                         "99999999999", "18446744073709551616", "1073741825"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+        REJECT("--spp: expected a whole number from 1 to 1073741824", bad[i], "--spp",
+               (char *)bad[i]);
+    REJECT("--spp: expected a whole number from 1 to 1073741824, got '0'", "'0'", "--spp=0");
+    REJECT("--spppp: expected a whole number from 1 to 65536", "65537", "--spppp", "65537");
+    REJECT("--spppp", "'0'", "--spppp", "0");
+    REJECT("--threads: expected a whole number from 1 to 256", "257", "--threads", "257");
+    REJECT("--threads", "'0'", "--threads=0");
+    REJECT("--threads", "'-4'", "--threads", "-4");
+    REJECT("--seed: expected a whole number from 0 to 18446744073709551615",
+           "18446744073709551616", "--seed", "18446744073709551616");
+    REJECT("--seed", "'-1'", "--seed", "-1");
+    REJECT("--seed", "'0x10'", "--seed", "0x10");
+}
+
+static void test_bad_sizes(void **state)
+{
+    (void)state;
+    const char *bad[] = {"0x5", "5x0", "100000x100000", "16385x1", "16384x16384", "12x", "x3",
+                         "5x5x5", "5X5", "", "x", "-5x5", "5 x5", "640*480", "99999999999999999999x1"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+        REJECT("--size: expected WxH", bad[i], "--size", (char *)bad[i]);
+}
+
+static void test_bad_strings(void **state)
+{
+    (void)state;
+    REJECT("--output: expected a file name ending in .png or .pfm", "'a.jpg'", "-o", "a.jpg");
+    REJECT("--output", "'png'", "--output=png");
+    REJECT("--output", "''", "--output=");
+    REJECT("--sampling: expected uniform, hemisphere or cosine", "'Cosine'", "--sampling",
+           "Cosine");
+    REJECT("--sampling", "''", "--sampling=");
+    REJECT("--stats: expected a file name", "''", "--stats", "");
+    REJECT("--reference: expected a file name", "''", "--reference=");
+}
+
+static void test_bad_distances(void **state)
+{
+    (void)state;
+    const char *bad[] = {"0", "-1", "inf", "nan", "1e39", "1e-50", "abc", "", " 1", "1x"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+        REJECT("--ao-distance: expected a finite number greater than 0", bad[i],
+               "--ao-distance", (char *)bad[i]);
+}
+
+static void test_bad_structure(void **state)
+{
+    (void)state;
+    REJECT("unknown option", "'--frobnicate'", "--frobnicate");
+    REJECT("unknown option", "'--frob'", "--frob=1");
+    REJECT("unknown option", "'-x'", "-x");
+    REJECT("unknown option", "'--sp'", "--sp", "5");
+    REJECT("--spp: missing value", "--spp", "--spp");
+    REJECT("--output: missing value", "--output", "a.scene", "-o");
+    REJECT("--headless: takes no value", "'yes'", "--headless=yes");
+    REJECT("--aa", "''", "--aa=");
+    REJECT("unexpected argument 'b.scene'", "'a.scene'", "a.scene", "b.scene");
+    /* A value is taken verbatim, even when it looks like an option. */
+    REJECT("--spp", "'--headless'", "--spp", "--headless");
+}
+
+static void test_usage_lists_every_option(void **state)
+{
+    (void)state;
+    const char *u = ao_cli_usage();
+    const char *names[] = {"--headless", "-o, --output", "--spp", "--spppp", "--sampling",
+                           "--aa", "--no-aa", "--size", "--threads", "--seed", "--ao-distance",
+                           "--stats", "--reference", "-q, --quiet", "-h, --help", "--version",
+                           "default 256", "default cosine", "640x480", "Esc"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
+        assert_non_null(strstr(u, names[i]));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_defaults),
+        cmocka_unit_test(test_every_option),
+        cmocka_unit_test(test_equals_and_long_forms),
+        cmocka_unit_test(test_bad_counts),
+        cmocka_unit_test(test_bad_sizes),
+        cmocka_unit_test(test_bad_strings),
+        cmocka_unit_test(test_bad_distances),
+        cmocka_unit_test(test_bad_structure),
+        cmocka_unit_test(test_usage_lists_every_option),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
