@@ -141,14 +141,15 @@ static double rmse(const float *image, const float *reference, size_t count)
     return sqrt(sum / (double)count);
 }
 
-/* Resolves the running average into the back frame and swaps it into the middle slot. */
-static void publish(struct ao_render *r, const struct ao_frame_info *info)
+/* Resolves the running average into the back frame, fills in info's RMSE, and swaps the frame
+ * into the middle slot. */
+static void publish(struct ao_render *r, struct ao_frame_info *info)
 {
     struct ao_frame *f = &r->frames[r->back];
     size_t count = 3 * (size_t)f->width * (size_t)f->height;
     ao_accum_resolve(&r->accum, f->rgb);
+    info->rmse = r->config.reference ? rmse(f->rgb, r->config.reference, count) : NAN;
     f->info = *info;
-    f->info.rmse = r->config.reference ? rmse(f->rgb, r->config.reference, count) : NAN;
     unsigned previous = atomic_exchange(&r->middle, (unsigned)r->back | FRESH);
     r->back = (int)(previous & ~(unsigned)FRESH);
 }

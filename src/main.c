@@ -1,0 +1,197 @@
+/* aoview: wiring of options, scene, tracer, renderer and the window or headless output. The only
+ * place that exits. */
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "config.h"
+#include "headless.h"
+#include "image.h"
+#include "render.h"
+#include "scene.h"
+#include "tracer.h"
+#include "window.h"
+
+enum { EXIT_RUNTIME = 1, EXIT_USAGE = 2 };
+
+/* What the per-pass callback reports to. */
+struct reporter {
+    FILE *stats;
+    const char *stats_path;
+    bool progress;         /* a progress bar on stderr (a terminal, not --quiet) */
+    bool stats_failed;
+};
+
+static double mrays_per_second(const struct ao_frame_info *info)
+{
+    return info->seconds > 0.0 ? (double)(info->eye_rays + info->shadow_rays) / info->seconds / 1e6 : 0.0;
+}
+
+/* Runs on the render thread after every published pass. */
+static void on_pass(const struct ao_frame_info *info, void *user)
+{
+    struct reporter *rep = user;
+    if (rep->stats && !rep->stats_failed) {
+        fprintf(rep->stats, "%u,%u,%.6f,%llu,%llu,%.3f", info->pass, info->spp, info->seconds,
+                (unsigned long long)info->eye_rays, (unsigned long long)info->shadow_rays,
+                mrays_per_second(info));
+        if (!isnan(info->rmse))
+            fprintf(rep->stats, ",%.9g", info->rmse);
+        fputc('\n', rep->stats);
+        if (fflush(rep->stats) != 0) {
+            fprintf(stderr, "%s: write failed\n", rep->stats_path);
+            rep->stats_failed = true;
+        }
+    }
+    if (rep->progress) {
+        int filled = (int)(30.0 * info->spp / info->target_spp);
+        fprintf(stderr, "\r[%.*s%*s] spp %u/%u  %.1f s  %.1f Mrays/s", filled,
+                "##############################", 30 - filled, "", info->spp, info->target_spp,
+                info->seconds, mrays_per_second(info));
+        if (info->done)
+            fputc('\n', stderr);
+    }
+    ao_window_notify();
+}
+
+/* True when path ends in ext, ignoring case. */
+static bool ends_with(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    return n >= e && strcasecmp(path + n - e, ext) == 0;
+}
+
+/* Writes the final frame as PFM (linear) or PNG (through the display code). */
+static bool write_output(const char *path, const struct ao_frame *frame)
+{
+    if (ends_with(path, ".pfm"))
+        return ao_image_write_pfm(path, frame->rgb, frame->width, frame->height);
+    return ao_headless_write_png(path, frame->rgb, frame->width, frame->height);
+}
+
+/* Waits for the target spp and writes the output; the headless path of SPEC.md. */
+static int run_headless(struct ao_render *render, const struct ao_options *opts)
+{
+    const char *output = opts->output ? opts->output : "aoview.png";
+    if (!ao_render_wait(render))
+        return EXIT_RUNTIME;
+    const struct ao_frame *frame = ao_render_take_frame(render);
+    if (!frame || !write_output(output, frame))
+        return EXIT_RUNTIME;
+    if (!opts->quiet)
+        fprintf(stderr, "aoview: wrote %s (%u spp, %.2f s, %.1f Mrays/s)\n", output, frame->info.spp,
+                frame->info.seconds, mrays_per_second(&frame->info));
+    return 0;
+}
+
+/* Reads --reference and checks it matches the image size. */
+static float *load_reference(const char *path, int width, int height)
+{
+    float *rgb = NULL;
+    int w, h;
+    if (!ao_image_read_pfm(path, &rgb, &w, &h))
+        return NULL;
+    if (w != width || h != height) {
+        fprintf(stderr, "--reference: %s is %dx%d but the image is %dx%d\n", path, w, h, width, height);
+        free(rgb);
+        return NULL;
+    }
+    return rgb;
+}
+
+/* Everything main owns, released in one place. */
+struct app {
+    struct ao_scene scene;
+    struct ao_tracer *tracer;
+    struct ao_render *render;
+    float *reference;
+    struct reporter reporter;
+};
+
+static int run(struct app *app, const struct ao_options *opts)
+{
+    /* Scene, size, tracer. */
+    if (!ao_scene_load(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE))
+        return EXIT_RUNTIME;
+    int width = opts->width ? opts->width : app->scene.width ? app->scene.width : 640;
+    int height = opts->height ? opts->height : app->scene.height ? app->scene.height : 480;
+    if (opts->reference_path && !(app->reference = load_reference(opts->reference_path, width, height)))
+        return EXIT_RUNTIME;
+    if (!(app->tracer = ao_tracer_create(&app->scene)))
+        return EXIT_RUNTIME;
+    if (app->scene.degenerate_count && !opts->quiet)
+        fprintf(stderr, "aoview: skipped %zu degenerate triangles\n", app->scene.degenerate_count);
+
+    /* Stats file and progress bar. */
+    app->reporter.stats_path = opts->stats_path;
+    if (opts->stats_path) {
+        if (!(app->reporter.stats = fopen(opts->stats_path, "w"))) {
+            fprintf(stderr, "--stats: cannot write %s: %s\n", opts->stats_path, strerror(errno));
+            return EXIT_RUNTIME;
+        }
+        fprintf(app->reporter.stats, "pass,spp,seconds,eye_rays,shadow_rays,mrays_per_s%s\n",
+                app->reference ? ",rmse" : "");
+    }
+
+    /* Renderer. */
+    long cores = sysconf(_SC_NPROCESSORS_ONLN);
+    struct ao_render_config config = {
+        .scene = &app->scene, .tracer = app->tracer, .width = width, .height = height,
+        .threads = opts->threads ? opts->threads : (cores > 0 ? (int)cores : 1),
+        .seed = opts->seed, .target_spp = opts->spp,
+        .ao_distance = isnan(opts->ao_distance) ? app->scene.ao_distance : opts->ao_distance,
+        .reference = app->reference, .on_pass = on_pass, .user = &app->reporter};
+    struct ao_settings settings = {.sampling = opts->sampling, .aa = opts->aa, .spppp = (int)opts->spppp,
+                                   .camera = app->scene.camera};
+    struct ao_view view;
+    if (!ao_camera_view(&settings.camera, width, height, &view)) {
+        fprintf(stderr, "%s: the camera cannot form an image\n", app->scene.name);
+        return EXIT_RUNTIME;
+    }
+    bool window = !opts->headless;
+    app->reporter.progress = !opts->quiet && !window && isatty(STDERR_FILENO);
+    if (!(app->render = ao_render_create(&config, &settings)))
+        return EXIT_RUNTIME;
+
+    /* Window, or headless output (also where no window can be opened). */
+    if (window) {
+        struct ao_window_info info = {.scene_name = app->scene.name, .quiet = opts->quiet};
+        enum ao_window_result result = ao_window_run(app->render, &info);
+        if (result != AO_WINDOW_NO_DISPLAY)
+            return result == AO_WINDOW_OK ? 0 : EXIT_RUNTIME;
+        fprintf(stderr, "aoview: no display available; rendering headless to %s\n",
+                opts->output ? opts->output : "aoview.png");
+        app->reporter.progress = !opts->quiet && isatty(STDERR_FILENO);
+    }
+    return run_headless(app->render, opts);
+}
+
+int main(int argc, char **argv)
+{
+    struct ao_options opts;
+    char message[512];
+    if (!ao_cli_parse(argc, argv, &opts, message, sizeof message)) {
+        fprintf(stderr, "aoview: %s (try --help)\n", message);
+        return EXIT_USAGE;
+    }
+    if (opts.help || opts.version) {
+        fputs(opts.help ? ao_cli_usage() : "aoview " AO_VERSION "\n", stdout);
+        return 0;
+    }
+    struct app app = {0};
+    int status = run(&app, &opts);
+    ao_render_destroy(app.render);
+    if (app.reporter.stats && fclose(app.reporter.stats) != 0 && status == 0) {
+        fprintf(stderr, "%s: write failed\n", opts.stats_path);
+        status = EXIT_RUNTIME;
+    }
+    ao_tracer_destroy(app.tracer);
+    ao_scene_finish(&app.scene);
+    free(app.reference);
+    return status;
+}

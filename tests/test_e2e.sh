@@ -1,0 +1,109 @@
+#!/usr/bin/env bash
+# End to end: the built binary on both shipped scenes and on bad input. Every bad input must give
+# exit status 1 (runtime) or 2 (usage), exactly one line on stderr naming the culprit, and no
+# output file.
+set -u
+bin=${AO_BINARY:?AO_BINARY not set}
+root=${AO_SOURCE_ROOT:?AO_SOURCE_ROOT not set}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+failures=0
+
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# pfm_check FILE W H: a well-formed PFM of that size with only finite, non-negative values.
+pfm_check() {
+  python3 - "$@" <<'PY'
+import math, struct, sys
+path, w, h = sys.argv[1], int(sys.argv[2]), int(sys.argv[3])
+data = open(path, 'rb').read()
+parts = data.split(b'\n', 3)
+assert parts[0] == b'PF', 'magic'
+assert parts[1].split() == [str(w).encode(), str(h).encode()], 'size'
+assert float(parts[2]) < 0, 'little endian'
+values = struct.unpack('<%df' % (3 * w * h), parts[3])
+assert all(math.isfinite(v) and v >= 0 for v in values), 'non-finite or negative pixel'
+PY
+}
+
+# Good runs: both scenes, PNG and PFM, stats and reference.
+for scene in bunny spheres; do
+  if ! "$bin" --headless -q --size 64x48 --spp 8 --spppp 4 "$root/assets/scenes/$scene.scene" -o "$scene.pfm"; then
+    fail "$scene.scene did not render"
+  elif ! pfm_check "$scene.pfm" 64 48; then
+    fail "$scene.pfm is not a clean 64x48 PFM"
+  fi
+  "$bin" --headless -q --size 64x48 --spp 4 "$root/assets/scenes/$scene.scene" -o "$scene.png" ||
+    fail "$scene.scene did not render to PNG"
+  [ "$(head -c 8 "$scene.png" | od -An -tx1 | tr -d ' ')" = 89504e470d0a1a0a ] || fail "$scene.png is not a PNG"
+done
+
+"$bin" --headless -q --size 32x24 --spp 10 --spppp 4 --stats stats.csv --reference bunny.pfm.ref \
+  "$root/assets/scenes/bunny.scene" -o x.pfm 2>/dev/null && fail "a missing --reference was accepted"
+"$bin" --headless -q --size 32x24 --spp 64 --spppp 64 "$root/assets/scenes/bunny.scene" -o ref.pfm
+"$bin" --headless -q --size 32x24 --spp 10 --spppp 4 --stats stats.csv --reference ref.pfm \
+  "$root/assets/scenes/bunny.scene" -o x.pfm || fail "stats run failed"
+python3 - <<'PY' || fail "stats.csv is malformed"
+import csv
+rows = list(csv.reader(open('stats.csv')))
+assert rows[0] == ['pass', 'spp', 'seconds', 'eye_rays', 'shadow_rays', 'mrays_per_s', 'rmse'], rows[0]
+body = rows[1:]
+assert [int(r[0]) for r in body] == [1, 2, 3], 'passes = ceil(10 / 4)'
+assert [int(r[1]) for r in body] == [4, 8, 10], 'cumulative spp'
+assert [int(r[3]) for r in body] == [768, 1536, 2304], 'one eye ray per pixel per pass'
+assert all(float(r[6]) > 0 for r in body), 'rmse'
+PY
+
+# The same seed and settings give the same image for any thread count.
+"$bin" --headless -q --size 40x30 --spp 6 --spppp 2 --threads 1 --seed 9 "$root/assets/scenes/spheres.scene" -o t1.pfm
+"$bin" --headless -q --size 40x30 --spp 6 --spppp 2 --threads 2 --seed 9 "$root/assets/scenes/spheres.scene" -o t2.pfm
+cmp -s t1.pfm t2.pfm || fail "--threads 1 and 2 differ"
+
+# Bad input: expect_error STATUS TEXT ARGS...
+expect_error() {
+  local want=$1 text=$2
+  shift 2
+  rm -f out.png
+  "$bin" --headless -q -o out.png "$@" 2>err.txt >/dev/null
+  local got=$?
+  if [ "$got" != "$want" ]; then fail "$* exited $got, expected $want"; fi
+  if [ "$(wc -l < err.txt)" != 1 ]; then fail "$*: expected one stderr line, got: $(cat err.txt)"; fi
+  grep -qF -- "$text" err.txt || fail "$*: message lacks '$text': $(cat err.txt)"
+  [ -e out.png ] && fail "$*: left an output file"
+  ls out.png.tmp* >/dev/null 2>&1 && fail "$*: left a temporary file"
+  return 0
+}
+
+expect_error 2 --spp --spp 0
+expect_error 2 --size --size 0x5
+expect_error 2 --size --size 100000x100000
+expect_error 2 --sampling --sampling foo
+expect_error 2 --bogus --bogus
+expect_error 1 nowhere.scene nowhere.scene
+expect_error 1 "$root/assets" "$root/assets"
+printf 'camera eye 0 1 4 target 0 0 0\nsphere center 0 0 0 radius -1\n' > neg.scene
+expect_error 1 neg.scene:2: neg.scene
+printf 'camera eye 0 1 4 target 0 0 0\nsphere center 0 nan 0 radius 1\n' > nan.scene
+expect_error 1 nan.scene:2: nan.scene
+printf 'camera eye 0 1 4 target 0 0 0\nteapot\n' > kw.scene
+expect_error 1 kw.scene:2: kw.scene
+printf 'camera eye 0 1 4 target 0 0 0 colour 3\n' > key.scene
+expect_error 1 key.scene:1: key.scene
+printf 'camera eye 0 1 4 target 0 0\n' > short.scene
+expect_error 1 short.scene:1: short.scene
+printf 'camera eye 0 1 4 target 0 1 4\n' > degenerate.scene
+expect_error 1 degenerate.scene:1: degenerate.scene
+printf 'quad corner 0 0 0 edge1 1 0 0 edge2 2 0 0\n' > flat.scene
+expect_error 1 flat.scene:1: flat.scene
+printf 'mesh missing.obj\n' > mesh.scene
+expect_error 1 missing.obj mesh.scene
+printf 'sphere center 0 0 0 radius 1 albedo 1.5\n' > albedo.scene
+expect_error 1 albedo.scene:1: albedo.scene
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n' > bad.obj
+expect_error 1 bad.obj:4: bad.obj
+printf 'ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n\1\2' > truncated.ply
+expect_error 1 truncated.ply truncated.ply
+
+echo "$failures failure(s)"
+[ "$failures" = 0 ]

@@ -1,0 +1,192 @@
+/* Samplers against their pdfs: unit length, finiteness at the edges of [0,1)^2, chi-square tests of
+ * the direction histograms, and the weight each sampler hands the estimator. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <string.h>
+
+#include "rng.h"
+#include "sampling.h"
+
+static const double PI = 3.14159265358979323846;
+
+/* Normals to test about: the axes (both signs of z hit the basis' branch), and skewed ones. */
+static const struct ao_vec3 NORMALS[] = {
+    {0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {0, -1, 0}, {0.48f, -0.6f, 0.64f}, {-0.36f, 0.48f, -0.8f},
+};
+enum { NORMAL_COUNT = sizeof NORMALS / sizeof NORMALS[0] };
+
+/* The largest float below 1, the edge of what ao_rng_float returns. */
+static const float ALMOST_ONE = 0x1.fffffep-1f;
+
+static struct ao_vec3 draw(enum ao_sampling mode, struct ao_vec3 n, float u1, float u2, float *weight)
+{
+    struct ao_basis f = ao_basis_from_normal(n);
+    struct ao_vec3 w;
+    *weight = ao_sample_direction(mode, &f, u1, u2, &w);
+    return w;
+}
+
+static double pdf(enum ao_sampling mode, struct ao_vec3 n, struct ao_vec3 w)
+{
+    switch (mode) {
+    case AO_SAMPLING_UNIFORM:
+        return ao_uniform_sphere_pdf();
+    case AO_SAMPLING_HEMISPHERE:
+        return ao_hemisphere_pdf(n, w);
+    case AO_SAMPLING_COSINE:
+        return ao_cosine_pdf(n, w);
+    }
+    return 0;
+}
+
+static void test_edges_give_unit_finite_directions(void **state)
+{
+    (void)state;
+    const float edges[] = {0.0f, 0x1p-24f, 0.5f, ALMOST_ONE};
+    for (int mode = 0; mode < 3; mode++)
+        for (int k = 0; k < NORMAL_COUNT; k++)
+            for (int a = 0; a < 4; a++)
+                for (int b = 0; b < 4; b++) {
+                    float weight;
+                    struct ao_vec3 w = draw((enum ao_sampling)mode, NORMALS[k], edges[a], edges[b], &weight);
+                    assert_true(ao_vec3_is_finite(w) && isfinite(weight));
+                    assert_true(fabsf(ao_vec3_length(w) - 1.0f) < 1e-6f);
+                    if (mode != AO_SAMPLING_UNIFORM)
+                        assert_true(ao_vec3_dot(w, NORMALS[k]) >= -1e-6f);
+                }
+}
+
+static void test_cosine_at_minus_n_is_the_horizon(void **state)
+{
+    (void)state;
+    /* u1 = 0 is the uniform-sphere sample s = -n, where normalize(n + s) would be 0/0: the closed
+     * form must give the limit of the neighbouring samples, a unit direction on the horizon. */
+    for (int k = 0; k < NORMAL_COUNT; k++) {
+        float weight;
+        struct ao_vec3 w = draw(AO_SAMPLING_COSINE, NORMALS[k], 0.0f, 0.3f, &weight);
+        assert_true(fabsf(ao_vec3_dot(w, NORMALS[k])) < 1e-6f);
+        assert_true(fabsf(ao_vec3_length(w) - 1.0f) < 1e-6f);
+        assert_true(weight == 1.0f);
+    }
+}
+
+static void test_weight_is_cosine_over_pi_pdf(void **state)
+{
+    (void)state;
+    struct ao_rng rng = ao_rng_make(7, 0, 0, 0);
+    for (int mode = 0; mode < 3; mode++)
+        for (int k = 0; k < NORMAL_COUNT; k++)
+            for (int i = 0; i < 2000; i++) {
+                float weight;
+                struct ao_vec3 n = NORMALS[k];
+                struct ao_vec3 w = draw((enum ao_sampling)mode, n, ao_rng_float(&rng), ao_rng_float(&rng), &weight);
+                double cosine = fmax(0.0, ao_vec3_dot(n, w));
+                double p = pdf((enum ao_sampling)mode, n, w);
+                double expected = p > 0 ? cosine / (PI * p) : 0.0;
+                assert_true(fabs(weight - expected) < 1e-5 * (1.0 + expected));
+            }
+    /* Cosine sampling's weight is exactly one: the estimator reduces to rho * V. */
+    for (int i = 0; i < 1000; i++) {
+        float weight;
+        draw(AO_SAMPLING_COSINE, NORMALS[4], ao_rng_float(&rng), ao_rng_float(&rng), &weight);
+        assert_true(weight == 1.0f);
+    }
+}
+
+static void test_pdfs_integrate_to_one(void **state)
+{
+    (void)state;
+    /* Integral of p over the sphere by uniform Monte Carlo: mean of 4 pi p(w). Per sample the value
+     * is at most 4 (cosine: 4 cos), variance at most 16/3 - 1 < 4.5, so over 10^6 samples the
+     * standard error is below 0.0022 and 4 sigma below 0.009. */
+    enum { N = 1000000 };
+    struct ao_rng rng = ao_rng_make(11, 0, 0, 0);
+    for (int mode = 0; mode < 3; mode++) {
+        double sum = 0;
+        for (int i = 0; i < N; i++) {
+            struct ao_vec3 w = ao_sample_uniform_sphere(ao_rng_float(&rng), ao_rng_float(&rng));
+            sum += 4.0 * PI * pdf((enum ao_sampling)mode, NORMALS[5], w);
+        }
+        assert_true(fabs(sum / N - 1.0) < 0.009);
+    }
+}
+
+/* Chi-square of a histogram over (bin of a function of cos(theta), bin of phi) in an independent
+ * frame. `stratum` maps cos(theta) to [0,1) so that each of its bins is equally likely under the
+ * sampler's pdf; phi bins are equally likely for all three. */
+static double chi_square(enum ao_sampling mode, struct ao_vec3 n, double (*stratum)(double))
+{
+    enum { THETA_BINS = 20, PHI_BINS = 16, N = 320000 };
+    static unsigned counts[THETA_BINS][PHI_BINS];
+    memset(counts, 0, sizeof counts);
+    /* A frame built by Gram-Schmidt, not the sampler's own basis. */
+    struct ao_vec3 a = fabsf(n.x) < 0.9f ? ao_vec3_make(1, 0, 0) : ao_vec3_make(0, 1, 0);
+    struct ao_vec3 t = ao_vec3_normalize(ao_vec3_sub(a, ao_vec3_scale(n, ao_vec3_dot(a, n))));
+    struct ao_vec3 b = ao_vec3_cross(n, t);
+    struct ao_rng rng = ao_rng_make(3, (uint64_t)mode, 0, 0);
+    for (int i = 0; i < N; i++) {
+        float weight;
+        struct ao_vec3 w = draw(mode, n, ao_rng_float(&rng), ao_rng_float(&rng), &weight);
+        double s = stratum(fmin(1.0, fmax(-1.0, ao_vec3_dot(w, n))));
+        double phi = atan2(ao_vec3_dot(w, b), ao_vec3_dot(w, t)) / (2 * PI) + 0.5;
+        int i_theta = (int)fmin(THETA_BINS - 1, fmax(0, s * THETA_BINS));
+        int i_phi = (int)fmin(PHI_BINS - 1, fmax(0, phi * PHI_BINS));
+        counts[i_theta][i_phi]++;
+    }
+    double expected = (double)N / (THETA_BINS * PHI_BINS), chi2 = 0;
+    for (int i = 0; i < THETA_BINS; i++)
+        for (int j = 0; j < PHI_BINS; j++)
+            chi2 += (counts[i][j] - expected) * (counts[i][j] - expected) / expected;
+    return chi2;
+}
+
+static double sphere_stratum(double c) { return 0.5 * (c + 1.0); }     /* cos uniform on [-1,1] */
+static double hemisphere_stratum(double c) { return c; }               /* cos uniform on [0,1] */
+static double cosine_stratum(double c) { return c * c; }               /* cos^2 uniform on [0,1] */
+
+static void test_histograms_match_pdfs(void **state)
+{
+    (void)state;
+    /* 320 equally likely cells, 319 degrees of freedom: the statistic has mean 319 and standard
+     * deviation sqrt(2 * 319) = 25.3, so a correct sampler stays below 319 + 5 * 25.3 = 445 (the
+     * right tail is a little heavier than normal; 5 sigma keeps the false alarm rate under 1e-4).
+     * A wrong pdf (e.g. hemisphere drawn for cosine) gives a statistic in the tens of thousands. */
+    const double bound = 319 + 5 * sqrt(2 * 319.0);
+    for (int k = 0; k < NORMAL_COUNT; k++) {
+        assert_true(chi_square(AO_SAMPLING_UNIFORM, NORMALS[k], sphere_stratum) < bound);
+        assert_true(chi_square(AO_SAMPLING_HEMISPHERE, NORMALS[k], hemisphere_stratum) < bound);
+        assert_true(chi_square(AO_SAMPLING_COSINE, NORMALS[k], cosine_stratum) < bound);
+    }
+    /* The test can fail: hemisphere samples binned as if cosine-distributed. */
+    assert_true(chi_square(AO_SAMPLING_HEMISPHERE, NORMALS[0], cosine_stratum) > 10 * bound);
+}
+
+static void test_names_round_trip(void **state)
+{
+    (void)state;
+    for (int mode = 0; mode < 3; mode++) {
+        enum ao_sampling parsed;
+        assert_true(ao_sampling_parse(ao_sampling_name((enum ao_sampling)mode), &parsed));
+        assert_int_equal(parsed, mode);
+    }
+    enum ao_sampling parsed;
+    assert_false(ao_sampling_parse("foo", &parsed));
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_edges_give_unit_finite_directions),
+        cmocka_unit_test(test_cosine_at_minus_n_is_the_horizon),
+        cmocka_unit_test(test_weight_is_cosine_over_pi_pdf),
+        cmocka_unit_test(test_pdfs_integrate_to_one),
+        cmocka_unit_test(test_histograms_match_pdfs),
+        cmocka_unit_test(test_names_round_trip),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
