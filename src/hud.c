@@ -1,0 +1,201 @@
+#include "hud.h"
+
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "sampling.h"
+#include "shaders/ao_shaders.h"
+
+/* stb_easy_font is a header of static functions, not all used here, written in an older style. */
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wunused-function"
+#pragma GCC diagnostic ignored "-Wmissing-braces"
+#include <stb_easy_font.h>
+#pragma GCC diagnostic pop
+
+/* stb_easy_font's vertex: position, unused z, colour; four per quad. */
+struct glyph_vertex {
+    float x, y, z;
+    unsigned char rgba[4];
+};
+
+struct ao_hud {
+    const struct ao_glapi *gl;
+    GLuint program, vao, vbo;
+    GLint screen, tint;
+    char *text;                  /* sanitised copy of the text being drawn */
+    size_t text_size;
+    struct glyph_vertex *quads;  /* stb_easy_font output */
+    float *triangles;            /* x, y pairs: the box, then two triangles per quad */
+    size_t quad_capacity;
+};
+
+/* Appends one status item, preceded by the separator unless it is the first. */
+static void item(char *out, size_t size, size_t *used, const char *separator, const char *format, ...)
+{
+    if (*used >= size)
+        return;
+    if (*used > 0)
+        *used += (size_t)snprintf(out + *used, size - *used, "%s", separator);
+    if (*used >= size)
+        return;
+    va_list args;
+    va_start(args, format);
+    *used += (size_t)vsnprintf(out + *used, size - *used, format, args);
+    va_end(args);
+}
+
+void ao_hud_format(const struct ao_hud_status *s, const char *separator, char *out, size_t size)
+{
+    const struct ao_frame_info *f = &s->info;
+    double mrays = f->seconds > 0 ? (double)(f->eye_rays + f->shadow_rays) / f->seconds / 1e6 : 0;
+    size_t used = 0;
+    out[0] = '\0';
+    item(out, size, &used, separator, "%s", s->scene);
+    item(out, size, &used, separator, "%s", ao_sampling_name(f->sampling));
+    item(out, size, &used, separator, "AA %s", f->aa ? "on" : "off");
+    item(out, size, &used, separator, "spp %u of %u", (unsigned)f->spp, (unsigned)f->target_spp);
+    item(out, size, &used, separator, "%.1fs", s->seconds);
+    item(out, size, &used, separator, "%.1f Mrays/s", mrays);
+    item(out, size, &used, separator, "pass %u", (unsigned)f->pass);
+    item(out, size, &used, separator, "%d spp/pass", s->spppp);
+    if (!isnan(f->rmse))
+        item(out, size, &used, separator, "RMSE %.4g", f->rmse);
+    if (s->paused)
+        item(out, size, &used, separator, "paused");
+}
+
+struct ao_hud *ao_hud_create(const struct ao_glapi *gl)
+{
+    struct ao_hud *hud = calloc(1, sizeof *hud);
+    if (!hud) {
+        fprintf(stderr, "aoview: out of memory for the overlay\n");
+        return NULL;
+    }
+    hud->gl = gl;
+    hud->program = ao_glapi_program(gl, "hud", ao_shader_hud_vert, ao_shader_hud_frag);
+    if (!hud->program) {
+        free(hud);
+        return NULL;
+    }
+    hud->screen = gl->GetUniformLocation(hud->program, "screen");
+    hud->tint = gl->GetUniformLocation(hud->program, "tint");
+    gl->GenVertexArrays(1, &hud->vao);
+    gl->GenBuffers(1, &hud->vbo);
+    gl->BindVertexArray(hud->vao);
+    gl->BindBuffer(GL_ARRAY_BUFFER, hud->vbo);
+    gl->VertexAttribPointer(0, 2, GL_FLOAT, GL_FALSE, 2 * sizeof(float), NULL);
+    gl->EnableVertexAttribArray(0);
+    gl->BindVertexArray(0);
+    return hud;
+}
+
+void ao_hud_destroy(struct ao_hud *hud)
+{
+    if (!hud)
+        return;
+    hud->gl->DeleteBuffers(1, &hud->vbo);
+    hud->gl->DeleteVertexArrays(1, &hud->vao);
+    hud->gl->DeleteProgram(hud->program);
+    free(hud->text);
+    free(hud->quads);
+    free(hud->triangles);
+    free(hud);
+}
+
+/* Copies text into the scratch buffer with every byte stb_easy_font has no glyph for (it indexes
+ * its table by byte - 32) replaced by '?'; false when memory is short. */
+static bool sanitise(struct ao_hud *hud, const char *text)
+{
+    size_t n = strlen(text) + 1;
+    if (n > hud->text_size) {
+        char *grown = realloc(hud->text, n);
+        if (!grown)
+            return false;
+        hud->text = grown;
+        hud->text_size = n;
+    }
+    for (size_t i = 0; i < n; i++) {
+        unsigned char c = (unsigned char)text[i];
+        hud->text[i] = c == '\n' || c == '\0' || (c >= 32 && c < 127) ? (char)c : '?';
+    }
+    return true;
+}
+
+/* Inner margin of the box around the text, in font pixels. */
+#define PADDING 4
+
+void ao_hud_measure(struct ao_hud *hud, const char *text, float scale, int *width, int *height)
+{
+    *width = *height = 0;
+    if (!sanitise(hud, text))
+        return;
+    *width = (int)ceilf((float)(stb_easy_font_width(hud->text) + 2 * PADDING) * scale);
+    *height = (int)ceilf((float)(stb_easy_font_height(hud->text) + 2 * PADDING) * scale);
+}
+
+/* Writes the two triangles of the rectangle (x0, y0)-(x1, y1) at t; returns the next slot. */
+static float *rectangle(float *t, float x0, float y0, float x1, float y1)
+{
+    const float v[12] = {x0, y0, x1, y0, x1, y1, x0, y0, x1, y1, x0, y1};
+    memcpy(t, v, sizeof v);
+    return t + 12;
+}
+
+/* Makes room for quads glyph quads (plus the box) in the scratch buffers. */
+static bool reserve(struct ao_hud *hud, size_t quads)
+{
+    if (quads <= hud->quad_capacity)
+        return true;
+    struct glyph_vertex *q = realloc(hud->quads, quads * 4 * sizeof *q);
+    if (!q)
+        return false;
+    hud->quads = q;
+    float *t = realloc(hud->triangles, (quads + 1) * 12 * sizeof *t);
+    if (!t)
+        return false;
+    hud->triangles = t;
+    hud->quad_capacity = quads;
+    return true;
+}
+
+void ao_hud_draw(struct ao_hud *hud, const char *text, int x, int y, float scale, int fb_width,
+                 int fb_height)
+{
+    const struct ao_glapi *gl = hud->gl;
+    int box_width, box_height;
+    ao_hud_measure(hud, text, scale, &box_width, &box_height);
+    /* No glyph has more than 16 segments, each one quad of 64 bytes. */
+    size_t length = strlen(hud->text);
+    if (!box_width || !reserve(hud, 16 * length + 1))
+        return;
+    int quads = stb_easy_font_print(0, 0, hud->text, NULL, hud->quads,
+                                    (int)(hud->quad_capacity * 4 * sizeof *hud->quads));
+
+    /* The box, then each glyph quad as two triangles, scaled and moved into place. */
+    float ox = (float)x + PADDING * scale, oy = (float)y + PADDING * scale;
+    float *t = rectangle(hud->triangles, (float)x, (float)y, (float)(x + box_width), (float)(y + box_height));
+    for (int i = 0; i < quads; i++) {
+        const struct glyph_vertex *q = hud->quads + 4 * i;
+        t = rectangle(t, ox + q[0].x * scale, oy + q[0].y * scale, ox + q[2].x * scale, oy + q[2].y * scale);
+    }
+
+    gl->Viewport(0, 0, fb_width, fb_height);
+    gl->Enable(GL_BLEND);
+    gl->BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
+    gl->UseProgram(hud->program);
+    gl->Uniform2f(hud->screen, (float)fb_width, (float)fb_height);
+    gl->BindVertexArray(hud->vao);
+    gl->BindBuffer(GL_ARRAY_BUFFER, hud->vbo);
+    gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)(quads + 1) * 12 * sizeof(float)),
+                   hud->triangles, GL_STREAM_DRAW);
+    gl->Uniform4f(hud->tint, 0.0f, 0.0f, 0.0f, 0.7f);
+    gl->DrawArrays(GL_TRIANGLES, 0, 6);
+    gl->Uniform4f(hud->tint, 1.0f, 1.0f, 0.85f, 1.0f);
+    gl->DrawArrays(GL_TRIANGLES, 6, 6 * quads);
+    gl->BindVertexArray(0);
+    gl->Disable(GL_BLEND);
+}

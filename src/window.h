@@ -1,0 +1,32 @@
+/* The interactive viewer: a GLFW window on the running renderer, with SPEC.md's keys and mouse,
+ * the status overlay and title, and screenshots. */
+#ifndef AO_WINDOW_H
+#define AO_WINDOW_H
+
+#include <stdbool.h>
+
+#include "render.h"
+
+/* What the window shows besides the frames; strings owned by the caller for the whole run. */
+struct ao_window_info {
+    const char *scene_name;
+    bool quiet;              /* no screenshot names on stdout */
+};
+
+/* How ao_window_run ended. */
+enum ao_window_result {
+    AO_WINDOW_OK,            /* the user quit */
+    AO_WINDOW_NO_DISPLAY,    /* no window could be opened; no frame was taken from the renderer */
+    AO_WINDOW_FAILED,        /* OpenGL failed after the window opened; one message printed */
+};
+
+/* Opens the GLFW window on the running renderer, sized to its first frame, and runs until the user
+ * quits; it is the renderer's frame consumer meanwhile. NO_DISPLAY when no window can be opened
+ * (main then falls back to headless). Main thread only. */
+enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_window_info *info);
+
+/* Wakes the window's event wait (glfwPostEmptyEvent) so that it takes a new frame; a no-op when
+ * no window is running. Any thread: main's on_pass calls it after each published pass. */
+void ao_window_notify(void);
+
+#endif

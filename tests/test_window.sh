@@ -1,0 +1,153 @@
+#!/bin/bash
+# window suite: the real viewer in a real X window under Xvfb, driven by xdotool.
+#   test_window.sh keys    presses C, U, A, S, +, R, Esc in turn and checks the title, the
+#                          screenshot files and a clean exit within a second of Esc
+#   test_window.sh stress  200 random keys, drags and resizes in a few seconds, then a screenshot
+#                          (no NaN in its PFM) and a clean exit
+# Needs AO_BINARY and AO_SOURCE_ROOT (tests/meson.build sets both); exits 77 when Xvfb or
+# xdotool is missing.
+set -u
+mode=${1:-keys}
+
+for tool in xvfb-run xdotool python3; do
+    if ! command -v "$tool" >/dev/null; then
+        echo "SKIP: $tool is not installed (Debian: apt-get install xvfb xdotool)"
+        exit 77
+    fi
+done
+if [ -z "${AO_UNDER_XVFB:-}" ]; then
+    # A 24-bit screen: xvfb-run's default depth has no OpenGL visual.
+    AO_UNDER_XVFB=1 exec xvfb-run -a -s "-screen 0 1280x1024x24" "$0" "$@"
+fi
+
+fail() {
+    echo "FAIL: $*"
+    echo "last title: $(xdotool getwindowname "$wid" 2>/dev/null)"
+    echo "--- aoview stdout"; cat "$work/stdout"
+    echo "--- aoview stderr"; cat "$work/stderr"
+    exit 1
+}
+
+title() { xdotool getwindowname "$wid"; }
+
+# Polls the title until it matches the extended regex $1, for at most 10 s.
+wait_title() {
+    for _ in $(seq 200); do
+        [[ $(title) =~ $1 ]] && return 0
+        sleep 0.05
+    done
+    fail "title never matched /$1/"
+}
+
+# Field of the title: the number in "spp N of", or in "pass N".
+spp() { [[ $(title) =~ spp\ ([0-9]+)\ of ]] && echo "${BASH_REMATCH[1]}"; }
+pass() { [[ $(title) =~ pass\ ([0-9]+) ]] && echo "${BASH_REMATCH[1]}"; }
+
+# Presses the keys (X keysym names) on the focused viewer, as a user would.
+press() {
+    xdotool windowfocus --sync "$wid" key --delay 20 "$@" 2>/dev/null
+}
+
+# Waits for screenshot number $1 and checks that both files decode: PNG signature and IHDR size,
+# PFM header, size and no NaN or infinity among its floats.
+check_screenshot() {
+    local png="$work/aoview-$1.png" pfm="$work/aoview-$1.pfm"
+    for _ in $(seq 200); do
+        [ -s "$png" ] && [ -s "$pfm" ] && break
+        sleep 0.05
+    done
+    python3 - "$png" "$pfm" "$W" "$H" <<'EOF' || fail "screenshot $1 does not decode"
+import math, struct, sys
+png, pfm, w, h = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
+data = open(png, 'rb').read()
+assert data[:8] == b'\x89PNG\r\n\x1a\n', 'no PNG signature'
+assert data[12:16] == b'IHDR' and struct.unpack('>II', data[16:24]) == (w, h), 'PNG size'
+data = open(pfm, 'rb').read()
+header = data.split(b'\n', 3)
+assert header[0] == b'PF' and header[1].split() == [str(w).encode(), str(h).encode()], 'PFM header'
+scale = float(header[2])
+pixels = header[3]
+assert len(pixels) == 12 * w * h, 'PFM size'
+values = struct.unpack(('<' if scale < 0 else '>') + 'f' * (3 * w * h), pixels)
+bad = [v for v in values if not math.isfinite(v)]
+assert not bad, '%d non-finite values' % len(bad)
+EOF
+}
+
+# Starts the viewer on the small spheres scene with a target it will not reach.
+W=160
+H=120
+work=$(mktemp -d)
+trap 'kill "$pid" 2>/dev/null; rm -rf "$work"' EXIT
+cd "$work" || exit 1
+"$AO_BINARY" --size ${W}x$H --spp 1000000 --threads 2 --sampling hemisphere \
+    "$AO_SOURCE_ROOT/assets/scenes/spheres.scene" >stdout 2>stderr &
+pid=$!
+wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window appeared"
+wid=${wid%%$'\n'*}
+wait_title "hemisphere — AA on — spp [0-9]+ of 1000000 — "
+
+if [ "$mode" = keys ]; then
+    # Sampling and anti-aliasing: each key shows in the title of the next frame.
+    press c
+    wait_title " — cosine — AA on — "
+    press u
+    wait_title " — uniform — AA on — "
+    press a
+    wait_title " — uniform — AA off — "
+
+    # S: both files, named for the first free number, reported on stdout.
+    press s
+    check_screenshot 1
+    grep -q "aoview-1.png" stdout || fail "screenshot names not printed"
+
+    # +: two samples per pass, so spp runs ahead of the pass count.
+    press plus
+    wait_title " — 2 spp/pass"
+    for _ in $(seq 200); do
+        [ "$(spp)" -gt "$(pass)" ] && break
+        sleep 0.05
+    done
+    [ "$(spp)" -gt "$(pass)" ] || fail "+ did not raise the samples per pass"
+
+    # R: the pass count starts again from 1.
+    wait_title " — pass ([1-9][0-9]|[6-9]) — "
+    before=$(pass)
+    press r
+    for _ in $(seq 200); do
+        [ "$(pass)" -lt "$before" ] && break
+        sleep 0.05
+    done
+    [ "$(pass)" -lt "$before" ] || fail "R did not restart (pass stayed at or above $before)"
+else
+    # Random keys (no S, Q or Esc), drags, wheel steps and resizes, as fast as xdotool goes.
+    keys=(u h c a space r plus minus equal KP_Add KP_Subtract F1 F2 question)
+    RANDOM=1
+    for i in $(seq 200); do
+        case $((RANDOM % 4)) in
+        0) xdotool windowsize "$wid" $((50 + RANDOM % 600)) $((50 + RANDOM % 500)) ;;
+        1) button=$((RANDOM % 2 * 2 + 1))   # left or right
+           xdotool mousemove --window "$wid" $((RANDOM % 100)) $((RANDOM % 100)) mousedown $button \
+               mousemove_relative -- $((RANDOM % 41 - 20)) $((RANDOM % 41 - 20)) mouseup $button \
+               click $((RANDOM % 2 + 4)) ;;   # wheel up or down
+        *) press "${keys[RANDOM % ${#keys[@]}]}" ;;
+        esac
+        kill -0 "$pid" 2>/dev/null || fail "aoview died after $i random inputs"
+    done
+    # Release any button a drag above left down; then the viewer must still answer.
+    xdotool mouseup 1 mouseup 3 2>/dev/null
+    press s
+    check_screenshot 1
+fi
+
+# Esc: the process ends, with status 0, within a second even with a pass in flight.
+press Escape
+for _ in $(seq 100); do
+    kill -0 "$pid" 2>/dev/null || break
+    sleep 0.01
+done
+kill -0 "$pid" 2>/dev/null && fail "still running 1 s after Esc"
+wait "$pid"
+status=$?
+[ "$status" -eq 0 ] || fail "exit status $status after Esc"
+echo "PASS ($mode)"
