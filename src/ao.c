@@ -13,11 +13,8 @@
 
 #include "rng.h"
 
-/* Directions traced per batch, a multiple of the tracer's 16-ray packets. */
-enum { BATCH = 64 };
-
-/* Key of the eye-ray stream in the sample slot and of the AO streams in the pass slot, so that the
- * two never share a stream: real pass and sample numbers stay far below it. */
+/* Key of the AO streams in the pass slot, so that they never share a stream with the eye rays':
+ * real pass numbers stay far below it. */
 static const uint64_t STREAM_TAG = UINT64_MAX;
 
 float ao_surface_offset(struct ao_vec3 origin, float t, struct ao_vec3 position)
@@ -60,53 +57,118 @@ void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struc
     s->offset = ao_surface_offset(org, hit->t, s->position);
 }
 
+/* Occlusion rays waiting for a full packet, each lane remembering its weight and whose sum the
+ * weight joins when the ray is open. */
+struct queue {
+    const struct ao_context *ctx;
+    struct ao_packet rays;
+    float weight[AO_PACKET_SIZE];
+    double *sum[AO_PACKET_SIZE];
+    uint64_t traced;
+};
+
+static void flush(struct queue *q)
+{
+    uint8_t open[AO_PACKET_SIZE];
+    if (q->rays.count == 0)
+        return;
+    ao_tracer_occluded(q->ctx->tracer, &q->rays, open);
+    for (int k = 0; k < q->rays.count; k++)
+        *q->sum[k] += open[k] ? q->weight[k] : 0.0f;
+    q->traced += (uint64_t)q->rays.count;
+    q->rays.count = 0;
+}
+
+/* Queues the `count` AO samples of surface s (stream `key`, from first_sample) into *sum. */
+static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t key, uint64_t first_sample,
+                          int count, double *sum)
+{
+    struct ao_basis basis = ao_basis_from_normal(s->ns);
+    struct ao_vec3 origin = ao_vec3_add(s->position, ao_vec3_scale(s->ng, s->offset));
+    for (int k = 0; k < count; k++) {
+        float u1, u2;
+        struct ao_vec3 dir;
+        ao_rng_pair(key, first_sample + (uint64_t)k, &u1, &u2);
+        float w = ao_sample_direction(q->ctx->sampling, &basis, u1, u2, &dir);
+        if (w <= 0.0f)
+            continue;
+        int lane = q->rays.count++;
+        q->rays.org_x[lane] = origin.x;
+        q->rays.org_y[lane] = origin.y;
+        q->rays.org_z[lane] = origin.z;
+        q->rays.dir_x[lane] = dir.x;
+        q->rays.dir_y[lane] = dir.y;
+        q->rays.dir_z[lane] = dir.z;
+        q->rays.tfar[lane] = q->ctx->ao_distance;
+        q->weight[lane] = w;
+        q->sum[lane] = sum;
+        if (q->rays.count == AO_PACKET_SIZE)
+            flush(q);
+    }
+}
+
+/* The AO stream of a pixel: keyed in the pass slot by a tag no real pass reaches. */
+static uint64_t ao_key(const struct ao_context *ctx, uint64_t pixel)
+{
+    return ao_rng_key(ctx->seed, pixel, STREAM_TAG);
+}
+
 struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao_surface *s,
                                    uint64_t pixel, uint64_t first_sample, int count,
                                    uint64_t *shadow_rays)
 {
-    struct ao_basis basis = ao_basis_from_normal(s->ns);
-    struct ao_vec3 origin = ao_vec3_add(s->position, ao_vec3_scale(s->ng, s->offset));
+    struct queue q = {.ctx = ctx};
     double sum = 0.0;
-    for (int first = 0; first < count; first += BATCH) {
-        struct ao_vec3 dirs[BATCH];
-        float weights[BATCH];
-        uint8_t open[BATCH];
-        int traced = 0;
-        /* Draw the batch, keeping only directions that can contribute. */
-        for (int k = first; k < count && k < first + BATCH; k++) {
-            struct ao_rng rng = ao_rng_make(ctx->seed, pixel, STREAM_TAG, first_sample + (uint64_t)k);
-            float u1 = ao_rng_float(&rng), u2 = ao_rng_float(&rng);
-            float w = ao_sample_direction(ctx->sampling, &basis, u1, u2, &dirs[traced]);
-            if (w > 0.0f)
-                weights[traced++] = w;
-        }
-        /* Trace them and add the open ones' weights. */
-        if (traced)
-            ao_tracer_occluded(ctx->tracer, origin, dirs, traced, ctx->ao_distance, open);
-        *shadow_rays += (uint64_t)traced;
-        for (int k = 0; k < traced; k++)
-            sum += open[k] ? weights[k] : 0.0f;
-    }
+    queue_samples(&q, s, ao_key(ctx, pixel), first_sample, count, &sum);
+    flush(&q);
+    *shadow_rays += q.traced;
     return ao_vec3_scale(s->albedo, (float)sum);
 }
 
-struct ao_vec3 ao_estimate_pixel(const struct ao_context *ctx, int i, int j, uint64_t pass,
-                                 uint64_t first_sample, int count, uint64_t *eye_rays,
-                                 uint64_t *shadow_rays)
+void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, uint64_t pass,
+                      uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
+                      uint64_t *shadow_rays)
 {
-    uint64_t pixel = (uint64_t)j * (uint64_t)ctx->view.width + (uint64_t)i;
-    float du = 0.5f, dv = 0.5f;
-    if (ctx->aa) {
-        struct ao_rng rng = ao_rng_make(ctx->seed, pixel, pass, STREAM_TAG);
-        du = ao_rng_float(&rng);
-        dv = ao_rng_float(&rng);
+    int width = tile->x1 - tile->x0, pixels = width * (tile->y1 - tile->y0);
+    struct queue q = {.ctx = ctx};
+    for (int first = 0; first < pixels; first += AO_PACKET_SIZE) {
+        struct ao_packet eye = {.count = pixels - first < AO_PACKET_SIZE ? pixels - first : AO_PACKET_SIZE};
+        struct ao_hit hits[AO_PACKET_SIZE];
+        uint64_t index[AO_PACKET_SIZE];
+        /* Eye rays of up to 16 pixels, jittered inside the pixel with AA. */
+        for (int k = 0; k < eye.count; k++) {
+            int i = tile->x0 + (first + k) % width, j = tile->y0 + (first + k) / width;
+            float du = 0.5f, dv = 0.5f;
+            index[k] = (uint64_t)j * (uint64_t)ctx->view.width + (uint64_t)i;
+            if (ctx->aa)
+                ao_rng_pair(ao_rng_key(ctx->seed, index[k], pass), 0, &du, &dv);
+            struct ao_vec3 d = ao_camera_ray(&ctx->view, (float)i + du, (float)j + dv);
+            eye.org_x[k] = ctx->view.eye.x;
+            eye.org_y[k] = ctx->view.eye.y;
+            eye.org_z[k] = ctx->view.eye.z;
+            eye.dir_x[k] = d.x;
+            eye.dir_y[k] = d.y;
+            eye.dir_z[k] = d.z;
+            eye.tfar[k] = INFINITY;
+        }
+        ao_tracer_intersect(ctx->tracer, &eye, hits);
+        *eye_rays += (uint64_t)eye.count;
+        /* Their AO samples, queued across pixels so packets fill even at one sample per pass. */
+        double sum[AO_PACKET_SIZE] = {0};
+        struct ao_vec3 albedo[AO_PACKET_SIZE];
+        for (int k = 0; k < eye.count; k++) {
+            if (hits[k].t == INFINITY)
+                continue;
+            struct ao_surface s;
+            struct ao_vec3 d = ao_vec3_make(eye.dir_x[k], eye.dir_y[k], eye.dir_z[k]);
+            ao_surface_from_hit(ctx->scene, ctx->view.eye, d, &hits[k], &s);
+            albedo[k] = s.albedo;
+            queue_samples(&q, &s, ao_key(ctx, index[k]), first_sample, count, &sum[k]);
+        }
+        flush(&q);
+        for (int k = 0; k < eye.count; k++)
+            sums[first + k] = hits[k].t == INFINITY ? ao_vec3_scale(ctx->scene->background, (float)count)
+                                                    : ao_vec3_scale(albedo[k], (float)sum[k]);
     }
-    struct ao_vec3 dir = ao_camera_ray(&ctx->view, (float)i + du, (float)j + dv);
-    struct ao_hit hit;
-    *eye_rays += 1;
-    if (!ao_tracer_intersect(ctx->tracer, ctx->view.eye, dir, &hit))
-        return ao_vec3_scale(ctx->scene->background, (float)count);
-    struct ao_surface s;
-    ao_surface_from_hit(ctx->scene, ctx->view.eye, dir, &hit, &s);
-    return ao_estimate_surface(ctx, &s, pixel, first_sample, count, shadow_rays);
+    *shadow_rays += q.traced;
 }

@@ -43,10 +43,17 @@ struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao
                                    uint64_t pixel, uint64_t first_sample, int count,
                                    uint64_t *shadow_rays);
 
-/* One pass at pixel (i, j): one eye ray (jittered with AA) and `count` AO samples; returns the sum
- * of their values (background on a miss) and adds the rays traced to *eye_rays / *shadow_rays. */
-struct ao_vec3 ao_estimate_pixel(const struct ao_context *ctx, int i, int j, uint64_t pass,
-                                 uint64_t first_sample, int count, uint64_t *eye_rays,
-                                 uint64_t *shadow_rays);
+/* A rectangle of pixels [x0, x1) x [y0, y1) holding at most AO_TILE_PIXELS. */
+enum { AO_TILE_PIXELS = 256 };
+struct ao_tile {
+    int x0, y0, x1, y1;
+};
+
+/* One pass over a tile: per pixel one eye ray (jittered with AA) and `count` AO samples; writes
+ * each pixel's sum of sample values (background on a miss) to sums, row by row, and adds the rays
+ * traced to *eye_rays / *shadow_rays. Rays go to the tracer in packets across pixels. Any thread. */
+void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, uint64_t pass,
+                      uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
+                      uint64_t *shadow_rays);
 
 #endif

@@ -12,7 +12,9 @@
 #include "accum.h"
 #include "ao.h"
 
+/* Tiles are TILE x TILE pixels (AO_TILE_PIXELS); FRESH marks a frame the consumer has not seen. */
 enum { TILE = 16, FRESH = 4 };
+_Static_assert(TILE * TILE <= AO_TILE_PIXELS, "a tile must fit ao_estimate_tile");
 
 struct ao_render {
     struct ao_render_config config;
@@ -75,16 +77,16 @@ static void render_tiles(struct ao_render *r)
         int tile = atomic_fetch_add_explicit(&r->next_tile, 1, memory_order_relaxed);
         if (tile >= r->tile_count || aborted(r))
             return;
-        int x0 = (tile % r->tiles_x) * TILE, y0 = (tile / r->tiles_x) * TILE;
-        int x1 = x0 + TILE < width ? x0 + TILE : width, y1 = y0 + TILE < height ? y0 + TILE : height;
+        struct ao_tile t = {.x0 = (tile % r->tiles_x) * TILE, .y0 = (tile / r->tiles_x) * TILE};
+        t.x1 = t.x0 + TILE < width ? t.x0 + TILE : width;
+        t.y1 = t.y0 + TILE < height ? t.y0 + TILE : height;
+        struct ao_vec3 sums[AO_TILE_PIXELS];
         uint64_t eye = 0, shadow = 0;
-        for (int j = y0; j < y1; j++) {
-            for (int i = x0; i < x1; i++) {
-                struct ao_vec3 sum = ao_estimate_pixel(ctx, i, j, r->pass, r->first_sample, r->samples,
-                                                       &eye, &shadow);
-                ao_accum_add(&r->accum, (size_t)j * (size_t)width + (size_t)i, sum, (uint32_t)r->samples);
-            }
-        }
+        ao_estimate_tile(ctx, &t, r->pass, r->first_sample, r->samples, sums, &eye, &shadow);
+        for (int j = t.y0; j < t.y1; j++)
+            for (int i = t.x0; i < t.x1; i++)
+                ao_accum_add(&r->accum, (size_t)j * (size_t)width + (size_t)i,
+                             sums[(j - t.y0) * (t.x1 - t.x0) + (i - t.x0)], (uint32_t)r->samples);
         atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
         atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
     }

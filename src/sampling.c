@@ -27,12 +27,31 @@ bool ao_sampling_parse(const char *name, enum ao_sampling *mode)
     return false;
 }
 
+/* cos and sin of 2 pi u for u in [0, 1), without libm (a third of a sample's cost otherwise) and
+ * without branches: the quadrant comes from 4u, the rest a in [-pi/4, pi/4) is handled by Taylor
+ * polynomials (truncation error below 2e-9, far under float rounding), rotated by pi/4 and then
+ * by the quadrant. */
+static inline void cos_sin_2pi(float u, float *c, float *s)
+{
+    float v = 4.0f * u;
+    int quadrant = (int)v;
+    float a = (v - (float)quadrant - 0.5f) * (0.5f * PI), a2 = a * a;
+    float sin_a = a * (1.0f + a2 * (-1.0f / 6 + a2 * (1.0f / 120 + a2 * (-1.0f / 5040 + a2 * (1.0f / 362880)))));
+    float cos_a = 1.0f + a2 * (-0.5f + a2 * (1.0f / 24 + a2 * (-1.0f / 720 + a2 * (1.0f / 40320 + a2 * (-1.0f / 3628800)))));
+    const float half_sqrt2 = 0.70710678118654752f;
+    float cq = (cos_a - sin_a) * half_sqrt2, sq = (sin_a + cos_a) * half_sqrt2;
+    float x = quadrant & 1 ? -sq : cq, y = quadrant & 1 ? cq : sq;
+    *c = quadrant & 2 ? -x : x;
+    *s = quadrant & 2 ? -y : y;
+}
+
 struct ao_vec3 ao_sample_uniform_sphere(float u1, float u2)
 {
     float z = 2.0f * u1 - 1.0f;
     float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
-    float phi = 2.0f * PI * u2;
-    return ao_vec3_make(r * cosf(phi), r * sinf(phi), z);
+    float c, s;
+    cos_sin_2pi(u2, &c, &s);
+    return ao_vec3_make(r * c, r * s, z);
 }
 
 float ao_uniform_sphere_pdf(void)
@@ -45,8 +64,9 @@ struct ao_vec3 ao_sample_hemisphere(const struct ao_basis *f, float u1, float u2
     /* cos(theta) uniform in (0, 1]: 1 - u1 keeps the direction off the horizon at u1 = 0. */
     float z = 1.0f - u1;
     float r = sqrtf(fmaxf(0.0f, 1.0f - z * z));
-    float phi = 2.0f * PI * u2;
-    return ao_basis_to_world(f, r * cosf(phi), r * sinf(phi), z);
+    float c, s;
+    cos_sin_2pi(u2, &c, &s);
+    return ao_basis_to_world(f, r * c, r * s, z);
 }
 
 float ao_hemisphere_pdf(struct ao_vec3 n, struct ao_vec3 w)
@@ -63,8 +83,9 @@ struct ao_vec3 ao_sample_cosine(const struct ao_basis *f, float u1, float u2)
      * limit of its neighbours, instead of 0/0. The density is cos(theta)/pi (Malley's method). */
     float z = sqrtf(u1);
     float r = sqrtf(1.0f - u1);
-    float phi = 2.0f * PI * u2;
-    return ao_basis_to_world(f, r * cosf(phi), r * sinf(phi), z);
+    float c, s;
+    cos_sin_2pi(u2, &c, &s);
+    return ao_basis_to_world(f, r * c, r * s, z);
 }
 
 float ao_cosine_pdf(struct ao_vec3 n, struct ao_vec3 w)

@@ -120,63 +120,59 @@ void ao_tracer_thread_init(void)
 #endif
 }
 
-bool ao_tracer_intersect(const struct ao_tracer *tracer, struct ao_vec3 org, struct ao_vec3 dir,
-                         struct ao_hit *hit)
+/* Copies our packet into Embree's ray layout, with a validity mask for the unused lanes. */
+static void to_embree(const struct ao_packet *rays, struct RTCRay16 *out, int *valid)
 {
-    struct RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    struct RTCRayHit rh = {
-        .ray = {.org_x = org.x, .org_y = org.y, .org_z = org.z, .tnear = 0.0f,
-                .dir_x = dir.x, .dir_y = dir.y, .dir_z = dir.z, .tfar = INFINITY, .mask = ~0u},
-        .hit = {.geomID = RTC_INVALID_GEOMETRY_ID, .instID = {RTC_INVALID_GEOMETRY_ID}},
-    };
-    rtcIntersect1(tracer->scene, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID)
-        return false;
-    hit->t = rh.ray.tfar;
-    hit->u = rh.hit.u;
-    hit->v = rh.hit.v;
-    hit->prim = rh.hit.primID;
-    hit->sphere = rh.hit.geomID == tracer->spheres_id;
-    return true;
+    for (int k = 0; k < AO_PACKET_SIZE; k++) {
+        int lane = k < rays->count ? k : 0;
+        valid[k] = k < rays->count ? -1 : 0;
+        out->org_x[k] = rays->org_x[lane];
+        out->org_y[k] = rays->org_y[lane];
+        out->org_z[k] = rays->org_z[lane];
+        out->dir_x[k] = rays->dir_x[lane];
+        out->dir_y[k] = rays->dir_y[lane];
+        out->dir_z[k] = rays->dir_z[lane];
+        out->tnear[k] = 0.0f;
+        out->tfar[k] = rays->tfar[lane];
+        out->time[k] = 0.0f;
+        out->mask[k] = ~0u;
+        out->id[k] = (unsigned)k;
+        out->flags[k] = 0;
+    }
 }
 
-void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_vec3 org,
-                        const struct ao_vec3 *dirs, int count, float tfar, uint8_t *open)
+void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet *rays, struct ao_hit *hits)
 {
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    if (count == 1) {
-        struct RTCRay ray = {.org_x = org.x, .org_y = org.y, .org_z = org.z, .tnear = 0.0f,
-                             .dir_x = dirs[0].x, .dir_y = dirs[0].y, .dir_z = dirs[0].z,
-                             .tfar = tfar, .mask = ~0u};
-        rtcOccluded1(tracer->scene, &context, &ray);
-        open[0] = ray.tfar >= 0.0f;
-        return;
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    _Alignas(64) struct RTCRayHit16 rh;
+    _Alignas(64) int valid[AO_PACKET_SIZE];
+    to_embree(rays, &rh.ray, valid);
+    for (int k = 0; k < AO_PACKET_SIZE; k++) {
+        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
     }
-    /* Packets of 16 rays from one origin; Embree marks an occluded ray by setting tfar = -inf. */
-    for (int first = 0; first < count; first += 16) {
-        _Alignas(64) struct RTCRay16 packet;
-        _Alignas(64) int valid[16];
-        int lanes = count - first < 16 ? count - first : 16;
-        for (int k = 0; k < 16; k++) {
-            const struct ao_vec3 d = dirs[first + (k < lanes ? k : 0)];
-            valid[k] = k < lanes ? -1 : 0;
-            packet.org_x[k] = org.x;
-            packet.org_y[k] = org.y;
-            packet.org_z[k] = org.z;
-            packet.dir_x[k] = d.x;
-            packet.dir_y[k] = d.y;
-            packet.dir_z[k] = d.z;
-            packet.tnear[k] = 0.0f;
-            packet.tfar[k] = tfar;
-            packet.time[k] = 0.0f;
-            packet.mask[k] = ~0u;
-            packet.id[k] = (unsigned)k;
-            packet.flags[k] = 0;
-        }
-        rtcOccluded16(valid, tracer->scene, &context, &packet);
-        for (int k = 0; k < lanes; k++)
-            open[first + k] = packet.tfar[k] >= 0.0f;
+    rtcIntersect16(valid, tracer->scene, &context, &rh);
+    for (int k = 0; k < rays->count; k++) {
+        bool found = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
+        hits[k].t = found ? rh.ray.tfar[k] : INFINITY;
+        hits[k].u = rh.hit.u[k];
+        hits[k].v = rh.hit.v[k];
+        hits[k].prim = rh.hit.primID[k];
+        hits[k].sphere = rh.hit.geomID[k] == tracer->spheres_id;
     }
+}
+
+void ao_tracer_occluded(const struct ao_tracer *tracer, const struct ao_packet *rays, uint8_t *open)
+{
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    _Alignas(64) struct RTCRay16 packet;
+    _Alignas(64) int valid[AO_PACKET_SIZE];
+    to_embree(rays, &packet, valid);
+    rtcOccluded16(valid, tracer->scene, &context, &packet);
+    /* Embree marks an occluded ray by setting its tfar to -inf. */
+    for (int k = 0; k < rays->count; k++)
+        open[k] = packet.tfar[k] >= 0.0f;
 }

@@ -12,9 +12,18 @@
 /* An Embree device with the committed scene; opaque. */
 struct ao_tracer;
 
+/* Rays traced together: up to AO_PACKET_SIZE in structure-of-arrays layout, lanes 0..count-1. */
+enum { AO_PACKET_SIZE = 16 };
+struct ao_packet {
+    float org_x[AO_PACKET_SIZE], org_y[AO_PACKET_SIZE], org_z[AO_PACKET_SIZE];
+    float dir_x[AO_PACKET_SIZE], dir_y[AO_PACKET_SIZE], dir_z[AO_PACKET_SIZE];
+    float tfar[AO_PACKET_SIZE];
+    int count;
+};
+
 /* What an eye ray hit: enough for ao.c to shade it from the scene's arrays. */
 struct ao_hit {
-    float t;                /* distance along the unit ray */
+    float t;                /* distance along the unit ray; INFINITY on a miss */
     float u, v;             /* barycentrics of vertices 1 and 2 on triangles */
     uint32_t prim;          /* triangle index, or sphere index */
     bool sphere;            /* true for a sphere, false for a triangle */
@@ -31,13 +40,11 @@ void ao_tracer_destroy(struct ao_tracer *tracer);
  * thread; every thread that traces calls it once. */
 void ao_tracer_thread_init(void);
 
-/* Closest hit of the ray org + t dir, t in (0, inf); false on a miss. Any thread. */
-bool ao_tracer_intersect(const struct ao_tracer *tracer, struct ao_vec3 org, struct ao_vec3 dir,
-                         struct ao_hit *hit);
+/* Closest hits of the packet's rays (coherent eye rays), t in (0, tfar]. Any thread. */
+void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet *rays, struct ao_hit *hits);
 
-/* For count rays from one origin along dirs[k], t in [0, tfar], sets open[k] to 1 when nothing is
- * hit and 0 otherwise; traced in packets. Any thread. */
-void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_vec3 org,
-                        const struct ao_vec3 *dirs, int count, float tfar, uint8_t *open);
+/* Sets open[k] to 1 when nothing lies on ray k within t in [0, tfar], else 0 (incoherent
+ * occlusion rays). Any thread. */
+void ao_tracer_occluded(const struct ao_tracer *tracer, const struct ao_packet *rays, uint8_t *open);
 
 #endif

@@ -20,7 +20,7 @@ static const struct ao_vec3 NORMALS[] = {
 };
 enum { NORMAL_COUNT = sizeof NORMALS / sizeof NORMALS[0] };
 
-/* The largest float below 1, the edge of what ao_rng_float returns. */
+/* The largest float below 1, the edge of what ao_rng_pair returns. */
 static const float ALMOST_ONE = 0x1.fffffep-1f;
 
 static struct ao_vec3 draw(enum ao_sampling mode, struct ao_vec3 n, float u1, float u2, float *weight)
@@ -78,13 +78,16 @@ static void test_cosine_at_minus_n_is_the_horizon(void **state)
 static void test_weight_is_cosine_over_pi_pdf(void **state)
 {
     (void)state;
-    struct ao_rng rng = ao_rng_make(7, 0, 0, 0);
+    uint64_t key = ao_rng_key(7, 0, 0);
+    uint64_t sample = 0;
+    float u1, u2;
     for (int mode = 0; mode < 3; mode++)
         for (int k = 0; k < NORMAL_COUNT; k++)
             for (int i = 0; i < 2000; i++) {
                 float weight;
                 struct ao_vec3 n = NORMALS[k];
-                struct ao_vec3 w = draw((enum ao_sampling)mode, n, ao_rng_float(&rng), ao_rng_float(&rng), &weight);
+                ao_rng_pair(key, sample++, &u1, &u2);
+                struct ao_vec3 w = draw((enum ao_sampling)mode, n, u1, u2, &weight);
                 double cosine = fmax(0.0, ao_vec3_dot(n, w));
                 double p = pdf((enum ao_sampling)mode, n, w);
                 double expected = p > 0 ? cosine / (PI * p) : 0.0;
@@ -93,7 +96,8 @@ static void test_weight_is_cosine_over_pi_pdf(void **state)
     /* Cosine sampling's weight is exactly one: the estimator reduces to rho * V. */
     for (int i = 0; i < 1000; i++) {
         float weight;
-        draw(AO_SAMPLING_COSINE, NORMALS[4], ao_rng_float(&rng), ao_rng_float(&rng), &weight);
+        ao_rng_pair(key, sample++, &u1, &u2);
+        draw(AO_SAMPLING_COSINE, NORMALS[4], u1, u2, &weight);
         assert_true(weight == 1.0f);
     }
 }
@@ -105,11 +109,13 @@ static void test_pdfs_integrate_to_one(void **state)
      * is at most 4 (cosine: 4 cos), variance at most 16/3 - 1 < 4.5, so over 10^6 samples the
      * standard error is below 0.0022 and 4 sigma below 0.009. */
     enum { N = 1000000 };
-    struct ao_rng rng = ao_rng_make(11, 0, 0, 0);
+    uint64_t key = ao_rng_key(11, 0, 0);
+        float u1, u2;
     for (int mode = 0; mode < 3; mode++) {
         double sum = 0;
         for (int i = 0; i < N; i++) {
-            struct ao_vec3 w = ao_sample_uniform_sphere(ao_rng_float(&rng), ao_rng_float(&rng));
+            ao_rng_pair(key, (uint64_t)i, &u1, &u2);
+            struct ao_vec3 w = ao_sample_uniform_sphere(u1, u2);
             sum += 4.0 * PI * pdf((enum ao_sampling)mode, NORMALS[5], w);
         }
         assert_true(fabs(sum / N - 1.0) < 0.009);
@@ -128,10 +134,12 @@ static double chi_square(enum ao_sampling mode, struct ao_vec3 n, double (*strat
     struct ao_vec3 a = fabsf(n.x) < 0.9f ? ao_vec3_make(1, 0, 0) : ao_vec3_make(0, 1, 0);
     struct ao_vec3 t = ao_vec3_normalize(ao_vec3_sub(a, ao_vec3_scale(n, ao_vec3_dot(a, n))));
     struct ao_vec3 b = ao_vec3_cross(n, t);
-    struct ao_rng rng = ao_rng_make(3, (uint64_t)mode, 0, 0);
+    uint64_t key = ao_rng_key(3, (uint64_t)mode, 0);
     for (int i = 0; i < N; i++) {
         float weight;
-        struct ao_vec3 w = draw(mode, n, ao_rng_float(&rng), ao_rng_float(&rng), &weight);
+        float u1, u2;
+        ao_rng_pair(key, (uint64_t)i, &u1, &u2);
+        struct ao_vec3 w = draw(mode, n, u1, u2, &weight);
         double s = stratum(fmin(1.0, fmax(-1.0, ao_vec3_dot(w, n))));
         double phi = atan2(ao_vec3_dot(w, b), ao_vec3_dot(w, t)) / (2 * PI) + 0.5;
         int i_theta = (int)fmin(THETA_BINS - 1, fmax(0, s * THETA_BINS));
