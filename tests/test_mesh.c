@@ -1,0 +1,857 @@
+/* Tests of the OBJ and PLY loaders: every supported form, the computed normals, degenerate
+ * triangles, and that each bad input fails with one "path:line: message" line and an empty mesh.
+ * Fixtures live in tests/data/mesh; binary PLY files are generated into a temporary directory. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <dirent.h>
+#include <errno.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "mesh.h"
+
+/* Where the committed fixtures are, and a scratch directory for generated files. */
+static char data_dir[4096];
+static char temp_dir[4096];
+
+/* ------------------------------------------------------------------ helpers */
+
+/* A path in one of a few rotating buffers, so a test can hold several at once. */
+static char *path_buffer(void)
+{
+    static char buffers[4][4200];
+    static int next;
+    next = (next + 1) % 4;
+    return buffers[next];
+}
+
+/* The path of a committed fixture. */
+static const char *fixture(const char *name)
+{
+    char *path = path_buffer();
+    snprintf(path, 4200, "%s/%s", data_dir, name);
+    return path;
+}
+
+/* Writes bytes to a new file of the temporary directory and returns its path. An old file of
+ * that name is removed first: ext4 flushes a file truncated and rewritten to disk on close,
+ * which made the many rewrites below take seconds. */
+static const char *temp_file(const char *name, const void *bytes, size_t size)
+{
+    char *path = path_buffer();
+    snprintf(path, 4200, "%s/%s", temp_dir, name);
+    assert_true(unlink(path) == 0 || errno == ENOENT);
+    FILE *file = fopen(path, "wb");
+    assert_non_null(file);
+    assert_int_equal(fwrite(bytes, 1, size, file), size);
+    assert_int_equal(fclose(file), 0);
+    return path;
+}
+
+/* Reads a whole file into a malloc'd buffer. */
+static unsigned char *slurp(const char *path, size_t *size)
+{
+    FILE *file = fopen(path, "rb");
+    assert_non_null(file);
+    assert_int_equal(fseek(file, 0, SEEK_END), 0);
+    long length = ftell(file);
+    assert_true(length >= 0);
+    rewind(file);
+    unsigned char *data = malloc((size_t)length + 1);
+    assert_non_null(data);
+    assert_int_equal(fread(data, 1, (size_t)length, file), (size_t)length);
+    fclose(file);
+    *size = (size_t)length;
+    return data;
+}
+
+/* Runs ao_mesh_load with stderr redirected, returning what it printed in err. */
+static bool load_captured(struct ao_mesh *mesh, const char *path, char *err, size_t err_size)
+{
+    FILE *capture = tmpfile();
+    assert_non_null(capture);
+    fflush(stderr);
+    int saved = dup(STDERR_FILENO);
+    assert_true(saved >= 0);
+    assert_true(dup2(fileno(capture), STDERR_FILENO) >= 0);
+    bool ok = ao_mesh_load(mesh, path);
+    fflush(stderr);
+    assert_true(dup2(saved, STDERR_FILENO) >= 0);
+    close(saved);
+    rewind(capture);
+    size_t n = fread(err, 1, err_size - 1, capture);
+    err[n] = '\0';
+    fclose(capture);
+    return ok;
+}
+
+/* Loads a file that must load, and prints nothing. */
+static void load_ok(struct ao_mesh *mesh, const char *path)
+{
+    char err[1024];
+    bool ok = load_captured(mesh, path, err, sizeof err);
+    if (!ok || err[0])
+        print_error("loading %s printed: %s\n", path, err);
+    assert_true(ok);
+    assert_string_equal(err, "");
+}
+
+/* The mesh must be all zero, as a failed load leaves it. */
+static void assert_mesh_empty(const struct ao_mesh *mesh)
+{
+    assert_null(mesh->positions);
+    assert_null(mesh->normals);
+    assert_null(mesh->indices);
+    assert_int_equal(mesh->vertex_count, 0);
+    assert_int_equal(mesh->triangle_count, 0);
+    assert_int_equal(mesh->degenerate_count, 0);
+}
+
+/* Loading path must fail, leave the mesh empty and print exactly one line that starts with
+ * the path followed by location (":LINE: " or ": ") and contains message. */
+static void expect_failure(const char *path, const char *location, const char *message)
+{
+    struct ao_mesh mesh;
+    char err[1024], prefix[4300];
+    memset(&mesh, 0xab, sizeof mesh);
+    bool ok = load_captured(&mesh, path, err, sizeof err);
+    snprintf(prefix, sizeof prefix, "%s%s", path, location);
+    if (ok || strncmp(err, prefix, strlen(prefix)) != 0 || !strstr(err, message))
+        print_error("%s: expected \"%s...%s\", got ok=%d \"%s\"\n", path, prefix, message, ok,
+                    err);
+    assert_false(ok);
+    assert_mesh_empty(&mesh);
+    size_t n = strlen(err);
+    assert_true(n > 0 && strchr(err, '\n') == err + n - 1);
+    assert_memory_equal(err, prefix, strlen(prefix));
+    assert_non_null(strstr(err, message));
+}
+
+/* a must be within 1e-5 of (x, y, z). */
+static void assert_vec3_near(struct ao_vec3 a, float x, float y, float z)
+{
+    assert_float_equal(a.x, x, 1e-5f);
+    assert_float_equal(a.y, y, 1e-5f);
+    assert_float_equal(a.z, z, 1e-5f);
+}
+
+/* Triangle t must be (a, b, c). */
+static void assert_triangle(const struct ao_mesh *mesh, size_t t, uint32_t a, uint32_t b,
+                            uint32_t c)
+{
+    assert_int_equal(mesh->indices[3 * t], a);
+    assert_int_equal(mesh->indices[3 * t + 1], b);
+    assert_int_equal(mesh->indices[3 * t + 2], c);
+}
+
+/* What every loaded mesh must satisfy: triangles, indices in range, finite positions, and
+ * normals that are unit length or zero. */
+static void assert_mesh_valid(const struct ao_mesh *mesh)
+{
+    assert_true(mesh->triangle_count > 0);
+    assert_non_null(mesh->positions);
+    assert_non_null(mesh->normals);
+    assert_non_null(mesh->indices);
+    for (size_t i = 0; i < 3 * mesh->triangle_count; i++)
+        assert_true(mesh->indices[i] < mesh->vertex_count);
+    for (size_t i = 0; i < mesh->vertex_count; i++) {
+        float length = ao_vec3_length(mesh->normals[i]);
+        assert_true(ao_vec3_is_finite(mesh->positions[i]));
+        assert_true(length == 0.0f || fabsf(length - 1.0f) < 1e-5f);
+    }
+}
+
+/* The one vertex at position p (the test meshes have a single one there). */
+static size_t vertex_at(const struct ao_mesh *mesh, float x, float y, float z)
+{
+    for (size_t i = 0; i < mesh->vertex_count; i++) {
+        struct ao_vec3 p = mesh->positions[i];
+        if (p.x == x && p.y == y && p.z == z)
+            return i;
+    }
+    fail();
+    return 0;
+}
+
+/* ------------------------------------------------------------------ binary PLY writer */
+
+/* A binary PLY file under construction. */
+struct bytes {
+    unsigned char data[4096];
+    size_t size;
+};
+
+/* Appends text (the header). */
+static void put_text(struct bytes *b, const char *text)
+{
+    size_t n = strlen(text);
+    assert_true(b->size + n <= sizeof b->data);
+    memcpy(b->data + b->size, text, n);
+    b->size += n;
+}
+
+/* Appends value as n bytes, little endian (zero-extended past 8). */
+static void put_int(struct bytes *b, uint64_t value, size_t n)
+{
+    assert_true(b->size + n <= sizeof b->data);
+    for (size_t i = 0; i < n; i++)
+        b->data[b->size++] = (unsigned char)(i < 8 ? value >> (8 * i) : 0);
+}
+
+/* Appends a float32, little endian. */
+static void put_f32(struct bytes *b, float f)
+{
+    uint32_t bits;
+    memcpy(&bits, &f, sizeof bits);
+    put_int(b, bits, 4);
+}
+
+/* Appends a float64, little endian. */
+static void put_f64(struct bytes *b, double d)
+{
+    uint64_t bits;
+    memcpy(&bits, &d, sizeof bits);
+    put_int(b, bits, 8);
+}
+
+/* A square of 4 vertices (z = -2, normals +z) as one quad plus a degenerate triangle, with every
+ * scalar type, list properties and elements the loader must skip. */
+static struct bytes binary_square(void)
+{
+    static const float corners[4][2] = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+    struct bytes b = {.size = 0};
+    put_text(&b, "ply\nformat binary_little_endian 1.0\n"
+                 "comment every scalar type, and lists and elements to skip\n"
+                 "element vertex 4\nproperty char a\nproperty uchar b\nproperty short c\n"
+                 "property ushort d\nproperty int e\nproperty uint f\nproperty float x\n"
+                 "property double y\nproperty int16 z\nproperty float64 nx\n"
+                 "property float32 ny\nproperty int8 nz\n"
+                 "element extra 2\nproperty list int uint32 stuff\nproperty double w\n"
+                 "element face 2\nproperty uchar flags\n"
+                 "property list int32 uint32 vertex_indices\nproperty list uchar double other\n"
+                 "element tail 2\nproperty list ushort short values\nend_header\n");
+    for (int i = 0; i < 4; i++) {
+        put_int(&b, (uint64_t)-5, 1);
+        put_int(&b, 200, 1);
+        put_int(&b, (uint64_t)-300, 2);
+        put_int(&b, 60000, 2);
+        put_int(&b, (uint64_t)-70000, 4);
+        put_int(&b, 4000000000u, 4);
+        put_f32(&b, corners[i][0]);
+        put_f64(&b, corners[i][1]);
+        put_int(&b, (uint64_t)-2, 2);
+        put_f64(&b, 0.0);
+        put_f32(&b, 0.0f);
+        put_int(&b, 3, 1);
+    }
+    /* extra: stuff [1 2], w 0.5; stuff [], w 0.25 */
+    put_int(&b, 2, 4);
+    put_int(&b, 1, 4);
+    put_int(&b, 2, 4);
+    put_f64(&b, 0.5);
+    put_int(&b, 0, 4);
+    put_f64(&b, 0.25);
+    /* face: flags 1, the quad 0 1 2 3, other [9.0]; flags 0, the degenerate 3 1 1, other [] */
+    put_int(&b, 1, 1);
+    put_int(&b, 4, 4);
+    for (uint64_t i = 0; i < 4; i++)
+        put_int(&b, i, 4);
+    put_int(&b, 1, 1);
+    put_f64(&b, 9.0);
+    put_int(&b, 0, 1);
+    put_int(&b, 3, 4);
+    put_int(&b, 3, 4);
+    put_int(&b, 1, 4);
+    put_int(&b, 1, 4);
+    put_int(&b, 0, 1);
+    /* tail: values [-1 -2]; values [] */
+    put_int(&b, 2, 2);
+    put_int(&b, (uint64_t)-1, 2);
+    put_int(&b, (uint64_t)-2, 2);
+    put_int(&b, 0, 2);
+    return b;
+}
+
+/* One triangle (0,0,0) (1,0,0) (0,1,0); its face row is a list of the given types ("uchar int")
+ * with count written as the count and the three index values after it. */
+static struct bytes binary_triangle(const char *list_types, size_t count_size, uint64_t count,
+                                    size_t index_size, const uint64_t index[3])
+{
+    struct bytes b = {.size = 0};
+    char header[400];
+    snprintf(header, sizeof header, "ply\nformat binary_little_endian 1.0\nelement vertex 3\n"
+             "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+             "property list %s vertex_indices\nend_header\n", list_types);
+    put_text(&b, header);
+    for (int i = 0; i < 3; i++) {
+        put_f32(&b, i == 1);
+        put_f32(&b, i == 2);
+        put_f32(&b, 0.0f);
+    }
+    put_int(&b, count, count_size);
+    for (int i = 0; i < 3; i++)
+        put_int(&b, index[i], index_size);
+    return b;
+}
+
+/* ------------------------------------------------------------------ OBJ */
+
+static void test_obj_triangle(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("tri.obj"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 3);
+    assert_int_equal(mesh.triangle_count, 1);
+    assert_int_equal(mesh.degenerate_count, 0);
+    assert_triangle(&mesh, 0, 0, 1, 2);
+    assert_vec3_near(mesh.positions[1], 1, 0, 0);
+    for (int i = 0; i < 3; i++)
+        assert_vec3_near(mesh.normals[i], 0, 0, 1);
+    ao_mesh_finish(&mesh);
+    assert_mesh_empty(&mesh);
+}
+
+static void test_obj_polygon_fan(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("fan.obj"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 5);
+    assert_int_equal(mesh.triangle_count, 3);
+    assert_triangle(&mesh, 0, 0, 1, 2);
+    assert_triangle(&mesh, 1, 0, 2, 3);
+    assert_triangle(&mesh, 2, 0, 3, 4);
+    for (int i = 0; i < 5; i++)
+        assert_vec3_near(mesh.normals[i], 0, 0, 1);
+    ao_mesh_finish(&mesh);
+}
+
+/* v/vt, v//vn and v/vt/vn; corners with the same position and normal share one vertex. */
+static void test_obj_corner_forms(void **state)
+{
+    (void)state;
+    static const char *const names[] = {"forms_vt.obj", "forms_vn.obj", "forms_vtvn.obj"};
+    for (size_t f = 0; f < 3; f++) {
+        struct ao_mesh mesh;
+        load_ok(&mesh, fixture(names[f]));
+        assert_mesh_valid(&mesh);
+        assert_int_equal(mesh.vertex_count, 4);
+        assert_int_equal(mesh.triangle_count, 2);
+        for (int i = 0; i < 4; i++)
+            assert_vec3_near(mesh.normals[i], 0, 0, 1);
+        assert_vec3_near(mesh.positions[mesh.indices[4]], 1, 1, 0);
+        ao_mesh_finish(&mesh);
+    }
+}
+
+/* Negative indices count back from the last v, vt or vn read so far. */
+static void test_obj_negative_indices(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("negative.obj"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 6);
+    assert_int_equal(mesh.triangle_count, 2);
+    for (int k = 0; k < 3; k++) {
+        struct ao_vec3 first = mesh.positions[mesh.indices[k]];
+        struct ao_vec3 second = mesh.positions[mesh.indices[3 + k]];
+        assert_float_equal(first.z, 0, 0);
+        assert_float_equal(second.z, 1, 0);
+        assert_vec3_near(mesh.normals[mesh.indices[k]], 0, 0, 1);
+        assert_vec3_near(mesh.normals[mesh.indices[3 + k]], 0, 0, -1);
+    }
+    ao_mesh_finish(&mesh);
+}
+
+/* CRLF, comments, blank lines, tabs, w, and statements that do not make triangles. */
+static void test_obj_other_statements(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("statements.obj"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 3);
+    assert_int_equal(mesh.triangle_count, 1);
+    assert_vec3_near(mesh.positions[2], 0, 1, 0);
+    ao_mesh_finish(&mesh);
+}
+
+/* Two faces sharing an edge with different normals: the edge's positions split in two. */
+static void test_obj_split_vertices(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("split.obj"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 6);
+    assert_int_equal(mesh.triangle_count, 2);
+    float h = sqrtf(0.5f);
+    for (int k = 0; k < 3; k++) {
+        assert_vec3_near(mesh.normals[mesh.indices[k]], 0, 0, 1);
+        assert_vec3_near(mesh.normals[mesh.indices[3 + k]], 0, -h, h);
+    }
+    assert_vec3_near(mesh.positions[mesh.indices[3]], 1, 0, 0);
+    assert_vec3_near(mesh.positions[mesh.indices[4]], 1, 1, 1);
+    ao_mesh_finish(&mesh);
+}
+
+/* Corners without a normal share one vertex per position, whose normal is computed from the
+ * triangles using it; the angle weighting shows at (0,1,0): 90 degrees of a +z triangle and 45
+ * of a +x one give (1,0,2)/sqrt 5 (area or uniform weights would give (1,0,1)/sqrt 2). */
+static void test_obj_mixed_normals(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("mixed.obj"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 7);
+    assert_int_equal(mesh.triangle_count, 3);
+    for (int k = 0; k < 3; k++)
+        assert_vec3_near(mesh.normals[mesh.indices[k]], 1, 0, 0);
+    assert_vec3_near(mesh.normals[mesh.indices[3]], 0, 0, 1);
+    assert_vec3_near(mesh.normals[mesh.indices[6]], 1, 0, 0);
+    float s = 1.0f / sqrtf(5.0f);
+    assert_vec3_near(mesh.normals[vertex_at(&mesh, 0, 1, 0)], s, 0, 2 * s);
+    assert_vec3_near(mesh.normals[vertex_at(&mesh, 0, 0, 1)], 1, 0, 0);
+    ao_mesh_finish(&mesh);
+}
+
+/* A zero-length file normal stays zero (the renderer then uses the geometric normal). */
+static void test_obj_zero_normal(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("zero_normal.obj"));
+    assert_mesh_valid(&mesh);
+    for (int i = 0; i < 3; i++)
+        assert_vec3_near(mesh.normals[i], 0, 0, 0);
+    ao_mesh_finish(&mesh);
+}
+
+/* A repeated index, collinear corners and a point are skipped and counted; vertices left
+ * without a triangle get a zero normal. */
+static void test_degenerate_counted(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("degenerate.obj"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 5);
+    assert_int_equal(mesh.triangle_count, 1);
+    assert_int_equal(mesh.degenerate_count, 3);
+    assert_triangle(&mesh, 0, 0, 1, 2);
+    assert_vec3_near(mesh.normals[0], 0, 0, 1);
+    assert_vec3_near(mesh.normals[3], 0, 0, 0);
+    assert_vec3_near(mesh.normals[4], 0, 0, 0);
+    ao_mesh_finish(&mesh);
+}
+
+/* The extension decides the format, in any case. */
+static void test_extension_case(void **state)
+{
+    (void)state;
+    static const char *const pairs[][2] = {{"tri.obj", "UPPER.OBJ"}, {"cube.ply", "Mixed.Ply"}};
+    for (int i = 0; i < 2; i++) {
+        size_t size;
+        unsigned char *text = slurp(fixture(pairs[i][0]), &size);
+        struct ao_mesh mesh;
+        load_ok(&mesh, temp_file(pairs[i][1], text, size));
+        assert_mesh_valid(&mesh);
+        ao_mesh_finish(&mesh);
+        free(text);
+    }
+}
+
+/* ------------------------------------------------------------------ PLY */
+
+/* Quads fanned, extra properties and elements (lists too) skipped, and angle-weighted normals:
+ * every cube corner gets 90 degrees of each of its three faces, however the quads were split,
+ * so its normal points away from the centre. */
+static void test_ply_ascii_cube(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("cube.ply"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 8);
+    assert_int_equal(mesh.triangle_count, 12);
+    assert_triangle(&mesh, 0, 0, 3, 2);
+    assert_triangle(&mesh, 1, 0, 2, 1);
+    assert_vec3_near(mesh.positions[6], 1, 1, 1);
+    float s = 1.0f / sqrtf(3.0f);
+    for (size_t i = 0; i < 8; i++) {
+        struct ao_vec3 p = mesh.positions[i];
+        assert_vec3_near(mesh.normals[i], p.x > 0.5f ? s : -s, p.y > 0.5f ? s : -s,
+                         p.z > 0.5f ? s : -s);
+    }
+    ao_mesh_finish(&mesh);
+}
+
+/* File normals (mixed types, CRLF, vertex_index) are normalized, zero stays zero. */
+static void test_ply_ascii_normals(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("normals.ply"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 4);
+    assert_int_equal(mesh.triangle_count, 2);
+    assert_int_equal(mesh.degenerate_count, 1);
+    assert_triangle(&mesh, 1, 1, 3, 2);
+    assert_vec3_near(mesh.normals[0], 0, 0, 1);
+    assert_vec3_near(mesh.normals[1], 0, 0, 1);
+    assert_vec3_near(mesh.normals[2], 0, 0, 0);
+    assert_vec3_near(mesh.normals[3], 0, 0, -1);
+    ao_mesh_finish(&mesh);
+}
+
+static void test_ply_binary(void **state)
+{
+    (void)state;
+    struct bytes b = binary_square();
+    struct ao_mesh mesh;
+    load_ok(&mesh, temp_file("square.ply", b.data, b.size));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 4);
+    assert_int_equal(mesh.triangle_count, 2);
+    assert_int_equal(mesh.degenerate_count, 1);
+    assert_triangle(&mesh, 0, 0, 1, 2);
+    assert_triangle(&mesh, 1, 0, 2, 3);
+    assert_vec3_near(mesh.positions[2], 1, 1, -2);
+    assert_vec3_near(mesh.positions[3], 0, 1, -2);
+    for (int i = 0; i < 4; i++)
+        assert_vec3_near(mesh.normals[i], 0, 0, 1);
+    ao_mesh_finish(&mesh);
+}
+
+/* Claimed sizes are checked against the file before anything is allocated for them; list
+ * counts against the bytes left; signed and unsigned indices against the vertex count. */
+static void test_ply_binary_errors(void **state)
+{
+    (void)state;
+    static const uint64_t good[3] = {0, 1, 2}, negative[3] = {0, 0xffffffff, 2},
+                          huge[3] = {0, 4294967295u, 2}, range[3] = {0, 3, 2};
+    struct bytes b = binary_triangle("uchar int", 1, 3, 4, good);
+    struct ao_mesh mesh;
+    load_ok(&mesh, temp_file("good.ply", b.data, b.size));
+    ao_mesh_finish(&mesh);
+
+    b = binary_triangle("uchar int", 1, 3, 4, negative);
+    expect_failure(temp_file("negative.ply", b.data, b.size), ": face 0: ", "vertex index -1");
+    b = binary_triangle("uchar uint", 1, 3, 4, huge);
+    expect_failure(temp_file("huge.ply", b.data, b.size), ": face 0: ", "4294967295");
+    b = binary_triangle("uint8 ushort", 1, 3, 2, range);
+    expect_failure(temp_file("range.ply", b.data, b.size), ": face 0: ", "vertex index 3");
+
+    b = binary_triangle("uchar int", 1, 3, 4, good);
+    put_int(&b, 0, 3);
+    expect_failure(temp_file("trailing.ply", b.data, b.size), ": ", "3 bytes after the last");
+
+    b = binary_triangle("uchar int", 1, 3, 4, good);
+    memcpy(b.data + b.size - 13 - 36 + 12, "\x00\x00\xc0\x7f", 4);  /* x of vertex 1: NaN */
+    expect_failure(temp_file("nan.ply", b.data, b.size), ": vertex 1: ", "not a finite float");
+
+    b = binary_triangle("uchar int", 1, 255, 4, good);
+    expect_failure(temp_file("list.ply", b.data, b.size), ": face 0: ",
+                   "list of 255 items runs past the end");
+    b = binary_triangle("uint int", 4, 4000000000u, 4, good);
+    expect_failure(temp_file("list4g.ply", b.data, b.size), ": face 0: ",
+                   "list of 4000000000 items runs past the end");
+
+    b = (struct bytes){.size = 0};
+    put_text(&b, "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n"
+                 "property float x\nproperty float y\nproperty float z\nelement face 1\n"
+                 "property list uchar int vertex_indices\nend_header\n");
+    put_int(&b, 0, 12);
+    expect_failure(temp_file("claims.ply", b.data, b.size), ":3: ", "declares 4000000000 rows");
+
+    /* 2^62 + 1 rows of 8 bytes: the product overflows 64 bits. */
+    b = (struct bytes){.size = 0};
+    put_text(&b, "ply\nformat binary_little_endian 1.0\nelement vertex 0\n"
+                 "property float x\nproperty float y\nproperty float z\n"
+                 "element junk 4611686018427387905\nproperty double d\nelement face 1\n"
+                 "property list uchar int vertex_indices\nend_header\n");
+    expect_failure(temp_file("overflow.ply", b.data, b.size), ":7: ", "declares");
+}
+
+/* Every proper prefix of a binary file fails cleanly. */
+static void test_ply_binary_truncated(void **state)
+{
+    (void)state;
+    struct bytes b = binary_square();
+    for (size_t size = 0; size < b.size; size++) {
+        struct ao_mesh mesh;
+        char err[1024];
+        assert_false(load_captured(&mesh, temp_file("cut.ply", b.data, size), err, sizeof err));
+        assert_mesh_empty(&mesh);
+        assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    }
+}
+
+/* ------------------------------------------------------------------ bad input */
+
+/* Each bad fixture, where its one error line must point, and what it must say. */
+static const struct {
+    const char *name, *location, *message;
+} bad_inputs[] = {
+    {"bad_number.obj", ":2: ", "bad number 'x'"},
+    {"bad_nan.obj", ":1: ", "bad number 'nan'"},
+    {"bad_inf.obj", ":3: ", "bad number '1e999'"},
+    {"bad_v_few.obj", ":2: ", "found 2 numbers"},
+    {"bad_v_many.obj", ":1: ", "too many numbers"},
+    {"bad_vn_count.obj", ":4: ", "expected 'vn x y z'"},
+    {"bad_index_range.obj", ":4: ", "'4': vertex index out of range (3 defined"},
+    {"bad_index_negative.obj", ":4: ", "'-4': vertex index out of range"},
+    {"bad_index_zero.obj", ":4: ", "bad face corner '0'"},
+    {"bad_index_huge.obj", ":4: ", "vertex index out of range"},
+    {"bad_forward_ref.obj", ":1: ", "(0 defined so far)"},
+    {"bad_normal_range.obj", ":5: ", "'2//2': normal index out of range"},
+    {"bad_texcoord_range.obj", ":5: ", "'3/2': texture coordinate index out of range"},
+    {"bad_corner_slash.obj", ":4: ", "bad face corner '1/'"},
+    {"bad_corner_fields.obj", ":6: ", "bad face corner '1/1/1/1'"},
+    {"bad_corner_text.obj", ":4: ", "bad face corner 'a'"},
+    {"bad_face_two.obj", ":4: ", "face with 2 vertices"},
+    {"bad_empty.obj", ": ", "no triangles"},
+    {"bad_no_faces.obj", ": ", "no triangles"},
+    {"bad_all_degenerate.obj", ": ", "no triangles (2 degenerate"},
+    {"bad_empty.ply", ": ", "empty file"},
+    {"bad_magic.ply", ":1: ", "not a PLY file"},
+    {"bad_big_endian.ply", ":2: ", "big-endian binary PLY is not supported"},
+    {"bad_format.ply", ":2: ", "unknown PLY format 'binary'"},
+    {"bad_version.ply", ":2: ", "unsupported PLY version '2.0'"},
+    {"bad_no_format.ply", ":3: ", "no format line"},
+    {"bad_no_end_header.ply", ":3: ", "without end_header"},
+    {"bad_property_first.ply", ":3: ", "property before any element"},
+    {"bad_type.ply", ":4: ", "unknown property type 'float128'"},
+    {"bad_keyword.ply", ":3: ", "unknown header keyword 'elemnt'"},
+    {"bad_count.ply", ":3: ", "bad element count '-3'"},
+    {"bad_count_overflow.ply", ":3: ", "bad element count"},
+    {"bad_no_z.ply", ":3: ", "needs x, y and z"},
+    {"bad_partial_normals.ply", ":3: ", "nx, ny and nz"},
+    {"bad_no_face.ply", ": ", "no 'face' element"},
+    {"bad_indices_scalar.ply", ":7: ", "'vertex_indices' must be a list"},
+    {"bad_few_values.ply", ":11: ", "too few values for a 'vertex' row"},
+    {"bad_many_values.ply", ":11: ", "more values than the header declares"},
+    {"bad_few_rows.ply", ":13: ", "'face' declares 2 rows, found 1"},
+    {"bad_extra_rows.ply", ":15: ", "data after the last element"},
+    {"bad_ply_index_range.ply", ":13: ", "vertex index 3 is not an integer in [0, 3)"},
+    {"bad_ply_index_negative.ply", ":13: ", "vertex index -1"},
+    {"bad_ply_index_fraction.ply", ":13: ", "vertex index 1.5"},
+    {"bad_ply_face_two.ply", ":13: ", "face with 2 vertices"},
+    {"bad_ply_list_count.ply", ":13: ", "bad list count -1"},
+    {"bad_ply_nan.ply", ":11: ", "not a finite float"},
+    {"bad_ply_number.ply", ":11: ", "bad number 'abc'"},
+    {"bad_ply_float_range.ply", ":11: ", "not a finite float"},
+    {"bad_ply_claims.ply", ":12: ", "'vertex' declares 4000000000 rows, found 3"},
+};
+
+static void test_bad_inputs(void **state)
+{
+    (void)state;
+    for (size_t i = 0; i < sizeof bad_inputs / sizeof bad_inputs[0]; i++)
+        expect_failure(fixture(bad_inputs[i].name), bad_inputs[i].location,
+                       bad_inputs[i].message);
+}
+
+/* A missing file, a directory, an unknown or absent extension. */
+static void test_file_errors(void **state)
+{
+    (void)state;
+    char *dir = path_buffer();
+    snprintf(dir, 4200, "%s/dir.obj", temp_dir);
+    assert_int_equal(mkdir(dir, 0700), 0);
+    expect_failure(fixture("missing.obj"), ": ", "cannot open: No such file");
+    expect_failure(dir, ": ", "is a directory");
+    expect_failure(fixture("tri.stl"), ": ", "unknown mesh format");
+    expect_failure(data_dir, ": ", "unknown mesh format");
+    expect_failure("dir.obj/file", ": ", "unknown mesh format");
+}
+
+/* A file without read permission (not testable as root, who may read anything). */
+static void test_unreadable_file(void **state)
+{
+    (void)state;
+    const char *path = temp_file("locked.obj", "v 0 0 0\n", 8);
+    assert_int_equal(chmod(path, 0), 0);
+    FILE *probe = fopen(path, "rb");
+    if (probe) {
+        fclose(probe);
+        skip();
+    }
+    expect_failure(path, ": ", "cannot open: Permission denied");
+}
+
+/* Random byte changes to valid files (fixed seed) load or fail cleanly, never anything else. */
+static void test_mutations(void **state)
+{
+    (void)state;
+    static const char *const names[] = {"cube.ply", "normals.ply", "mixed.obj", "negative.obj"};
+    static const char alphabet[] = "0123456789-+./ \n#eExvfn\r";
+    const size_t letters = sizeof alphabet - 1;
+    uint64_t rng = 0x2545f4914f6cdd1dULL;
+    struct bytes binary = binary_square();
+    for (int f = 0; f < 5; f++) {
+        size_t size = binary.size;
+        unsigned char *original = f < 4 ? slurp(fixture(names[f]), &size) : binary.data;
+        unsigned char *text = malloc(size);
+        assert_non_null(text);
+        for (int m = 0; m < 400; m++) {
+            memcpy(text, original, size);
+            for (int k = 0; k < 1 + m % 3; k++) {
+                rng ^= rng << 13;
+                rng ^= rng >> 7;
+                rng ^= rng << 17;
+                text[(rng >> 8) % size] = (rng & 1) ? (unsigned char)(rng >> 40)
+                                                    : (unsigned char)alphabet[(rng >> 40) % letters];
+            }
+            struct ao_mesh mesh;
+            char err[1024];
+            const char *path = temp_file(f < 4 ? names[f] : "square.ply", text, size);
+            if (load_captured(&mesh, path, err, sizeof err)) {
+                assert_string_equal(err, "");
+                assert_mesh_valid(&mesh);
+                ao_mesh_finish(&mesh);
+            } else {
+                assert_mesh_empty(&mesh);
+                assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+            }
+        }
+        free(text);
+        if (f < 4)
+            free(original);
+    }
+}
+
+/* ------------------------------------------------------------------ normals and the bunny */
+
+/* The public recomputation, from scratch and over existing normals; an empty mesh is fine. */
+static void test_compute_normals(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh = {0};
+    assert_true(ao_mesh_compute_normals(&mesh));
+    ao_mesh_finish(&mesh);
+    mesh.vertex_count = 3;
+    mesh.triangle_count = 1;
+    mesh.positions = malloc(3 * sizeof *mesh.positions);
+    mesh.indices = malloc(3 * sizeof *mesh.indices);
+    assert_non_null(mesh.positions);
+    assert_non_null(mesh.indices);
+    mesh.positions[0] = ao_vec3_make(0, 0, 0);
+    mesh.positions[1] = ao_vec3_make(0, 1, 0);
+    mesh.positions[2] = ao_vec3_make(1, 0, 0);
+    for (uint32_t i = 0; i < 3; i++)
+        mesh.indices[i] = i;
+    assert_true(ao_mesh_compute_normals(&mesh));
+    assert_vec3_near(mesh.normals[1], 0, 0, -1);
+    mesh.positions[2] = ao_vec3_make(0, 0, 1);
+    assert_true(ao_mesh_compute_normals(&mesh));
+    assert_vec3_near(mesh.normals[1], 1, 0, 0);
+    ao_mesh_finish(&mesh);
+    assert_mesh_empty(&mesh);
+}
+
+/* The shipped bunny: its counts, y up, finite unit normals, and outward orientation. */
+static void test_bunny(void **state)
+{
+    (void)state;
+    char path[4200];
+    snprintf(path, sizeof path, "%s/assets/bunny.obj", getenv("AO_SOURCE_ROOT"));
+    struct ao_mesh mesh;
+    load_ok(&mesh, path);
+    assert_int_equal(mesh.vertex_count, 1839);
+    assert_int_equal(mesh.triangle_count, 3674);
+    assert_int_equal(mesh.degenerate_count, 0);
+    struct ao_vec3 lo = mesh.positions[0], hi = lo, sum = {0, 0, 0};
+    for (size_t i = 0; i < mesh.vertex_count; i++) {
+        struct ao_vec3 p = mesh.positions[i];
+        lo = ao_vec3_make(fminf(lo.x, p.x), fminf(lo.y, p.y), fminf(lo.z, p.z));
+        hi = ao_vec3_make(fmaxf(hi.x, p.x), fmaxf(hi.y, p.y), fmaxf(hi.z, p.z));
+        sum = ao_vec3_add(sum, p);
+        assert_true(ao_vec3_is_finite(mesh.normals[i]));
+        assert_float_equal(ao_vec3_length(mesh.normals[i]), 1.0f, 1e-5f);
+    }
+    assert_float_equal(lo.y, -0.003149f, 1e-6f);
+    assert_float_equal(hi.y, 9.654748f, 1e-5f);
+    struct ao_vec3 centre = ao_vec3_scale(sum, 1.0f / (float)mesh.vertex_count);
+    size_t outward = 0;
+    for (size_t i = 0; i < mesh.vertex_count; i++)
+        outward += ao_vec3_dot(mesh.normals[i], ao_vec3_sub(mesh.positions[i], centre)) > 0.0f;
+    assert_true(outward > mesh.vertex_count * 9 / 10);
+    ao_mesh_finish(&mesh);
+}
+
+/* ------------------------------------------------------------------ main */
+
+/* Makes the scratch directory. */
+static int make_temp_dir(void **state)
+{
+    (void)state;
+    const char *tmp = getenv("TMPDIR");
+    snprintf(temp_dir, sizeof temp_dir, "%s/test_mesh.XXXXXX", tmp && *tmp ? tmp : "/tmp");
+    return mkdtemp(temp_dir) ? 0 : -1;
+}
+
+/* Removes the scratch directory and what the tests left in it. */
+static int remove_temp_dir(void **state)
+{
+    (void)state;
+    DIR *dir = opendir(temp_dir);
+    struct dirent *entry;
+    char path[8300];
+    while (dir && (entry = readdir(dir))) {
+        snprintf(path, sizeof path, "%s/%s", temp_dir, entry->d_name);
+        if (strcmp(entry->d_name, ".") != 0 && strcmp(entry->d_name, "..") != 0 &&
+            unlink(path) != 0)
+            rmdir(path);
+    }
+    if (dir)
+        closedir(dir);
+    return rmdir(temp_dir);
+}
+
+int main(void)
+{
+    const char *root = getenv("AO_SOURCE_ROOT");
+    if (!root) {
+        fprintf(stderr, "test_mesh: AO_SOURCE_ROOT is not set (run it through meson test)\n");
+        return 77;
+    }
+    snprintf(data_dir, sizeof data_dir, "%s/tests/data/mesh", root);
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_obj_triangle),
+        cmocka_unit_test(test_obj_polygon_fan),
+        cmocka_unit_test(test_obj_corner_forms),
+        cmocka_unit_test(test_obj_negative_indices),
+        cmocka_unit_test(test_obj_other_statements),
+        cmocka_unit_test(test_obj_split_vertices),
+        cmocka_unit_test(test_obj_mixed_normals),
+        cmocka_unit_test(test_obj_zero_normal),
+        cmocka_unit_test(test_degenerate_counted),
+        cmocka_unit_test(test_extension_case),
+        cmocka_unit_test(test_ply_ascii_cube),
+        cmocka_unit_test(test_ply_ascii_normals),
+        cmocka_unit_test(test_ply_binary),
+        cmocka_unit_test(test_ply_binary_errors),
+        cmocka_unit_test(test_ply_binary_truncated),
+        cmocka_unit_test(test_bad_inputs),
+        cmocka_unit_test(test_file_errors),
+        cmocka_unit_test(test_unreadable_file),
+        cmocka_unit_test(test_mutations),
+        cmocka_unit_test(test_compute_normals),
+        cmocka_unit_test(test_bunny),
+    };
+    return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);
+}
