@@ -85,25 +85,30 @@ static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t 
 {
     struct ao_basis basis = ao_basis_from_normal(s->ns);
     struct ao_vec3 origin = ao_vec3_add(s->position, ao_vec3_scale(s->ng, s->offset));
-    for (int k = 0; k < count; k++) {
-        float u1, u2;
-        struct ao_vec3 dir;
-        ao_rng_pair(key, first_sample + (uint64_t)k, &u1, &u2);
-        float w = ao_sample_direction(q->ctx->sampling, &basis, u1, u2, &dir);
-        if (w <= 0.0f)
-            continue;
-        int lane = q->rays.count++;
-        q->rays.org_x[lane] = origin.x;
-        q->rays.org_y[lane] = origin.y;
-        q->rays.org_z[lane] = origin.z;
-        q->rays.dir_x[lane] = dir.x;
-        q->rays.dir_y[lane] = dir.y;
-        q->rays.dir_z[lane] = dir.z;
-        q->rays.tfar[lane] = q->ctx->ao_distance;
-        q->weight[lane] = w;
-        q->sum[lane] = sum;
-        if (q->rays.count == AO_PACKET_SIZE)
-            flush(q);
+    for (int first = 0; first < count; first += AO_PACKET_SIZE) {
+        int n = count - first < AO_PACKET_SIZE ? count - first : AO_PACKET_SIZE;
+        float u1[AO_PACKET_SIZE], u2[AO_PACKET_SIZE], w[AO_PACKET_SIZE];
+        float x[AO_PACKET_SIZE], y[AO_PACKET_SIZE], z[AO_PACKET_SIZE];
+        for (int k = 0; k < n; k++)
+            ao_rng_pair(key, first_sample + (uint64_t)(first + k), &u1[k], &u2[k]);
+        ao_sample_directions(q->ctx->sampling, &basis, n, u1, u2, x, y, z, w);
+        /* Only directions that can contribute become rays. */
+        for (int k = 0; k < n; k++) {
+            if (w[k] <= 0.0f)
+                continue;
+            int lane = q->rays.count++;
+            q->rays.org_x[lane] = origin.x;
+            q->rays.org_y[lane] = origin.y;
+            q->rays.org_z[lane] = origin.z;
+            q->rays.dir_x[lane] = x[k];
+            q->rays.dir_y[lane] = y[k];
+            q->rays.dir_z[lane] = z[k];
+            q->rays.tfar[lane] = q->ctx->ao_distance;
+            q->weight[lane] = w[k];
+            q->sum[lane] = sum;
+            if (q->rays.count == AO_PACKET_SIZE)
+                flush(q);
+        }
     }
 }
 

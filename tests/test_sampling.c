@@ -26,9 +26,9 @@ static const float ALMOST_ONE = 0x1.fffffep-1f;
 static struct ao_vec3 draw(enum ao_sampling mode, struct ao_vec3 n, float u1, float u2, float *weight)
 {
     struct ao_basis f = ao_basis_from_normal(n);
-    struct ao_vec3 w;
-    *weight = ao_sample_direction(mode, &f, u1, u2, &w);
-    return w;
+    float x, y, z;
+    ao_sample_directions(mode, &f, 1, &u1, &u2, &x, &y, &z, weight);
+    return ao_vec3_make(x, y, z);
 }
 
 static double pdf(enum ao_sampling mode, struct ao_vec3 n, struct ao_vec3 w)
