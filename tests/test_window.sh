@@ -111,7 +111,7 @@ if [ "$mode" = keys ]; then
     [ "$(spp)" -gt "$(pass)" ] || fail "+ did not raise the samples per pass"
 
     # R: the pass count starts again from 1.
-    wait_title " — pass ([1-9][0-9]|[6-9]) — "
+    wait_title " — pass ([6-9]|[1-9][0-9]+) — "
     before=$(pass)
     press r
     for _ in $(seq 200); do
