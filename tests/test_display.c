@@ -1,5 +1,5 @@
 /* gl suite: the display shader path through OSMesa (no display server) against the CPU's sRGB
- * encoding, and the display's letterbox geometry. */
+ * encoding, the display's letterbox geometry, and golden screenshots of the shipped scenes. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -15,6 +15,9 @@
 #include "display.h"
 #include "headless.h"
 #include "image.h"
+#include "render.h"
+#include "scene.h"
+#include "tracer.h"
 
 /* A linear test image whose every pixel differs: negative values, values above 1, tiny values
  * around the curve's 0.0031308 knee, and a red ramp along x and a green ramp along y so that
@@ -149,6 +152,170 @@ static void test_fit_letterboxes(void **state)
     assert_true(r.width >= 0 && r.height >= 0 && r.width <= 1 && r.height <= 1);
 }
 
+/* ---- golden screenshots ----
+ *
+ * Each shipped scene, uniform and cosine sampling, 80x60, AA on, seed 1, rendered to a PNG through
+ * the renderer and ao_headless_write_png, is compared with tests/golden/<scene>-<mode>.png: the
+ * same picture at GOLDEN_SPP. Rerun with AO_UPDATE_GOLDEN=1 to rewrite the goldens (look at them).
+ *
+ * The comparison must survive any change of random numbers (the renderer may change how it draws
+ * directions) and still catch a wrong estimate, so it compares expectations, not noise: both PNGs
+ * are decoded back to linear (the inverse sRGB curve; 8-bit rounding averages out over a block)
+ * and averaged over 8x8-pixel blocks, 70 blocks per image.
+ *
+ * Noise bound per mode (albedo <= 1): a cosine sample is V in [0, 1], std <= 0.5; a uniform-sphere
+ * sample is 4 V max(0, cos), E[w^2] = 16/6, std <= 1.63 (a sky sample is 1, within both). At
+ * TEST_SPP = 1024 a pixel's std is <= 0.0156 (cosine) or 0.051 (uniform), a block mean's 8x
+ * smaller, and the golden's (4x the samples) adds 12 %: the block difference has
+ * sigma <= 0.0022 (cosine), 0.0072 (uniform).
+ * Limits: block RMS <= 2 sigma (for 70 independent blocks an RMS above 2 sigma has
+ * chi^2_70 > 280, probability < 1e-25) and every block within 5 sigma (p < 1e-4 per image).
+ * Measured clean with seeds 1-4: RMS <= 0.0010 / 0.0043, worst block <= 0.0042 / 0.0126
+ * (cosine / uniform).
+ *
+ * Regressions, measured with a patched renderer (seed 1; cosine / uniform limits on the worst
+ * block 0.011 / 0.036):
+ *   rows flipped in the read-back:              RMS 0.20-0.23, worst 0.48-0.51: caught
+ *   uniform pdf 1/2pi instead of 1/4pi:         RMS 0.31, worst 0.40 (uniform): caught
+ *   sphere shading normal pointing inwards:     RMS 0.14, worst 0.53 (spheres): caught
+ *   mesh normal from one vertex, not three:     worst 0.020 (bunny, cosine): caught
+ *   flat instead of Phong normals on the bunny: worst 0.009 (cosine): within the noise at 80x60
+ *   normal not turned towards the eye:          no change (no back faces in view)
+ * The last two barely change any picture of these scenes; the estimator's unit tests cover them. */
+#define GOLDEN_WIDTH 80
+#define GOLDEN_HEIGHT 60
+#define GOLDEN_BLOCK 8
+#define GOLDEN_SPP 4096
+#define TEST_SPP 1024
+
+/* The bound on a block difference's std derived above, per sampling mode. */
+static double block_sigma(enum ao_sampling sampling)
+{
+    return sampling == AO_SAMPLING_COSINE ? 0.0022 : 0.0072;
+}
+
+/* Renders a shipped scene with the golden settings and writes it as PNG through the display. */
+static void render_png(const char *scene_name, enum ao_sampling sampling, uint32_t spp, const char *png)
+{
+    const char *root = getenv("AO_SOURCE_ROOT");
+    if (!root)
+        skip();
+    char path[1024];
+    snprintf(path, sizeof path, "%s/assets/scenes/%s.scene", root, scene_name);
+    struct ao_scene scene;
+    assert_true(ao_scene_load(&scene, path));
+    struct ao_tracer *tracer = ao_tracer_create(&scene);
+    assert_non_null(tracer);
+    struct ao_render_config config = {
+        .scene = &scene, .tracer = tracer, .width = GOLDEN_WIDTH, .height = GOLDEN_HEIGHT,
+        .threads = 2, .seed = 1, .target_spp = spp, .ao_distance = scene.ao_distance};
+    /* One AO sample per pass, so that every sample has its own jittered eye ray (the noise
+     * bound below counts the AA coverage noise at silhouettes as part of each sample). */
+    struct ao_settings settings = {.sampling = sampling, .aa = true, .spppp = 1, .camera = scene.camera};
+    struct ao_render *render = ao_render_create(&config, &settings);
+    assert_non_null(render);
+    assert_true(ao_render_wait(render));
+    const struct ao_frame *frame = ao_render_take_frame(render);
+    assert_non_null(frame);
+    assert_true(ao_headless_write_png(png, frame->rgb, frame->width, frame->height));
+    ao_render_destroy(render);
+    ao_tracer_destroy(tracer);
+    ao_scene_finish(&scene);
+}
+
+/* The inverse of the sRGB curve, for an 8-bit value. */
+static double srgb8_to_linear(uint8_t v)
+{
+    double e = v / 255.0;
+    return e <= 0.04045 ? e / 12.92 : pow((e + 0.055) / 1.055, 2.4);
+}
+
+/* Linear means of a PNG over GOLDEN_BLOCK-square blocks, all channels together. */
+static void block_means(const char *png, double *means)
+{
+    uint8_t *rgb = NULL;
+    int width = 0, height = 0;
+    assert_true(ao_image_read_png(png, &rgb, &width, &height));
+    assert_int_equal(width, GOLDEN_WIDTH);
+    assert_int_equal(height, GOLDEN_HEIGHT);
+    int bx = GOLDEN_WIDTH / GOLDEN_BLOCK, by = GOLDEN_HEIGHT / GOLDEN_BLOCK;
+    for (int b = 0; b < bx * by; b++) {
+        double sum = 0;
+        for (int y = 0; y < GOLDEN_BLOCK; y++)
+            for (int x = 0; x < GOLDEN_BLOCK; x++)
+                for (int c = 0; c < 3; c++) {
+                    size_t px = (size_t)(b / bx * GOLDEN_BLOCK + y) * GOLDEN_WIDTH + (size_t)(b % bx * GOLDEN_BLOCK + x);
+                    sum += srgb8_to_linear(rgb[3 * px + (size_t)c]);
+                }
+        means[b] = sum / (3.0 * GOLDEN_BLOCK * GOLDEN_BLOCK);
+    }
+    free(rgb);
+}
+
+/* Renders one case and compares it with its golden (or rewrites the golden). */
+static void check_golden(const char *scene_name, enum ao_sampling sampling)
+{
+    char golden[1024];
+    const char *root = getenv("AO_SOURCE_ROOT");
+    if (!root)
+        skip();
+    snprintf(golden, sizeof golden, "%s/tests/golden/%s-%s.png", root, scene_name,
+             ao_sampling_name(sampling));
+    const char *update = getenv("AO_UPDATE_GOLDEN");
+    if (update && strcmp(update, "1") == 0) {
+        render_png(scene_name, sampling, GOLDEN_SPP, golden);
+        return;
+    }
+
+    char dir[] = "/tmp/aoview-test-golden-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    char png[sizeof dir + 16];
+    snprintf(png, sizeof png, "%s/test.png", dir);
+    render_png(scene_name, sampling, TEST_SPP, png);
+
+    enum { BLOCKS = (GOLDEN_WIDTH / GOLDEN_BLOCK) * (GOLDEN_HEIGHT / GOLDEN_BLOCK) };
+    double want[BLOCKS], got[BLOCKS];
+    block_means(golden, want);
+    block_means(png, got);
+    double sum = 0, worst = 0;
+    for (int b = 0; b < BLOCKS; b++) {
+        double d = fabs(got[b] - want[b]);
+        sum += d * d;
+        worst = fmax(worst, d);
+    }
+    double rms = sqrt(sum / BLOCKS), sigma = block_sigma(sampling);
+    printf("%s %s: block RMS %.4f, worst block %.4f\n", scene_name, ao_sampling_name(sampling), rms, worst);
+    if (rms > 2 * sigma || worst > 5 * sigma)
+        fail_msg("%s, %s sampling: block RMS %.4f (limit %.4f), worst block %.4f (limit %.4f)",
+                 scene_name, ao_sampling_name(sampling), rms, 2 * sigma, worst, 5 * sigma);
+    assert_int_equal(unlink(png), 0);
+    assert_int_equal(rmdir(dir), 0);
+}
+
+static void test_golden_bunny_uniform(void **state)
+{
+    (void)state;
+    check_golden("bunny", AO_SAMPLING_UNIFORM);
+}
+
+static void test_golden_bunny_cosine(void **state)
+{
+    (void)state;
+    check_golden("bunny", AO_SAMPLING_COSINE);
+}
+
+static void test_golden_spheres_uniform(void **state)
+{
+    (void)state;
+    check_golden("spheres", AO_SAMPLING_UNIFORM);
+}
+
+static void test_golden_spheres_cosine(void **state)
+{
+    (void)state;
+    check_golden("spheres", AO_SAMPLING_COSINE);
+}
+
 /* Read by LeakSanitizer in sanitizer builds: Mesa's OSMesa keeps a few hundred bytes per context
  * that OSMesaDestroyContext does not free (a bare create/destroy leaks them too), so leaks whose
  * stack passes through libOSMesa are Mesa's, not ours. */
@@ -165,6 +332,10 @@ int main(void)
         cmocka_unit_test(test_thin_sizes_match_cpu),
         cmocka_unit_test(test_dense_ramp_matches_cpu),
         cmocka_unit_test(test_fit_letterboxes),
+        cmocka_unit_test(test_golden_bunny_uniform),
+        cmocka_unit_test(test_golden_bunny_cosine),
+        cmocka_unit_test(test_golden_spheres_uniform),
+        cmocka_unit_test(test_golden_spheres_cosine),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
