@@ -2,6 +2,9 @@
  * place that exits. */
 #include <errno.h>
 #include <math.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -74,19 +77,78 @@ static bool write_output(const char *path, const struct ao_frame *frame)
     return ao_headless_write_png(path, frame->rgb, frame->width, frame->height);
 }
 
-/* Waits for the target spp and writes the output; the headless path of SPEC.md. */
-static int run_headless(struct ao_render *render, const struct ao_options *opts)
+/* SIGINT/SIGTERM during a headless render: the first stops the renderer at the next tile so that
+ * main writes what it has; a second exits at once. The signals are blocked in every thread and
+ * taken here with sigwait, so nothing runs in a signal handler. */
+struct interrupt {
+    sigset_t signals;
+    struct ao_render *render;
+    atomic_bool graceful;    /* headless: stop and write; in the window: exit as by default */
+    atomic_int caught;
+};
+
+static void *watch_signals(void *arg)
+{
+    struct interrupt *in = arg;
+    int sig;
+    if (sigwait(&in->signals, &sig) != 0)
+        return NULL;
+    if (!atomic_load(&in->graceful))
+        _exit(128 + sig);
+    atomic_store(&in->caught, sig);
+    ao_render_stop(in->render);
+    if (sigwait(&in->signals, &sig) == 0)
+        _exit(128 + sig);
+    return NULL;
+}
+
+/* Blocks SIGINT and SIGTERM in the calling thread and every thread it starts from now on. Their
+ * disposition goes back to default first: a shell starts background jobs with SIGINT ignored, and
+ * an ignored signal never reaches sigwait. */
+static void block_signals(struct interrupt *in)
+{
+    signal(SIGINT, SIG_DFL);
+    signal(SIGTERM, SIG_DFL);
+    sigemptyset(&in->signals);
+    sigaddset(&in->signals, SIGINT);
+    sigaddset(&in->signals, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &in->signals, NULL);
+}
+
+/* Starts the thread that takes the blocked signals; false when it cannot. */
+static bool start_watcher(struct interrupt *in, struct ao_render *render)
+{
+    pthread_t thread;
+    in->render = render;
+    if (pthread_create(&thread, NULL, watch_signals, in) != 0) {
+        fprintf(stderr, "aoview: could not start the signal watcher thread\n");
+        return false;
+    }
+    pthread_detach(thread);
+    return true;
+}
+
+/* Waits for the target spp (or an interruption) and writes the output; SPEC.md's headless path. */
+static int run_headless(struct ao_render *render, const struct ao_options *opts, struct interrupt *in,
+                        struct reporter *reporter)
 {
     const char *output = opts->output ? opts->output : "aoview.png";
-    if (!ao_render_wait(render))
+    bool finished = ao_render_wait(render);
+    int sig = atomic_load(&in->caught);
+    if (!finished && !sig)
         return EXIT_RUNTIME;
-    const struct ao_frame *frame = ao_render_take_frame(render);
+    const struct ao_frame *frame = finished ? ao_render_take_frame(render) : ao_render_resolve_stopped(render);
+    if (!finished) {
+        fprintf(stderr, "\naoview: interrupted by %s at %u spp\n", sig == SIGINT ? "SIGINT" : "SIGTERM",
+                frame->info.spp);
+        on_pass(&frame->info, reporter);
+    }
     if (!frame || !write_output(output, frame))
         return EXIT_RUNTIME;
     if (!opts->quiet)
         fprintf(stderr, "aoview: wrote %s (%u spp, %.2f s, %.1f Mrays/s)\n", output, frame->info.spp,
                 frame->info.seconds, mrays_per_second(&frame->info));
-    return 0;
+    return finished ? 0 : 128 + sig;
 }
 
 /* Reads --reference and checks it matches the image size. */
@@ -111,10 +173,14 @@ struct app {
     struct ao_render *render;
     float *reference;
     struct reporter reporter;
+    struct interrupt interrupt;
 };
 
 static int run(struct app *app, const struct ao_options *opts)
 {
+    /* Before any thread starts (Embree's included), so that they all inherit the mask. */
+    block_signals(&app->interrupt);
+
     /* Scene, size, tracer. */
     if (!ao_scene_load(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE))
         return EXIT_RUNTIME;
@@ -155,7 +221,7 @@ static int run(struct app *app, const struct ao_options *opts)
     }
     bool window = !opts->headless;
     app->reporter.progress = !opts->quiet && !window && isatty(STDERR_FILENO);
-    if (!(app->render = ao_render_create(&config, &settings)))
+    if (!(app->render = ao_render_create(&config, &settings)) || !start_watcher(&app->interrupt, app->render))
         return EXIT_RUNTIME;
 
     /* Window, or headless output (also where no window can be opened). */
@@ -168,7 +234,8 @@ static int run(struct app *app, const struct ao_options *opts)
                 opts->output ? opts->output : "aoview.png");
         app->reporter.progress = !opts->quiet && isatty(STDERR_FILENO);
     }
-    return run_headless(app->render, opts);
+    atomic_store(&app->interrupt.graceful, true);
+    return run_headless(app->render, opts, &app->interrupt, &app->reporter);
 }
 
 int main(int argc, char **argv)

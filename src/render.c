@@ -50,6 +50,7 @@ struct ao_render {
 
     pthread_t thread;
     bool started;
+    struct ao_frame_info last_info;      /* the render thread's facts when it stopped */
     pthread_t *workers;
     int worker_count;
 };
@@ -204,17 +205,17 @@ static void *render_main(void *arg)
         atomic_store(&r->eye_rays, 0);
         atomic_store(&r->shadow_rays, 0);
         bool complete = run_pass(r);
+        info.eye_rays += atomic_load(&r->eye_rays);
+        info.shadow_rays += atomic_load(&r->shadow_rays);
+        info.seconds += now_seconds() - start;
+        info.sampling = s.sampling;
+        info.aa = s.aa;
 
         /* Publish it. */
         if (complete) {
             info.pass++;
             info.spp += (uint32_t)r->samples;
-            info.eye_rays += atomic_load(&r->eye_rays);
-            info.shadow_rays += atomic_load(&r->shadow_rays);
-            info.sampling = s.sampling;
-            info.aa = s.aa;
             info.done = info.spp >= info.target_spp;
-            info.seconds += now_seconds() - start;
             publish(r, &info);
             if (r->config.on_pass)
                 r->config.on_pass(&info, r->config.user);
@@ -225,6 +226,7 @@ static void *render_main(void *arg)
             pthread_cond_broadcast(&r->finished);
         }
     }
+    r->last_info = info;
     pthread_mutex_unlock(&r->lock);
     return NULL;
 }
@@ -292,13 +294,37 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
     return r;
 }
 
+/* Stops the render thread and waits for it; the accumulation is then main's to read. */
+static void join_render_thread(struct ao_render *render)
+{
+    ao_render_stop(render);
+    if (render->started)
+        pthread_join(render->thread, NULL);
+    render->started = false;
+}
+
+const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render)
+{
+    join_render_thread(render);
+    struct ao_frame *f = &render->frames[render->back];
+    size_t pixels = (size_t)f->width * (size_t)f->height;
+    uint32_t fewest = UINT32_MAX;
+    for (size_t p = 0; p < pixels; p++)
+        fewest = render->accum.count[p] < fewest ? render->accum.count[p] : fewest;
+    struct ao_frame_info info = render->last_info;
+    info.spp = fewest;
+    info.done = false;
+    ao_accum_resolve(&render->accum, f->rgb);
+    info.rmse = render->config.reference ? rmse(f->rgb, render->config.reference, 3 * pixels) : NAN;
+    f->info = info;
+    return f;
+}
+
 void ao_render_destroy(struct ao_render *render)
 {
     if (!render)
         return;
-    ao_render_stop(render);
-    if (render->started)
-        pthread_join(render->thread, NULL);
+    join_render_thread(render);
     pthread_mutex_lock(&render->pass_lock);
     render->quit = true;
     pthread_cond_broadcast(&render->pass_start);

@@ -84,6 +84,11 @@ const struct ao_frame *ao_render_take_frame(struct ao_render *render);
 /* Blocks until the target spp is reached (true) or ao_render_stop was called (false). */
 bool ao_render_wait(struct ao_render *render);
 
+/* After an interruption: stops and joins the render thread, then resolves the accumulation as it
+ * stands, the aborted pass's finished tiles included, into a frame whose info.spp is the smallest
+ * per-pixel sample count. Main thread, as the frame consumer; call ao_render_destroy afterwards. */
+const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render);
+
 /* Asks the render thread to stop at the next tile boundary and wakes ao_render_wait. Any thread. */
 void ao_render_stop(struct ao_render *render);
 

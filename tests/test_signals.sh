@@ -1,0 +1,73 @@
+#!/usr/bin/env bash
+# Interruption loses nothing: SIGINT / SIGTERM during a headless render write the running average
+# so far and exit 130 / 143; a second signal exits at once; kill -9 never leaves a truncated image.
+set -u
+bin=${AO_BINARY:?AO_BINARY not set}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# complete_pfm FILE W H: the file is a whole W x H colour PFM.
+complete_pfm() {
+  local header="PF"$'\n'"$2 $3"$'\n'"-1.0"$'\n'
+  [ "$(stat -c %s "$1")" = $(( ${#header} + 12 * $2 * $3 )) ] && [ "$(head -c 2 "$1")" = PF ]
+}
+
+# A render far too long to finish, interrupted once it has published a few passes.
+interrupt_once() {
+  local sig=$1 want=$2
+  rm -f out.pfm stats.csv
+  "$bin" --headless --spp 1000000 --size 96x64 --threads 2 -o out.pfm --stats stats.csv 2>err.txt &
+  local pid=$!
+  for _ in $(seq 100); do [ -f stats.csv ] && [ "$(wc -l < stats.csv)" -ge 4 ] && break; sleep 0.1; done
+  kill -"$sig" "$pid"
+  wait "$pid"
+  local status=$?
+  [ "$status" = "$want" ] || fail "SIG$sig: exit status $status, expected $want"
+  [ -f out.pfm ] && complete_pfm out.pfm 96 64 || fail "SIG$sig: no complete image written"
+  grep -q "interrupted by SIG$sig at [0-9]* spp" err.txt || fail "SIG$sig: stderr lacks the spp: $(cat err.txt)"
+  local spp
+  spp=$(sed -n 's/.*interrupted by SIG[A-Z]* at \([0-9]*\) spp.*/\1/p' err.txt)
+  [ "$(tail -n 1 stats.csv | cut -d, -f2)" = "$spp" ] || fail "SIG$sig: last stats row is not at $spp spp"
+}
+interrupt_once INT 130
+interrupt_once TERM 143
+
+# Two signals: the second one exits at once, whatever the first was doing. A huge image makes the
+# first signal's write take long enough for the second to arrive while it runs.
+"$bin" --headless --spp 1000000 --size 4000x3000 --threads 2 -o big.pfm 2>/dev/null &
+pid=$!
+sleep 2
+kill -INT "$pid"
+kill -INT "$pid"
+start=$(date +%s%N)
+wait "$pid"
+status=$?
+elapsed_ms=$(( ($(date +%s%N) - start) / 1000000 ))
+[ "$status" = 130 ] || fail "second SIGINT: exit status $status, expected 130"
+[ "$elapsed_ms" -lt 2000 ] || fail "second SIGINT took ${elapsed_ms} ms to exit"
+[ -e big.pfm ] && ! complete_pfm big.pfm 4000 3000 && fail "second SIGINT left a truncated big.pfm"
+
+# kill -9 at assorted moments of a run that writes a 3000x2000 PFM (72 MB): the output is either
+# absent or complete, never truncated. The moments are fractions of a timed full run, so that
+# some land in the write itself (rendering at 1 spp is about as quick as writing).
+k9=("$bin" --headless -q --spp 1 --size 3000x2000 --threads 2 -o k9.pfm)
+start=$(date +%s%N); "${k9[@]}"; total_ms=$(( ($(date +%s%N) - start) / 1000000 ))
+outcomes=""
+for percent in 55 60 64 68 71 74 77 80 85 92; do
+  rm -f k9.pfm
+  "${k9[@]}" &
+  pid=$!
+  sleep "$(awk -v t="$total_ms" -v p="$percent" 'BEGIN { printf "%.3f", t * p / 100000 }')"
+  kill -9 "$pid" 2>/dev/null
+  wait "$pid" 2>/dev/null
+  if [ -e k9.pfm ] && ! complete_pfm k9.pfm 3000 2000; then fail "kill -9 at ${percent}% left a truncated k9.pfm"; fi
+  outcomes="$outcomes ${percent}%:$([ -e k9.pfm ] && echo complete || echo absent)$(ls k9.pfm.tmp.* >/dev/null 2>&1 && echo +partial-temp)"
+  rm -f k9.pfm.tmp.*
+done
+echo "full run ${total_ms} ms; kill -9 outcomes:$outcomes"
+
+echo "$failures failure(s)"
+[ "$failures" = 0 ]
