@@ -11,11 +11,19 @@
 
 #include <float.h>
 
-#include "rng.h"
 
-/* Key of the AO streams in the pass slot, so that they never share a stream with the eye rays':
- * real pass numbers stay far below it. */
-static const uint64_t STREAM_TAG = UINT64_MAX;
+/* Keys of a pixel's eye-ray stream (indexed by pass) and AO stream (indexed by sample), in the
+ * pass slot of the key, where no real pass number reaches. */
+static const uint64_t EYE_STREAM = UINT64_MAX - 1, AO_STREAM = UINT64_MAX;
+
+/* The index-th pair of uniform numbers of the stream `key`, from the context's sequence. */
+static inline void draw_pair(const struct ao_context *ctx, uint64_t key, uint64_t index, float *u1, float *u2)
+{
+    if (ctx->sequence == AO_SEQUENCE_SOBOL)
+        ao_rng_sobol_pair(key, index, u1, u2);
+    else
+        ao_rng_pair(key, index, u1, u2);
+}
 
 float ao_surface_offset(struct ao_vec3 origin, float t, struct ao_vec3 position)
 {
@@ -79,6 +87,19 @@ static void flush(struct queue *q)
     q->rays.count = 0;
 }
 
+/* Mirrors the directions that point below the surface with geometric normal ng across it, keeping
+ * their weights (taken about the shading normal); branch-free so that it vectorizes. */
+static void reflect_below(struct ao_vec3 ng, int n, float *restrict x, float *restrict y, float *restrict z)
+{
+    for (int k = 0; k < n; k++) {
+        float d = x[k] * ng.x + y[k] * ng.y + z[k] * ng.z;
+        float twice_below = d - fabsf(d); /* 2d below the surface, 0 above */
+        x[k] -= twice_below * ng.x;
+        y[k] -= twice_below * ng.y;
+        z[k] -= twice_below * ng.z;
+    }
+}
+
 /* Queues the `count` AO samples of surface s (stream `key`, from first_sample) into *sum. */
 static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t key, uint64_t first_sample,
                           int count, double *sum)
@@ -90,8 +111,10 @@ static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t 
         float u1[AO_PACKET_SIZE], u2[AO_PACKET_SIZE], w[AO_PACKET_SIZE];
         float x[AO_PACKET_SIZE], y[AO_PACKET_SIZE], z[AO_PACKET_SIZE];
         for (int k = 0; k < n; k++)
-            ao_rng_pair(key, first_sample + (uint64_t)(first + k), &u1[k], &u2[k]);
+            draw_pair(q->ctx, key, first_sample + (uint64_t)(first + k), &u1[k], &u2[k]);
         ao_sample_directions(q->ctx->sampling, &basis, n, u1, u2, x, y, z, w);
+        if (q->ctx->below == AO_BELOW_REFLECT)
+            reflect_below(s->ng, n, x, y, z);
         /* Only directions that can contribute become rays. */
         for (int k = 0; k < n; k++) {
             if (w[k] <= 0.0f)
@@ -112,11 +135,6 @@ static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t 
     }
 }
 
-/* The AO stream of a pixel: keyed in the pass slot by a tag no real pass reaches. */
-static uint64_t ao_key(const struct ao_context *ctx, uint64_t pixel)
-{
-    return ao_rng_key(ctx->seed, pixel, STREAM_TAG);
-}
 
 struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao_surface *s,
                                    uint64_t pixel, uint64_t first_sample, int count,
@@ -124,7 +142,7 @@ struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao
 {
     struct queue q = {.ctx = ctx};
     double sum = 0.0;
-    queue_samples(&q, s, ao_key(ctx, pixel), first_sample, count, &sum);
+    queue_samples(&q, s, ao_rng_key(ctx->seed, pixel, AO_STREAM), first_sample, count, &sum);
     flush(&q);
     *shadow_rays += q.traced;
     return ao_vec3_scale(s->albedo, (float)sum);
@@ -146,7 +164,7 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
             float du = 0.5f, dv = 0.5f;
             index[k] = (uint64_t)j * (uint64_t)ctx->view.width + (uint64_t)i;
             if (ctx->aa)
-                ao_rng_pair(ao_rng_key(ctx->seed, index[k], pass), 0, &du, &dv);
+                draw_pair(ctx, ao_rng_key(ctx->seed, index[k], EYE_STREAM), pass, &du, &dv);
             struct ao_vec3 d = ao_camera_ray(&ctx->view, (float)i + du, (float)j + dv);
             eye.org_x[k] = ctx->view.eye.x;
             eye.org_y[k] = ctx->view.eye.y;
@@ -168,7 +186,7 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
             struct ao_vec3 d = ao_vec3_make(eye.dir_x[k], eye.dir_y[k], eye.dir_z[k]);
             ao_surface_from_hit(ctx->scene, ctx->view.eye, d, &hits[k], &s);
             albedo[k] = s.albedo;
-            queue_samples(&q, &s, ao_key(ctx, index[k]), first_sample, count, &sum[k]);
+            queue_samples(&q, &s, ao_rng_key(ctx->seed, index[k], AO_STREAM), first_sample, count, &sum[k]);
         }
         flush(&q);
         for (int k = 0; k < eye.count; k++)

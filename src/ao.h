@@ -6,10 +6,18 @@
 #include <stdint.h>
 
 #include "camera.h"
+#include "rng.h"
 #include "sampling.h"
 #include "scene.h"
 #include "tracer.h"
 #include "vec3.h"
+
+/* What happens to sampled directions that point below the geometric surface (possible where the
+ * interpolated shading normal differs from it). */
+enum ao_below {
+    AO_BELOW_REFLECT,        /* mirrored across the geometric surface, then traced */
+    AO_BELOW_TRACE,          /* traced as they are: they hit the surface itself and count occluded */
+};
 
 /* Everything one pass's pixel samples share; read-only while a pass runs. */
 struct ao_context {
@@ -20,6 +28,8 @@ struct ao_context {
     bool aa;                 /* jitter eye rays inside the pixel */
     float ao_distance;       /* occlusion rays longer than this do not occlude */
     uint64_t seed;
+    enum ao_sequence sequence;
+    enum ao_below below;
 };
 
 /* A shading point: unit normals turned to face the eye ray, and the ray-origin offset. */

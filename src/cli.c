@@ -16,8 +16,12 @@ enum { MAX_SPP = 1 << 30, MAX_SPPPP = 65536, MAX_THREADS = 256 };
 enum option_id {
     OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
     OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
-    OPT_VERSION,
+    OPT_VERSION, OPT_SAMPLER, OPT_BELOW,
 };
+
+/* Names of the --sampler and --below-surface values, in their enums' order. */
+static const char *const sequences[] = {[AO_SEQUENCE_RANDOM] = "random", [AO_SEQUENCE_SOBOL] = "sobol", NULL};
+static const char *const belows[] = {[AO_BELOW_REFLECT] = "reflect", [AO_BELOW_TRACE] = "trace", NULL};
 
 /* One row of the option table: long name, short name (or 0), whether it takes a value. */
 struct option_spec {
@@ -44,6 +48,8 @@ static const struct option_spec specs[] = {
     {"--quiet", 'q', false, OPT_QUIET},
     {"--help", 'h', false, OPT_HELP},
     {"--version", 0, false, OPT_VERSION},
+    {"--sampler", 0, true, OPT_SAMPLER},
+    {"--below-surface", 0, true, OPT_BELOW},
 };
 
 static const char usage[] =
@@ -57,6 +63,10 @@ static const char usage[] =
     "  --spp N               total AO samples per pixel (default 256)\n"
     "  --spppp N             AO samples per pixel per pass (default 1)\n"
     "  --sampling M          uniform | hemisphere | cosine (default cosine)\n"
+    "  --sampler S           random | sobol (Owen-scrambled) numbers for jitter and\n"
+    "                        directions (default random)\n"
+    "  --below-surface P     reflect | trace directions that point below the geometric\n"
+    "                        surface (default reflect)\n"
     "  --aa, --no-aa         jittered eye rays on / off (default on)\n"
     "  --size WxH            image size (default: the scene's, else 640x480)\n"
     "  --threads N           render threads, 1 to 256 (default: number of cores)\n"
@@ -160,12 +170,27 @@ static bool parse_sampling(const char *name, const char *value, enum ao_sampling
     return false;
 }
 
+/* Finds value among the NULL-terminated choices and stores its index; else a message listing them. */
+static bool parse_choice(const char *name, const char *value, const char *const *choices, int *out,
+                         char *msg, size_t msg_size)
+{
+    for (int k = 0; choices[k]; k++) {
+        if (strcmp(value, choices[k]) == 0) {
+            *out = k;
+            return true;
+        }
+    }
+    snprintf(msg, msg_size, "%s: expected %s or %s, got '%s'", name, choices[0], choices[1], value);
+    return false;
+}
+
 /* Applies one option (value is NULL for flags) to opts. */
 static bool apply(const struct option_spec *spec, const char *value, struct ao_options *opts,
                   char *msg, size_t msg_size)
 {
     const char *name = spec->name;
     uint64_t n;
+    int choice;
     switch (spec->id) {
     case OPT_HEADLESS: opts->headless = true; return true;
     case OPT_AA: opts->aa = true; return true;
@@ -194,6 +219,16 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
         if (!parse_count(name, value, 1, MAX_THREADS, &n, msg, msg_size))
             return false;
         opts->threads = (int)n;
+        return true;
+    case OPT_SAMPLER:
+        if (!parse_choice(name, value, sequences, &choice, msg, msg_size))
+            return false;
+        opts->sequence = (enum ao_sequence)choice;
+        return true;
+    case OPT_BELOW:
+        if (!parse_choice(name, value, belows, &choice, msg, msg_size))
+            return false;
+        opts->below = (enum ao_below)choice;
         return true;
     }
     return false;
@@ -243,6 +278,7 @@ bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, siz
 {
     *opts = (struct ao_options){
         .spp = 256, .spppp = 1, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
+        .sequence = AO_SEQUENCE_RANDOM, .below = AO_BELOW_REFLECT,
         .ao_distance = NAN,
     };
     for (int i = 1; i < argc; i++) {

@@ -6,6 +6,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "ao.h"
+#include "rng.h"
 #include "sampling.h"
 
 /* Everything SPEC.md's command line can say; strings point into argv. */
@@ -16,6 +18,8 @@ struct ao_options {
     uint32_t spp;             /* default 256 */
     uint32_t spppp;           /* default 1 */
     enum ao_sampling sampling;/* default cosine */
+    enum ao_sequence sequence;/* --sampler: default random */
+    enum ao_below below;      /* --below-surface: default reflect */
     bool aa;                  /* default on */
     int width, height;        /* 0: the scene's image size, else 640x480 */
     int threads;              /* 0: number of cores */

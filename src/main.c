@@ -211,6 +211,7 @@ static int run(struct app *app, const struct ao_options *opts)
         .threads = opts->threads ? opts->threads : (cores > 0 ? (int)cores : 1),
         .seed = opts->seed, .target_spp = opts->spp,
         .ao_distance = isnan(opts->ao_distance) ? app->scene.ao_distance : opts->ao_distance,
+        .sequence = opts->sequence, .below = opts->below,
         .reference = app->reference, .on_pass = on_pass, .user = &app->reporter};
     struct ao_settings settings = {.sampling = opts->sampling, .aa = opts->aa, .spppp = (int)opts->spppp,
                                    .camera = app->scene.camera};

@@ -267,7 +267,8 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
     atomic_init(&r->middle, 1u);
     r->front = 2;
     r->ctx = (struct ao_context){.scene = config->scene, .tracer = config->tracer,
-                                 .ao_distance = config->ao_distance, .seed = config->seed};
+                                 .ao_distance = config->ao_distance, .seed = config->seed,
+                                 .sequence = config->sequence, .below = config->below};
     r->tiles_x = (config->width + TILE - 1) / TILE;
     r->tile_count = r->tiles_x * ((config->height + TILE - 1) / TILE);
     pthread_mutex_init(&r->lock, NULL);

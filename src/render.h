@@ -6,6 +6,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "ao.h"
 #include "camera.h"
 #include "sampling.h"
 #include "scene.h"
@@ -50,6 +51,8 @@ struct ao_render_config {
     uint64_t seed;
     uint32_t target_spp;
     float ao_distance;
+    enum ao_sequence sequence;   /* random or Sobol numbers for jitter and directions */
+    enum ao_below below;         /* directions below the geometric surface */
     const float *reference;  /* width*height*3 linear floats, or NULL */
     /* Called on the render thread after each published pass (stats rows, waking the GL thread). */
     void (*on_pass)(const struct ao_frame_info *info, void *user);

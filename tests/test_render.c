@@ -33,8 +33,8 @@ static void count_pass(const struct ao_frame_info *info, void *user)
 }
 
 /* Renders SCENE to completion and returns a malloc'd copy of the final frame. */
-static float *render(int threads, uint32_t spp, int spppp, bool aa, enum ao_sampling sampling,
-                     struct ao_frame_info *info, struct counter *counter)
+static float *render_with(int threads, uint32_t spp, int spppp, bool aa, enum ao_sampling sampling,
+                          enum ao_sequence sequence, struct ao_frame_info *info, struct counter *counter)
 {
     struct ao_scene scene;
     assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
@@ -42,7 +42,8 @@ static float *render(int threads, uint32_t spp, int spppp, bool aa, enum ao_samp
     assert_non_null(tracer);
     struct ao_render_config config = {.scene = &scene, .tracer = tracer, .width = 37, .height = 29,
                                       .threads = threads, .seed = 5, .target_spp = spp,
-                                      .ao_distance = INFINITY, .on_pass = count_pass, .user = counter};
+                                      .ao_distance = INFINITY, .sequence = sequence,
+                                      .on_pass = count_pass, .user = counter};
     struct ao_settings settings = {.sampling = sampling, .aa = aa, .spppp = spppp, .camera = scene.camera};
     struct ao_render *r = ao_render_create(&config, &settings);
     assert_non_null(r);
@@ -60,6 +61,13 @@ static float *render(int threads, uint32_t spp, int spppp, bool aa, enum ao_samp
     return copy;
 }
 
+/* render_with random numbers. */
+static float *render(int threads, uint32_t spp, int spppp, bool aa, enum ao_sampling sampling,
+                     struct ao_frame_info *info, struct counter *counter)
+{
+    return render_with(threads, spp, spppp, aa, sampling, AO_SEQUENCE_RANDOM, info, counter);
+}
+
 static void test_thread_count_does_not_change_the_image(void **state)
 {
     (void)state;
@@ -74,6 +82,12 @@ static void test_thread_count_does_not_change_the_image(void **state)
     free(one);
     free(two);
     free(five);
+    /* Sobol numbers likewise. */
+    one = render_with(1, 12, 3, true, AO_SAMPLING_COSINE, AO_SEQUENCE_SOBOL, &a, &ca);
+    two = render_with(2, 12, 3, true, AO_SAMPLING_COSINE, AO_SEQUENCE_SOBOL, &b, &cb);
+    assert_memory_equal(one, two, 3 * sizeof(float) * 37 * 29);
+    free(one);
+    free(two);
 }
 
 static void test_passes_are_ceil_spp_over_spppp(void **state)
