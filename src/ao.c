@@ -5,8 +5,8 @@
  * estimator L ~ rho/(pi N) Sum_j V(x,w_j) max(0, n.w_j) / p(w_j). Per sampler the weight
  * max(0, n.w)/(pi p(w)) is 4 max(0, n.w) for the uniform sphere (p = 1/4pi), 2 n.w for the uniform
  * hemisphere (p = 1/2pi), and exactly 1 for cosine sampling (p = n.w/pi), where the estimator
- * reduces to rho times the fraction of open directions. Directions of weight 0 (below the
- * shading hemisphere) add nothing and are not traced. */
+ * reduces to rho times the fraction of open directions. Directions of weight 0 (the lower half of
+ * the uniform sphere) add nothing and are not traced. */
 #include "ao.h"
 
 #include <float.h>
@@ -100,41 +100,55 @@ static void reflect_below(struct ao_vec3 ng, int n, float *restrict x, float *re
     }
 }
 
-/* Queues the `count` AO samples of surface s (stream `key`, from first_sample) into *sum. */
+/* Drops the lanes from `first` on whose weight is zero (directions that cannot contribute, such as
+ * the lower half of the uniform sphere), keeping the others in order. */
+static void compact(struct queue *q, int first)
+{
+    struct ao_packet *r = &q->rays;
+    int kept = first;
+    for (int k = first; k < r->count; k++) {
+        if (q->weight[k] <= 0.0f)
+            continue;
+        r->dir_x[kept] = r->dir_x[k];
+        r->dir_y[kept] = r->dir_y[k];
+        r->dir_z[kept] = r->dir_z[k];
+        q->weight[kept++] = q->weight[k];
+    }
+    r->count = kept;
+}
+
+/* Queues the `count` AO samples of surface s (stream `key`, from first_sample) into *sum,
+ * drawing the directions straight into the free lanes of the packet. */
 static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t key, uint64_t first_sample,
                           int count, double *sum)
 {
     struct ao_basis basis = ao_basis_from_normal(s->ns);
     struct ao_vec3 origin = ao_vec3_add(s->position, ao_vec3_scale(s->ng, s->offset));
-    for (int first = 0; first < count; first += AO_PACKET_SIZE) {
-        int n = count - first < AO_PACKET_SIZE ? count - first : AO_PACKET_SIZE;
-        float u1[AO_PACKET_SIZE], u2[AO_PACKET_SIZE], w[AO_PACKET_SIZE];
-        float x[AO_PACKET_SIZE], y[AO_PACKET_SIZE], z[AO_PACKET_SIZE];
+    struct ao_packet *r = &q->rays;
+    for (int done = 0; done < count;) {
+        int lane = r->count, n = count - done < AO_PACKET_SIZE - lane ? count - done : AO_PACKET_SIZE - lane;
+        float u1[AO_PACKET_SIZE], u2[AO_PACKET_SIZE];
         for (int k = 0; k < n; k++)
-            draw_pair(q->ctx, key, first_sample + (uint64_t)(first + k), &u1[k], &u2[k]);
-        ao_sample_directions(q->ctx->sampling, &basis, n, u1, u2, x, y, z, w);
+            draw_pair(q->ctx, key, first_sample + (uint64_t)(done + k), &u1[k], &u2[k]);
+        ao_sample_directions(q->ctx->sampling, &basis, n, u1, u2, r->dir_x + lane, r->dir_y + lane,
+                             r->dir_z + lane, q->weight + lane);
         if (q->ctx->below == AO_BELOW_REFLECT)
-            reflect_below(s->ng, n, x, y, z);
-        /* Only directions that can contribute become rays. */
-        for (int k = 0; k < n; k++) {
-            if (w[k] <= 0.0f)
-                continue;
-            int lane = q->rays.count++;
-            q->rays.org_x[lane] = origin.x;
-            q->rays.org_y[lane] = origin.y;
-            q->rays.org_z[lane] = origin.z;
-            q->rays.dir_x[lane] = x[k];
-            q->rays.dir_y[lane] = y[k];
-            q->rays.dir_z[lane] = z[k];
-            q->rays.tfar[lane] = q->ctx->ao_distance;
-            q->weight[lane] = w[k];
-            q->sum[lane] = sum;
-            if (q->rays.count == AO_PACKET_SIZE)
-                flush(q);
+            reflect_below(s->ng, n, r->dir_x + lane, r->dir_y + lane, r->dir_z + lane);
+        r->count += n;
+        done += n;
+        if (q->ctx->sampling == AO_SAMPLING_UNIFORM)
+            compact(q, lane);
+        for (int k = lane; k < r->count; k++) {
+            r->org_x[k] = origin.x;
+            r->org_y[k] = origin.y;
+            r->org_z[k] = origin.z;
+            r->tfar[k] = q->ctx->ao_distance;
+            q->sum[k] = sum;
         }
+        if (r->count == AO_PACKET_SIZE)
+            flush(q);
     }
 }
-
 
 struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao_surface *s,
                                    uint64_t pixel, uint64_t first_sample, int count,
