@@ -287,9 +287,20 @@ static float *read_pixels(FILE *f, int width, int height, bool little_endian, st
 
 bool ao_image_read_pfm(const char *path, float **rgb, int *width, int *height)
 {
-    FILE *f = fopen(path, "rb");
+    /* Non-blocking, so that opening a FIFO returns at once; only regular files are read. */
+    int fd = open(path, O_RDONLY | O_NONBLOCK);
+    FILE *f = fd >= 0 ? fdopen(fd, "rb") : NULL;
     if (!f) {
-        report(path, "cannot open", errno);
+        int err = errno;
+        if (fd >= 0)
+            close(fd);
+        report(path, "cannot open", err);
+        return false;
+    }
+    struct stat st;
+    if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        fclose(f);
+        report(path, "not a regular file", 0);
         return false;
     }
     struct failure why = {NULL, 0};

@@ -5,6 +5,7 @@
 #include "mesh.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -12,11 +13,15 @@
 #include <string.h>
 #include <strings.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 /* An absent OBJ normal in a face corner; also one past the largest usable vertex index. */
 #define NO_INDEX UINT32_MAX
 /* Parsed indices saturate here, far above any possible vertex count. */
 #define INDEX_SATURATION 1000000000000000LL
+/* The most vertices a face may have: its fan then takes at most 1.5 MB, where a 100 MB line of
+ * corners would take gigabytes (and polygons that large are no real model's). */
+#define MAX_FACE_VERTICES 65536
 
 /* ------------------------------------------------------------------ shared helpers */
 
@@ -153,9 +158,13 @@ static bool parse_float(struct span s, float *out)
 static bool read_file(const char *path, char **text, size_t *size)
 {
     char reason[128];
-    FILE *file = fopen(path, "rb");
+    /* Non-blocking, so that opening a FIFO returns at once (to be refused below). */
+    int fd = open(path, O_RDONLY | O_NONBLOCK);
+    FILE *file = fd >= 0 ? fdopen(fd, "rb") : NULL;
     if (!file) {
         strerror_r(errno, reason, sizeof reason);
+        if (fd >= 0)
+            close(fd);
         report(path, 0, "cannot open: %s", reason);
         return false;
     }
@@ -503,6 +512,10 @@ static bool parse_obj_face(struct obj_reader *o, struct tokens *t)
     struct span s;
     o->face.count = 0;
     while (next_token(t, &s)) {
+        if (o->face.count == MAX_FACE_VERTICES) {
+            report(o->path, o->line, "face with more than %d vertices", MAX_FACE_VERTICES);
+            return false;
+        }
         struct corner *c = array_append(&o->face, 1);
         if (!c)
             return out_of_memory(o->path);
@@ -1106,6 +1119,8 @@ static bool read_list(struct ply_reader *r, const struct ply_property *p)
         return ply_error(r, "bad list count %.17g", count);
     if (r->binary && count > (double)((size_t)(r->end - r->cur) / ply_types[p->type].size))
         return ply_error(r, "list of %.0f items runs past the end of the file", count);
+    if (p->role == ROLE_INDICES && count > MAX_FACE_VERTICES)
+        return ply_error(r, "face with %.0f vertices (more than %d)", count, MAX_FACE_VERTICES);
     for (uint32_t i = 0; i < (uint32_t)count; i++)
         if (!read_value(r, p->type, &item) || (p->role == ROLE_INDICES && !add_index(r, item)))
             return false;
