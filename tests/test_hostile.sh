@@ -1,0 +1,151 @@
+#!/usr/bin/env bash
+# Hostile input: files that claim billions of elements in a few bytes, indices and sizes that
+# overflow 32 or 64 bits, 100 MB single lines, a scene naming itself, special files, option values
+# near INT_MAX. Each run must exit 1 or 2 with one stderr line holding the expected text, leave no
+# output, finish within 30 s and peak below a small memory bound (GNU time's maximum resident set
+# size), so each is refused before any large allocation. Committed fixtures are in
+# tests/data/hostile; the 100 MB files and the special files are made in a scratch directory.
+set -u
+bin=${AO_BINARY:?AO_BINARY not set}
+root=${AO_SOURCE_ROOT:?AO_SOURCE_ROOT not set}
+data=$root/tests/data/hostile
+gnu_time=/usr/bin/time
+if ! "$gnu_time" -f %M true >/dev/null 2>&1; then
+  echo "SKIP: GNU time ($gnu_time, Debian package 'time') is needed to measure peak memory"
+  exit 77
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+
+# The bound: a refused input costs the process's baseline (shared libraries, about 60 MB) plus
+# at most the file itself (the loaders read a file whole; the largest here is 100 MB). Sanitizer
+# runtimes add their own shadow memory and quarantine, so their builds get more room.
+limit_mb=200
+if ldd "$bin" 2>/dev/null | grep -qE 'lib(asan|tsan)'; then limit_mb=400; fi
+failures=0 refused=0 peak_kb=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# refuse STATUS TEXT ARGS...: aoview --headless ARGS must be refused as described above.
+refuse() {
+  local want=$1 text=$2
+  shift 2
+  rm -f out.png out.png.tmp* err.txt mem.txt
+  "$gnu_time" -f %M -o mem.txt timeout -s KILL 30 "$bin" --headless -q -o out.png "$@" \
+    2>err.txt >/dev/null
+  local got=$? kb
+  kb=$(tail -n 1 mem.txt)
+  [ "$kb" -gt "$peak_kb" ] && peak_kb=$kb
+  if [ "$got" != "$want" ]; then fail "$* exited $got, expected $want: $(head -c 300 err.txt)"
+  elif [ "$(wc -l < err.txt)" != 1 ]; then fail "$*: expected one stderr line, got: $(head -c 600 err.txt)"
+  elif ! grep -qF -- "$text" err.txt; then fail "$*: message lacks '$text': $(cat err.txt)"
+  elif [ "$kb" -gt $((limit_mb * 1024)) ]; then fail "$*: peak memory $((kb / 1024)) MB > $limit_mb MB"
+  elif [ -e out.png ] || ls out.png.tmp* >/dev/null 2>&1; then fail "$*: left an output file"
+  else
+    refused=$((refused + 1))
+    echo "refused in $((kb / 1024)) MB: $(basename -- "${!#}"): $(cat err.txt)"
+  fi
+}
+
+# ---- meshes claiming far more than they hold
+refuse 1 "declares 4000000000 rows, found 3" "$data/claims_ascii.ply"
+refuse 1 "declares 3000000000 rows of at least 12 bytes" "$data/claims_binary.ply"
+refuse 1 "declares 4000000000 rows of at least 1 bytes" "$data/claims_faces.ply"
+refuse 1 "list of 4000000000 items runs past the end" "$data/claims_list.ply"
+refuse 1 "bad element count '18446744073709551616'" "$data/count_overflow.ply"
+refuse 1 "4294967295 vertices are too many for 32-bit indices" "$data/count_32bit.ply"
+
+# ---- indices that would wrap to valid ones in 32 bits
+refuse 1 "index_wrap.obj:5: face corner '4294967298': vertex index out of range" "$data/index_wrap.obj"
+refuse 1 "index_negative_wrap.obj:5: face corner '-4294967295'" "$data/index_negative_wrap.obj"
+refuse 1 "index_huge.obj:4: face corner" "$data/index_huge.obj"
+refuse 1 "texture coordinate index out of range" "$data/texcoord_wrap.obj"
+refuse 1 "vertex index 4294967295 is not an integer in [0, 3)" "$data/index_wrap.ply"
+
+# ---- enormous lines and polygons, generated (100 MB each)
+big=100000000
+python3 - "$big" <<'PY'
+import struct, sys
+big = int(sys.argv[1])
+tri = b'v 0 0 0\nv 1 0 0\nv 0 1 0\n'
+with open('face_line.obj', 'wb') as f:             # one polygon of 50 million corners
+    f.write(tri + b'f' + b' 1 2 3' * (big // 6) + b'\n')
+with open('comment_line.obj', 'wb') as f:          # a comment line, and nothing else
+    f.write(b'#' + b'x' * big + b'\n')
+with open('vertex_line.obj', 'wb') as f:           # a vertex with 50 million coordinates
+    f.write(b'v' + b' 1' * (big // 2) + b'\n')
+with open('long_line.scene', 'wb') as f:
+    f.write(b'sphere center 0 0 0 radius 1 ' + b' ' * big + b'\n')
+header = ('ply\nformat %s 1.0\nelement vertex 3\nproperty float x\nproperty float y\n'
+          'property float z\nelement face 1\nproperty list %s int vertex_indices\nend_header\n')
+with open('face_row.ply', 'wb') as f:              # ascii: one face of 25 million corners
+    f.write((header % ('ascii', 'uint')).encode() + b'0 0 0\n1 0 0\n0 1 0\n')
+    f.write(b'%d' % (big // 4) + b' 0 1 2 0' * (big // 16) + b'\n')
+with open('face_list.ply', 'wb') as f:             # binary: one face of 25 million corners
+    f.write((header % ('binary_little_endian', 'uint')).encode())
+    f.write(struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack('<I', big // 4))
+    f.write(struct.pack('<4i', 0, 1, 2, 0) * (big // 16))
+PY
+refuse 1 "face_line.obj:4: face with more than 65536 vertices" face_line.obj
+refuse 1 "no triangles" comment_line.obj
+refuse 1 "vertex_line.obj:1: too many numbers" vertex_line.obj
+refuse 1 "long_line.scene:1: line longer than" long_line.scene
+refuse 1 "face_row.ply:13: face with 25000000 vertices (more than 65536)" face_row.ply
+refuse 1 "face_list.ply: face 0: face with 25000000 vertices (more than 65536)" face_list.ply
+rm -f face_line.obj comment_line.obj vertex_line.obj long_line.scene face_row.ply face_list.ply
+
+# ---- scenes naming themselves or what is not a mesh file; special files
+refuse 1 "self.scene: unknown mesh format" "$data/self.scene"
+refuse 1 "unknown mesh format" "$data/dot.scene"
+mkdir dir.obj
+refuse 1 "dir.obj: is a directory" dir.obj
+ln -s /dev/zero zero.obj
+refuse 1 "zero.obj: not a regular file" zero.obj
+mkfifo fifo.obj fifo.scene fifo.pfm             # nobody writes: opening must not wait forever
+refuse 1 "fifo.obj: not a regular file" fifo.obj
+refuse 1 "fifo.scene: not a regular file" fifo.scene
+printf 'camera eye 0 1 4 target 0 0 0\nmesh fifo.obj\n' > mesh_fifo.scene
+refuse 1 "fifo.obj: not a regular file" mesh_fifo.scene
+
+# ---- image sizes whose pixel count overflows 32 or 64 bits, in the scene and on the command line
+refuse 1 "image_huge.scene:2: 'image'" "$data/image_huge.scene"
+refuse 1 "image_overflow.scene:2: 'image'" "$data/image_overflow.scene"
+refuse 1 "image_pixels.scene:2: 'image'" "$data/image_pixels.scene"
+for size in 65536x65536 46341x46341 16384x16384 4294967297x1 18446744073709551617x1 1x-1; do
+  refuse 2 "--size: expected WxH" --size "$size" "$root/assets/scenes/spheres.scene"
+done
+
+# ---- counts near INT_MAX and beyond
+for spp in 2147483647 2147483648 4294967297 1073741825 18446744073709551617; do
+  refuse 2 "--spp: expected a whole number from 1 to 1073741824" --spp "$spp"
+done
+refuse 2 "--spppp: expected a whole number" --spppp 4294967296
+refuse 2 "--threads: expected a whole number" --threads 4294967297
+refuse 2 "--seed: expected a whole number" --seed 18446744073709551616
+
+# ---- PFM references with absurd dimensions
+spheres=$root/assets/scenes/spheres.scene
+refuse 1 "size_overflow.pfm: bad or too large width and height" --reference "$data/size_overflow.pfm" "$spheres"
+refuse 1 "size_pixels.pfm: bad or too large width and height" --reference "$data/size_pixels.pfm" "$spheres"
+refuse 1 "size_negative.pfm: bad or too large width and height" --reference "$data/size_negative.pfm" "$spheres"
+refuse 1 "claims_pixels.pfm: truncated pixel data" --reference "$data/claims_pixels.pfm" "$spheres"
+refuse 1 "fifo.pfm: not a regular file" --reference fifo.pfm "$spheres"
+
+# ---- the largest --spp accepted: 2^30 samples run (cut short after 4 s) without overflow.
+"$bin" --headless -q --spp 1073741824 --spppp 65536 --size 4x4 --stats max.csv -o max.pfm \
+  "$spheres" 2>err.txt &
+pid=$!
+sleep 4
+kill -KILL "$pid"
+wait "$pid" 2>/dev/null
+[ -s err.txt ] && fail "--spp 1073741824 printed: $(head -c 300 err.txt)"
+python3 - <<'PY' || fail "--spp 1073741824: stats do not show passes of 65536 samples"
+import csv
+rows = list(csv.reader(open('max.csv')))[1:]
+assert rows, 'no pass finished in 4 s'
+assert [int(r[1]) for r in rows] == [65536 * (k + 1) for k in range(len(rows))], rows
+assert 0 < int(rows[-1][4]) <= 16 * int(rows[-1][1]), 'shadow rays: at most one per sample'
+PY
+
+echo "$refused hostile inputs refused, peak memory $((peak_kb / 1024)) MB (bound $limit_mb MB); $failures failure(s)"
+[ "$failures" = 0 ]
