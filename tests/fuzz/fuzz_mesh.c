@@ -1,0 +1,48 @@
+/* libFuzzer target for one mesh loader: the input is written to a scratch file whose extension
+ * (AO_FUZZ_EXT, ".obj" or ".ply") picks the loader, since ao_mesh_load reads a path. A mesh that
+ * loads must be consistent: indices in range, finite positions, unit or zero normals. */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "fuzz.h"
+#include "mesh.h"
+
+#ifndef AO_FUZZ_EXT
+#error "define AO_FUZZ_EXT as \".obj\" or \".ply\""
+#endif
+
+/* Aborts with a message when a loaded mesh breaks what mesh.h promises. */
+static void check(const struct ao_mesh *m)
+{
+    const char *broken = NULL;
+    if (m->triangle_count == 0 || m->vertex_count == 0 || !m->positions || !m->normals ||
+        !m->indices)
+        broken = "empty mesh reported as loaded";
+    for (size_t i = 0; !broken && i < 3 * m->triangle_count; i++)
+        if (m->indices[i] >= m->vertex_count)
+            broken = "index out of range";
+    for (size_t i = 0; !broken && i < m->vertex_count; i++) {
+        struct ao_vec3 p = m->positions[i], n = m->normals[i];
+        double length = sqrt((double)n.x * n.x + (double)n.y * n.y + (double)n.z * n.z);
+        if (!isfinite(p.x) || !isfinite(p.y) || !isfinite(p.z))
+            broken = "non-finite position";
+        else if (!(length == 0.0 || fabs(length - 1.0) < 1e-5))
+            broken = "normal neither unit nor zero";
+    }
+    if (broken) {
+        fprintf(stderr, "fuzz_mesh: %s\n", broken);
+        abort();
+    }
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+    const char *path = fuzz_temp_path("input" AO_FUZZ_EXT);
+    fuzz_write_file(path, data, size);
+    struct ao_mesh mesh;
+    if (ao_mesh_load(&mesh, path))
+        check(&mesh);
+    ao_mesh_finish(&mesh);
+    return 0;
+}
