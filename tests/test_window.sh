@@ -39,9 +39,16 @@ wait_title() {
     fail "title never matched /$1/"
 }
 
-# Field of the title: the number in "spp N of", or in "pass N".
-spp() { [[ $(title) =~ spp\ ([0-9]+)\ of ]] && echo "${BASH_REMATCH[1]}"; }
+# The number in the title's "pass N".
 pass() { [[ $(title) =~ pass\ ([0-9]+) ]] && echo "${BASH_REMATCH[1]}"; }
+# True when one reading of the title shows more samples than passes (both from the same title:
+# two readings could straddle a new frame).
+spp_ahead() {
+    local t spp
+    t=$(title)
+    [[ $t =~ spp\ ([0-9]+)\ of ]] && spp=${BASH_REMATCH[1]} && [[ $t =~ pass\ ([0-9]+) ]] &&
+        [ "$spp" -gt "${BASH_REMATCH[1]}" ]
+}
 
 # Presses the keys (X keysym names) on the focused viewer, as a user would.
 press() {
@@ -105,10 +112,10 @@ if [ "$mode" = keys ]; then
     press plus
     wait_title " — 2 spp/pass"
     for _ in $(seq 200); do
-        [ "$(spp)" -gt "$(pass)" ] && break
+        spp_ahead && break
         sleep 0.05
     done
-    [ "$(spp)" -gt "$(pass)" ] || fail "+ did not raise the samples per pass"
+    spp_ahead || fail "+ did not raise the samples per pass"
 
     # R: the pass count starts again from 1.
     wait_title " — pass ([6-9]|[1-9][0-9]+) — "
