@@ -4,16 +4,14 @@
  * message") and leaves the mesh empty. */
 #include "mesh.h"
 
-#include <errno.h>
-#include <fcntl.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
-#include <sys/stat.h>
-#include <unistd.h>
+
+#include "file.h"
 
 /* An absent OBJ normal in a face corner; also one past the largest usable vertex index. */
 #define NO_INDEX UINT32_MAX
@@ -152,44 +150,6 @@ static bool parse_float(struct span s, float *out)
     char *stop;
     *out = strtof(s.begin, &stop);
     return stop == s.end && isfinite(*out);
-}
-
-/* Reads a whole regular file into a NUL-terminated buffer the caller frees. */
-static bool read_file(const char *path, char **text, size_t *size)
-{
-    char reason[128];
-    /* Non-blocking, so that opening a FIFO returns at once (to be refused below). */
-    int fd = open(path, O_RDONLY | O_NONBLOCK);
-    FILE *file = fd >= 0 ? fdopen(fd, "rb") : NULL;
-    if (!file) {
-        strerror_r(errno, reason, sizeof reason);
-        if (fd >= 0)
-            close(fd);
-        report(path, 0, "cannot open: %s", reason);
-        return false;
-    }
-    struct stat st;
-    bool ok = false;
-    if (fstat(fileno(file), &st) != 0)
-        report(path, 0, "cannot stat the file");
-    else if (S_ISDIR(st.st_mode))
-        report(path, 0, "is a directory, not a mesh file");
-    else if (!S_ISREG(st.st_mode))
-        report(path, 0, "not a regular file");
-    else if ((uintmax_t)st.st_size >= SIZE_MAX)
-        report(path, 0, "file too large");
-    else if (!(*text = malloc((size_t)st.st_size + 1)))
-        out_of_memory(path);
-    else if (fread(*text, 1, (size_t)st.st_size, file) != (size_t)st.st_size) {
-        report(path, 0, "read error");
-        free(*text);
-    } else {
-        *size = (size_t)st.st_size;
-        (*text)[*size] = '\0';
-        ok = true;
-    }
-    fclose(file);
-    return ok;
 }
 
 /* Appends the fan triangulation (v0, vi, vi+1) of the polygon face (elements of any size, at
@@ -1270,7 +1230,7 @@ bool ao_mesh_load(struct ao_mesh *mesh, const char *path)
         report(path, 0, "unknown mesh format; expected a .obj or .ply file");
         return false;
     }
-    if (!read_file(path, &text, &size))
+    if (!ao_file_read(path, &text, &size))
         return false;
     bool ok = load(mesh, path, text, size);
     free(text);

@@ -1,13 +1,12 @@
 /* Scene files and bare meshes; see scene.h and SPEC.md's "Scene file". */
 #include "scene.h"
 
-#include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
 
+#include "file.h"
 #include "image.h"
 #include "mesh.h"
 
@@ -41,7 +40,6 @@ static bool fail(const struct cursor *c, const char *fmt, ...)
 static bool is_number(const char *s)
 {
     char *end;
-    errno = 0;
     strtod(s, &end);
     return end != s && *end == '\0';
 }
@@ -516,29 +514,10 @@ bool ao_scene_load(struct ao_scene *scene, const char *path)
     memset(scene, 0, sizeof *scene);
     if (has_extension(path, ".obj") || has_extension(path, ".ply"))
         return load_bare_mesh(scene, path);
-    struct stat st;
-    if (stat(path, &st) != 0) {
-        fprintf(stderr, "%s: %s\n", path, strerror(errno));
+    char *text;
+    size_t got;
+    if (!ao_file_read(path, &text, &got))
         return false;
-    }
-    if (!S_ISREG(st.st_mode)) {
-        fprintf(stderr, "%s: not a regular file\n", path);
-        return false;
-    }
-    FILE *f = fopen(path, "rb");
-    if (!f) {
-        fprintf(stderr, "%s: %s\n", path, strerror(errno));
-        return false;
-    }
-    char *text = malloc((size_t)st.st_size + 1);
-    size_t got = text ? fread(text, 1, (size_t)st.st_size, f) : 0;
-    fclose(f);
-    if (!text || got != (size_t)st.st_size) {
-        fprintf(stderr, "%s: %s\n", path, text ? "could not read the whole file" : "out of memory");
-        free(text);
-        return false;
-    }
-    text[got] = '\0';
     if (strlen(text) != got) {
         fprintf(stderr, "%s: not a text file (it contains a NUL byte)\n", path);
         free(text);
