@@ -192,6 +192,9 @@ static int run(struct app *app, const struct ao_options *opts)
         return EXIT_RUNTIME;
     if (app->scene.degenerate_count && !opts->quiet)
         fprintf(stderr, "aoview: skipped %zu degenerate triangles\n", app->scene.degenerate_count);
+    if (!opts->quiet)
+        fprintf(stderr, "aoview: %s: %zu triangles, %zu spheres, traced by %s\n", app->scene.name,
+                app->scene.triangle_count, app->scene.sphere_count, ao_tracer_backend(app->tracer));
 
     /* Stats file and progress bar. */
     app->reporter.stats_path = opts->stats_path;

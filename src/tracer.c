@@ -4,17 +4,22 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include <embree3/rtcore.h>
+
+#include "direct.h"
 #if defined(__SSE__)
 #include <pmmintrin.h>
 #include <xmmintrin.h>
 #endif
 
 struct ao_tracer {
+    struct ao_direct *direct;            /* set when the direct back end traces: no Embree at all */
     RTCDevice device;
     RTCScene scene;
     unsigned triangles_id, spheres_id;   /* RTC_INVALID_GEOMETRY_ID when absent */
+    struct ao_ray_recorder *recorder;    /* benchmarks only */
 };
 
 static void report(void *user, enum RTCError code, const char *message)
@@ -71,10 +76,23 @@ static bool add_spheres(struct ao_tracer *t, const struct ao_scene *s)
 
 struct ao_tracer *ao_tracer_create(const struct ao_scene *scene)
 {
+    return ao_tracer_create_with(scene, AO_BACKEND_AUTO);
+}
+
+struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_backend backend)
+{
     struct ao_tracer *t = calloc(1, sizeof *t);
     if (!t) {
         fprintf(stderr, "aoview: out of memory creating the tracer\n");
         return NULL;
+    }
+    /* Scenes of a few primitives skip Embree: testing each one directly is faster (direct.c). */
+    if (backend == AO_BACKEND_DIRECT || (backend == AO_BACKEND_AUTO && ao_direct_suits(scene))) {
+        if (!(t->direct = ao_direct_create(scene))) {
+            free(t);
+            return NULL;
+        }
+        return t;
     }
     t->triangles_id = t->spheres_id = RTC_INVALID_GEOMETRY_ID;
     t->device = rtcNewDevice(NULL);
@@ -105,10 +123,17 @@ void ao_tracer_destroy(struct ao_tracer *tracer)
 {
     if (!tracer)
         return;
+    ao_direct_destroy(tracer->direct);
     if (tracer->scene)
         rtcReleaseScene(tracer->scene);
-    rtcReleaseDevice(tracer->device);
+    if (tracer->device)
+        rtcReleaseDevice(tracer->device);
     free(tracer);
+}
+
+const char *ao_tracer_backend(const struct ao_tracer *tracer)
+{
+    return tracer->direct ? "direct" : "embree";
 }
 
 void ao_tracer_thread_init(void)
@@ -143,6 +168,10 @@ static void to_embree(const struct ao_packet *rays, struct RTCRay16 *out, int *v
 
 void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet *rays, struct ao_hit *hits)
 {
+    if (tracer->direct) {
+        ao_direct_intersect(tracer->direct, rays, hits);
+        return;
+    }
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -166,13 +195,84 @@ void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet 
 
 void ao_tracer_occluded(const struct ao_tracer *tracer, const struct ao_packet *rays, uint8_t *open)
 {
+    if (tracer->direct) {
+        ao_direct_occluded(tracer->direct, rays, open);
+        return;
+    }
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     _Alignas(64) struct RTCRay16 packet;
     _Alignas(64) int valid[AO_PACKET_SIZE];
     to_embree(rays, &packet, valid);
+    struct ao_ray_recorder *rec = tracer->recorder;
+    if (rec && rec->seen++ % rec->stride == 0 && rec->count < rec->capacity)
+        rec->packets[rec->count++] = *rays;
     rtcOccluded16(valid, tracer->scene, &context, &packet);
     /* Embree marks an occluded ray by setting its tfar to -inf. */
     for (int k = 0; k < rays->count; k++)
         open[k] = packet.tfar[k] >= 0.0f;
+}
+
+void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *recorder)
+{
+    tracer->recorder = recorder;
+}
+
+static double seconds_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* The packets as one array of single rays, for rtcOccluded1M; NULL when memory is short. */
+static struct RTCRay *to_stream(const struct ao_packet *packets, size_t count, size_t *rays)
+{
+    *rays = 0;
+    for (size_t p = 0; p < count; p++)
+        *rays += (size_t)packets[p].count;
+    struct RTCRay *out = malloc(*rays * sizeof *out + 1);
+    size_t n = 0;
+    for (size_t p = 0; out && p < count; p++) {
+        _Alignas(64) struct RTCRay16 packet;
+        _Alignas(64) int valid[AO_PACKET_SIZE];
+        to_embree(&packets[p], &packet, valid);
+        for (int k = 0; k < packets[p].count; k++, n++)
+            out[n] = (struct RTCRay){.org_x = packet.org_x[k], .org_y = packet.org_y[k], .org_z = packet.org_z[k],
+                                     .dir_x = packet.dir_x[k], .dir_y = packet.dir_y[k], .dir_z = packet.dir_z[k],
+                                     .tfar = packet.tfar[k], .mask = ~0u, .id = (unsigned)k};
+    }
+    return out;
+}
+
+double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packet *packets, size_t count,
+                           bool stream)
+{
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    if (stream) {
+        size_t rays;
+        struct RTCRay *all = to_stream(packets, count, &rays);
+        if (!all)
+            return NAN;
+        double start = seconds_now();
+        rtcOccluded1M(tracer->scene, &context, all, (unsigned)rays, sizeof *all);
+        double seconds = seconds_now() - start;
+        free(all);
+        return seconds;
+    }
+    struct RTCRay16 *converted = aligned_alloc(64, count * sizeof *converted + 64);
+    int (*valid)[AO_PACKET_SIZE] = aligned_alloc(64, count * sizeof *valid + 64);
+    double seconds = NAN;
+    if (converted && valid) {
+        for (size_t p = 0; p < count; p++)
+            to_embree(&packets[p], &converted[p], valid[p]);
+        double start = seconds_now();
+        for (size_t p = 0; p < count; p++)
+            rtcOccluded16(valid[p], tracer->scene, &context, &converted[p]);
+        seconds = seconds_now() - start;
+    }
+    free(converted);
+    free(valid);
+    return seconds;
 }

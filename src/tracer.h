@@ -1,5 +1,6 @@
-/* The only Embree user: builds one Embree 3 scene from an ao_scene and traces eye and occlusion
- * rays against it. */
+/* Ray tracing for the estimator: eye and occlusion rays in packets, against one Embree 3 scene
+ * built from an ao_scene, or through direct.h's loops for scenes of a few primitives. The only
+ * file that includes Embree is tracer.c. */
 #ifndef AO_TRACER_H
 #define AO_TRACER_H
 
@@ -29,9 +30,19 @@ struct ao_hit {
     bool sphere;            /* true for a sphere, false for a triangle */
 };
 
-/* Builds the Embree scene for `scene` (which must outlive the tracer); NULL with one message on
- * stderr when Embree fails. Call from one thread; the result is then shared read-only. */
+/* Builds the tracer for `scene` (which must outlive it), Embree or direct as measured faster; NULL
+ * with one message on stderr on failure. Call from one thread; the result is then shared read-only. */
 struct ao_tracer *ao_tracer_create(const struct ao_scene *scene);
+
+/* Which code traces: Embree's BVH, or direct.h's loops over every primitive of a small scene. */
+enum ao_backend { AO_BACKEND_AUTO, AO_BACKEND_EMBREE, AO_BACKEND_DIRECT };
+
+/* ao_tracer_create with the back end forced; AUTO (what ao_tracer_create does) takes the direct
+ * one for scenes of a few primitives (ao_direct_suits), where it is measured faster. */
+struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_backend backend);
+
+/* The back end that traces, "embree" or "direct", for --stats and benchmarks. Any thread. */
+const char *ao_tracer_backend(const struct ao_tracer *tracer);
 
 /* Releases the Embree scene and device; accepts NULL. */
 void ao_tracer_destroy(struct ao_tracer *tracer);
@@ -46,5 +57,22 @@ void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet 
 /* Sets open[k] to 1 when nothing lies on ray k within t in [0, tfar], else 0 (incoherent
  * occlusion rays). Any thread. */
 void ao_tracer_occluded(const struct ao_tracer *tracer, const struct ao_packet *rays, uint8_t *open);
+
+/* Benchmark instrument: every stride-th occlusion packet traced is copied, up to capacity. */
+struct ao_ray_recorder {
+    struct ao_packet *packets;
+    size_t count, capacity;
+    size_t stride, seen;
+};
+
+/* While recorder is set, every packet ao_tracer_occluded traces is also appended to it; NULL
+ * stops. For a renderer with one thread only (the recorder takes no lock). */
+void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *recorder);
+
+/* Benchmark instrument: the bare-Embree ceiling on given rays. Traces count packets with plain
+ * rtcOccluded16 calls (stream false) or as one incoherent rtcOccluded1M stream (stream true),
+ * converted to Embree's layout beforehand, and returns the seconds the tracing alone took. */
+double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packet *packets, size_t count,
+                           bool stream);
 
 #endif

@@ -1,5 +1,6 @@
-/* The AO estimator against closed forms, for all three samplers, through the real Embree tracer.
- * Statistical bounds are derived next to each check; seeds are fixed. */
+/* The AO estimator against closed forms, for all three samplers, through both tracer back ends
+ * (Embree and the direct loops). Statistical bounds are derived next to each check; seeds are
+ * fixed. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -16,6 +17,9 @@
  * centred at height H above the origin. */
 static const float RHO = 0.7f, R = 0.5f, H = 1.0f;
 
+/* The back end the current group of tests traces with. */
+static enum ao_backend backend;
+
 struct fixture {
     struct ao_scene scene;
     struct ao_tracer *tracer;
@@ -25,7 +29,7 @@ struct fixture {
 static void setup(struct fixture *f, const char *text)
 {
     assert_true(ao_scene_parse(&f->scene, text, "estimator.scene"));
-    f->tracer = ao_tracer_create(&f->scene);
+    f->tracer = ao_tracer_create_with(&f->scene, backend);
     assert_non_null(f->tracer);
     f->ctx = (struct ao_context){.scene = &f->scene, .tracer = f->tracer, .ao_distance = INFINITY, .seed = 42};
 }
@@ -168,5 +172,8 @@ int main(void)
         cmocka_unit_test(test_inside_closed_sphere_gives_zero),
         cmocka_unit_test(test_ao_distance_limits_occlusion),
     };
-    return cmocka_run_group_tests(tests, NULL, NULL);
+    backend = AO_BACKEND_EMBREE;
+    int failures = cmocka_run_group_tests_name("embree", tests, NULL, NULL);
+    backend = AO_BACKEND_DIRECT;
+    return failures + cmocka_run_group_tests_name("direct", tests, NULL, NULL);
 }
