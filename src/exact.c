@@ -1,0 +1,420 @@
+/* aoview-exact: writes the exact ambient-occlusion image of a scene that has a closed form, as a
+ * PFM to use as aoview's --reference. Eye rays go through the project's camera and tracer, so
+ * what each pixel sees is exactly what aoview sees; only the AO integral is replaced by its
+ * closed form. Scenes with a closed form (anything else is refused with one line, exit 1):
+ *
+ * - coplanar triangles (a plane) and at most one sphere wholly on one side of it (centre at height
+ *   h >= r). A plane point at distance d from the centre, on the sphere's side, sees the sphere as
+ *   a disc of projected solid angle pi r^2 h / d^3 (the form factor of a sphere above a
+ *   differential area whose horizon it does not cross), so AO = rho (1 - r^2 h / d^3); on the
+ *   far side AO = rho. A sphere point whose unit normal n makes angle alpha with the plane's
+ *   normal N (towards the sphere) is occluded by the plane exactly in the directions below its
+ *   horizontal, whose cosine-weighted share of n's hemisphere is (1 - cos alpha)/2, so
+ *   AO = rho (1 + n.N)/2 for an infinite plane. Seen from inside, the sphere is closed: AO = 0.
+ *   With no sphere, AO = rho everywhere (an open plane); with no plane, a sphere point sees
+ *   nothing: AO = rho.
+ *   Finite ground. A downward direction at depression angle beta from a point at height z meets
+ *   the plane within horizontal distance z / tan(beta); so with D the distance from the point's
+ *   foot to the nearest boundary edge of the triangles, only directions with beta < eps =
+ *   atan(z / D) can miss the ground. Their cosine-weighted share is at most
+ *   (1/pi) (2 sin(alpha) eps + pi eps^2) <= 2 eps / pi + eps^2, the error of the sphere formula.
+ *   The tool bounds z by h + r and D by (distance from the centre's foot to the boundary) - r, and
+ *   refuses a ground whose bound exceeds MAX_GROUND_ERROR: a quad of +-1e4 under a sphere of
+ *   radius 0.5 resting on it (top at height 1) gives eps = 1e-4, an error below 6.4e-5 rho.
+ *   Plane points are exact.
+ * - a closed box around the eye: watertight triangles (every edge shared by exactly two) all on
+ *   the faces of their bounding box, with the eye strictly inside it. Every occlusion ray from an
+ *   inner wall meets another wall: AO = 0.
+ *
+ * An infinite AO distance is required (the forms above assume it).
+ *
+ * Pixel values: with --no-aa the closed form at the pixel centre's hit, as aoview without AA
+ * computes it. With AA (aoview's default) the box-filtered pixel: the mean of the closed form over
+ * a k x k grid of sub-pixel cell centres, k = round(sqrt(--spp)) (default 16). Where the image is
+ * smooth the midpoint rule's error is O(1/k^2) of the second derivative; a pixel crossed by a
+ * silhouette or the horizon is off by at most (jump) x (cells the edge crosses, <= 2k) / k^2 <=
+ * 2 jump / k, and in practice by much less, since the cells' errors have both signs.
+ * Measured against k = 256 at 160x120: k = 16 is off by 1.1e-4 RMSE (7e-3 in the worst pixel) on
+ * sphere-on-plane.scene and 3.1e-4 (1.4e-2) on hovering-sphere.scene, whose view has a horizon;
+ * k = 64 by 9e-6 (5e-4) and 7e-5 (9e-4). docs/ uses k = 64 (--spp 4096). */
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "ao.h"
+#include "camera.h"
+#include "cli.h"
+#include "config.h"
+#include "image.h"
+#include "scene.h"
+#include "tracer.h"
+
+enum { EXIT_RUNTIME = 1, EXIT_USAGE = 2 };
+
+/* Largest accepted error of the sphere formula caused by a finite ground (albedo 1). */
+static const float MAX_GROUND_ERROR = 1e-4f;
+static const float PI = 3.14159265358979323846f;
+
+static const char USAGE[] =
+    "usage: aoview-exact [--size WxH] [--aa | --no-aa] [--spp N] [-o FILE.pfm] [-q] SCENE\n"
+    "Writes the exact ambient occlusion of SCENE (a plane with at most one sphere over it, or a\n"
+    "closed box around the camera) as a PFM for aoview --reference. With AA (the default) each\n"
+    "pixel is the box-filtered value over a k x k sub-pixel grid, k = round(sqrt(N)), N = --spp\n"
+    "(default 256: 16 x 16). --size, --aa/--no-aa and -o mean what they mean to aoview (default\n"
+    "output exact.pfm); aoview's other options are accepted and have no effect.\n";
+
+/* What the scene's closed form needs. */
+enum kind { KIND_PLANE_SPHERE, KIND_CLOSED_BOX };
+struct closed_form {
+    enum kind kind;
+    const struct ao_sphere *sphere;   /* NULL: no sphere */
+    bool plane;                        /* some triangles (all in one plane) */
+    struct ao_vec3 up;                 /* the plane's unit normal, towards the sphere's side */
+    float ground_error;                /* bound on the sphere formula's finite-ground error */
+};
+
+/* An edge with its end points in lexicographic order, so that shared edges compare equal. */
+struct edge {
+    struct ao_vec3 a, b;
+};
+
+static int compare_points(struct ao_vec3 p, struct ao_vec3 q)
+{
+    if (p.x != q.x)
+        return p.x < q.x ? -1 : 1;
+    if (p.y != q.y)
+        return p.y < q.y ? -1 : 1;
+    return p.z < q.z ? -1 : p.z > q.z;
+}
+
+static int compare_edges(const void *pa, const void *pb)
+{
+    const struct edge *a = pa, *b = pb;
+    int c = compare_points(a->a, b->a);
+    return c ? c : compare_points(a->b, b->b);
+}
+
+static struct ao_vec3 vertex(const struct ao_scene *s, size_t triangle, int corner)
+{
+    return s->positions[s->indices[3 * triangle + (size_t)corner]];
+}
+
+/* Every triangle edge, sorted so that an edge shared by m triangles forms a run of m; NULL when
+ * memory runs out. */
+static struct edge *sorted_edges(const struct ao_scene *s)
+{
+    struct edge *e = malloc(3 * s->triangle_count * sizeof *e);
+    if (!e)
+        return NULL;
+    for (size_t t = 0; t < s->triangle_count; t++)
+        for (int k = 0; k < 3; k++) {
+            struct ao_vec3 p = vertex(s, t, k), q = vertex(s, t, (k + 1) % 3);
+            bool in_order = compare_points(p, q) < 0;
+            e[3 * t + (size_t)k] = (struct edge){in_order ? p : q, in_order ? q : p};
+        }
+    qsort(e, 3 * s->triangle_count, sizeof *e, compare_edges);
+    return e;
+}
+
+/* Length of the run of equal edges starting at e[i]. */
+static size_t run_length(const struct edge *e, size_t count, size_t i)
+{
+    size_t j = i + 1;
+    while (j < count && compare_edges(&e[i], &e[j]) == 0)
+        j++;
+    return j - i;
+}
+
+static float distance_to_segment(struct ao_vec3 p, struct ao_vec3 a, struct ao_vec3 b)
+{
+    struct ao_vec3 ab = ao_vec3_sub(b, a);
+    float len2 = ao_vec3_dot(ab, ab);
+    float t = len2 > 0.0f ? fmaxf(0.0f, fminf(1.0f, ao_vec3_dot(ao_vec3_sub(p, a), ab) / len2)) : 0.0f;
+    return ao_vec3_length(ao_vec3_sub(p, ao_vec3_add(a, ao_vec3_scale(ab, t))));
+}
+
+/* True when p, a point of the plane with normal n, lies in some triangle. */
+static bool plane_contains(const struct ao_scene *s, struct ao_vec3 n, struct ao_vec3 p)
+{
+    for (size_t t = 0; t < s->triangle_count; t++) {
+        struct ao_vec3 v[3] = {vertex(s, t, 0), vertex(s, t, 1), vertex(s, t, 2)};
+        float side[3];
+        for (int k = 0; k < 3; k++)
+            side[k] = ao_vec3_dot(n, ao_vec3_cross(ao_vec3_sub(v[(k + 1) % 3], v[k]), ao_vec3_sub(p, v[k])));
+        if ((side[0] >= 0 && side[1] >= 0 && side[2] >= 0) || (side[0] <= 0 && side[1] <= 0 && side[2] <= 0))
+            return true;
+    }
+    return false;
+}
+
+/* Distance from p to the nearest edge used by one triangle only (the plane's outline). */
+static float distance_to_outline(const struct edge *e, size_t count, struct ao_vec3 p)
+{
+    float d = INFINITY;
+    for (size_t i = 0; i < count; i += run_length(e, count, i))
+        if (run_length(e, count, i) == 1)
+            d = fminf(d, distance_to_segment(p, e[i].a, e[i].b));
+    return d;
+}
+
+/* Sets *n to the unit normal of the largest triangle and returns true when every vertex lies
+ * within a few ulps of its plane. */
+static bool coplanar(const struct ao_scene *s, struct ao_vec3 *n)
+{
+    float best = 0.0f, extent = 0.0f;
+    for (size_t t = 0; t < s->triangle_count; t++) {
+        struct ao_vec3 c = ao_vec3_cross(ao_vec3_sub(vertex(s, t, 1), vertex(s, t, 0)),
+                                         ao_vec3_sub(vertex(s, t, 2), vertex(s, t, 0)));
+        if (ao_vec3_length(c) > best) {
+            best = ao_vec3_length(c);
+            *n = ao_vec3_scale(c, 1.0f / best);
+        }
+    }
+    for (size_t v = 0; v < s->vertex_count; v++)
+        extent = fmaxf(extent, ao_vec3_max_abs(s->positions[v]));
+    struct ao_vec3 origin = s->positions[s->indices[0]];
+    for (size_t v = 0; v < s->vertex_count; v++)
+        if (fabsf(ao_vec3_dot(*n, ao_vec3_sub(s->positions[v], origin))) > 1e-6f * extent)
+            return false;
+    return true;
+}
+
+/* True when every triangle lies on a face of the triangles' bounding box and eye is inside it. */
+static bool on_box_faces(const struct ao_scene *s, struct ao_vec3 eye)
+{
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < s->vertex_count; v++) {
+        const float *p = &s->positions[v].x;
+        for (int a = 0; a < 3; a++) {
+            lo[a] = fminf(lo[a], p[a]);
+            hi[a] = fmaxf(hi[a], p[a]);
+        }
+    }
+    const float *e = &eye.x;
+    for (int a = 0; a < 3; a++)
+        if (!(e[a] > lo[a] && e[a] < hi[a]))
+            return false;
+    for (size_t t = 0; t < s->triangle_count; t++) {
+        struct ao_vec3 v0 = vertex(s, t, 0), v1 = vertex(s, t, 1), v2 = vertex(s, t, 2);
+        const float *p0 = &v0.x, *p1 = &v1.x, *p2 = &v2.x;
+        bool on_face = false;
+        for (int a = 0; a < 3; a++)
+            on_face |= p0[a] == p1[a] && p0[a] == p2[a] && (p0[a] == lo[a] || p0[a] == hi[a]);
+        if (!on_face)
+            return false;
+    }
+    return true;
+}
+
+/* Finds the scene's closed form; false with the reason in why when it has none. */
+static bool classify(const struct ao_scene *s, float ao_distance, struct closed_form *cf, char *why, size_t why_size)
+{
+    *cf = (struct closed_form){.kind = KIND_PLANE_SPHERE, .sphere = s->sphere_count ? s->spheres : NULL,
+                               .plane = s->triangle_count > 0};
+    if (ao_distance != INFINITY) {
+        snprintf(why, why_size, "the closed forms need an infinite AO distance, not %g", (double)ao_distance);
+        return false;
+    }
+    if (s->sphere_count > 1) {
+        snprintf(why, why_size, "%zu spheres (at most one: several spheres occlude one another)", s->sphere_count);
+        return false;
+    }
+    if (!cf->plane)
+        return true;
+    struct edge *edges = sorted_edges(s);
+    if (!edges) {
+        snprintf(why, why_size, "out of memory");
+        return false;
+    }
+    size_t count = 3 * s->triangle_count;
+    bool ok = true;
+    if (!coplanar(s, &cf->up)) {
+        /* Not a plane: a closed box around the eye is the one other case. */
+        cf->kind = KIND_CLOSED_BOX;
+        for (size_t i = 0; i < count && ok; i += run_length(edges, count, i))
+            ok = run_length(edges, count, i) == 2;
+        ok = ok && !cf->sphere && on_box_faces(s, s->camera.eye);
+        if (!ok)
+            snprintf(why, why_size, "the triangles are neither one plane nor a closed box (watertight, "
+                                    "on the faces of its bounding box, no sphere) around the camera");
+    } else if (cf->sphere) {
+        /* The sphere must not cross the plane, and the plane must reach far enough around it. */
+        const struct ao_sphere *sp = cf->sphere;
+        float h = ao_vec3_dot(cf->up, ao_vec3_sub(sp->center, s->positions[s->indices[0]]));
+        if (h < 0.0f) {
+            cf->up = ao_vec3_scale(cf->up, -1.0f);
+            h = -h;
+        }
+        struct ao_vec3 foot = ao_vec3_sub(sp->center, ao_vec3_scale(cf->up, h));
+        float eps = atanf((h + sp->radius) / (distance_to_outline(edges, count, foot) - sp->radius));
+        cf->ground_error = 2.0f * eps / PI + eps * eps;
+        if (h < sp->radius * (1.0f - 1e-6f)) {
+            snprintf(why, why_size, "the sphere cuts the plane (centre height %g < radius %g)", (double)h,
+                     (double)sp->radius);
+            ok = false;
+        } else if (!plane_contains(s, cf->up, foot)) {
+            snprintf(why, why_size, "the plane does not extend under the sphere");
+            ok = false;
+        } else if (!(cf->ground_error <= MAX_GROUND_ERROR)) {
+            snprintf(why, why_size, "the ground is too small for the infinite-plane limit under the sphere "
+                                    "(sphere points would be off by up to %.2g, limit %.0e)",
+                     (double)cf->ground_error, (double)MAX_GROUND_ERROR);
+            ok = false;
+        }
+    }
+    free(edges);
+    return ok;
+}
+
+/* The exact AO of the surface an eye ray found. */
+static struct ao_vec3 exact_value(const struct closed_form *cf, const struct ao_surface *s, bool sphere_hit)
+{
+    if (cf->kind == KIND_CLOSED_BOX)
+        return ao_vec3_make(0, 0, 0);
+    const struct ao_sphere *sp = cf->sphere;
+    double factor = 1.0;
+    if (sphere_hit) {
+        /* The sphere seen from inside is closed; from outside, the plane hides (1 - n.N)/2. */
+        if (ao_vec3_dot(s->ng, ao_vec3_sub(s->position, sp->center)) < 0.0f)
+            factor = 0.0;
+        else if (cf->plane)
+            factor = 0.5 * (1.0 + (double)ao_vec3_dot(s->ns, cf->up));
+    } else if (sp) {
+        /* A plane point on the sphere's side sees the sphere's disc: r^2 h / d^3. */
+        struct ao_vec3 to_center = ao_vec3_sub(sp->center, s->position);
+        double h = ao_vec3_dot(to_center, s->ng), d = ao_vec3_length(to_center), r = sp->radius;
+        if (h > 0.0)
+            factor = 1.0 - r * r * h / (d * d * d);
+    }
+    return ao_vec3_scale(s->albedo, (float)factor);
+}
+
+/* Fills rgb (top row first) with the mean closed form over grid x grid sub-pixel cell centres of
+ * each pixel (the centre alone when grid is 0), tracing eye rays 16 at a time. */
+static void render(const struct ao_scene *scene, const struct ao_tracer *tracer, const struct closed_form *cf,
+                   const struct ao_view *view, int grid, float *rgb)
+{
+    int cells = grid ? grid * grid : 1;
+    for (int j = 0; j < view->height; j++)
+        for (int i = 0; i < view->width; i++) {
+            double sum[3] = {0, 0, 0};
+            for (int first = 0; first < cells; first += AO_PACKET_SIZE) {
+                struct ao_packet eye = {.count = cells - first < AO_PACKET_SIZE ? cells - first : AO_PACKET_SIZE};
+                struct ao_hit hits[AO_PACKET_SIZE];
+                for (int k = 0; k < eye.count; k++) {
+                    int c = first + k;
+                    float u = grid ? ((float)(c % grid) + 0.5f) / (float)grid : 0.5f;
+                    float v = grid ? ((float)(c / grid) + 0.5f) / (float)grid : 0.5f;
+                    struct ao_vec3 d = ao_camera_ray(view, (float)i + u, (float)j + v);
+                    eye.org_x[k] = view->eye.x;
+                    eye.org_y[k] = view->eye.y;
+                    eye.org_z[k] = view->eye.z;
+                    eye.dir_x[k] = d.x;
+                    eye.dir_y[k] = d.y;
+                    eye.dir_z[k] = d.z;
+                    eye.tfar[k] = INFINITY;
+                }
+                ao_tracer_intersect(tracer, &eye, hits);
+                for (int k = 0; k < eye.count; k++) {
+                    struct ao_vec3 value = scene->background;
+                    if (hits[k].t != INFINITY) {
+                        struct ao_surface s;
+                        struct ao_vec3 d = ao_vec3_make(eye.dir_x[k], eye.dir_y[k], eye.dir_z[k]);
+                        ao_surface_from_hit(scene, view->eye, d, &hits[k], &s);
+                        value = exact_value(cf, &s, hits[k].sphere);
+                    }
+                    sum[0] += value.x;
+                    sum[1] += value.y;
+                    sum[2] += value.z;
+                }
+            }
+            for (int c = 0; c < 3; c++)
+                rgb[3 * ((size_t)j * (size_t)view->width + (size_t)i) + (size_t)c] = (float)(sum[c] / cells);
+        }
+}
+
+/* Everything main owns, released in one place. */
+struct app {
+    struct ao_scene scene;
+    struct ao_tracer *tracer;
+    float *rgb;
+};
+
+static int run(struct app *app, const struct ao_options *opts)
+{
+    const char *output = opts->output ? opts->output : "exact.pfm";
+    size_t n = strlen(output);
+    if (n < 4 || strcmp(output + n - 4, ".pfm") != 0) {
+        fprintf(stderr, "aoview-exact: -o: the exact image is linear: expected a .pfm name, got '%s'\n", output);
+        return EXIT_USAGE;
+    }
+    if (!opts->scene_path) {
+        fprintf(stderr, "aoview-exact: no SCENE given (try --help)\n");
+        return EXIT_USAGE;
+    }
+    if (!ao_scene_load(&app->scene, opts->scene_path))
+        return EXIT_RUNTIME;
+
+    /* The closed form, or a refusal. */
+    struct closed_form cf;
+    char why[256];
+    float ao_distance = isnan(opts->ao_distance) ? app->scene.ao_distance : opts->ao_distance;
+    if (!classify(&app->scene, ao_distance, &cf, why, sizeof why)) {
+        fprintf(stderr, "aoview-exact: %s: no closed form: %s\n", opts->scene_path, why);
+        return EXIT_RUNTIME;
+    }
+
+    /* Camera, tracer, image. */
+    int width = opts->width ? opts->width : app->scene.width ? app->scene.width : 640;
+    int height = opts->height ? opts->height : app->scene.height ? app->scene.height : 480;
+    struct ao_view view;
+    if (!ao_camera_view(&app->scene.camera, width, height, &view)) {
+        fprintf(stderr, "aoview-exact: %s: the camera cannot form an image\n", opts->scene_path);
+        return EXIT_RUNTIME;
+    }
+    if (!(app->tracer = ao_tracer_create(&app->scene)))
+        return EXIT_RUNTIME;
+    if (!(app->rgb = malloc(3 * sizeof *app->rgb * (size_t)width * (size_t)height))) {
+        fprintf(stderr, "aoview-exact: out of memory for a %dx%d image\n", width, height);
+        return EXIT_RUNTIME;
+    }
+    int grid = opts->aa ? (int)lround(sqrt((double)opts->spp)) : 0;
+    ao_tracer_thread_init();
+    render(&app->scene, app->tracer, &cf, &view, grid, app->rgb);
+    if (!ao_image_write_pfm(output, app->rgb, width, height))
+        return EXIT_RUNTIME;
+    if (!opts->quiet) {
+        fprintf(stderr, "aoview-exact: wrote %s (%s", output,
+                cf.kind == KIND_CLOSED_BOX ? "closed box"
+                : cf.sphere && cf.plane    ? "sphere over a plane"
+                : cf.sphere                ? "sphere alone"
+                                           : "open plane");
+        if (cf.sphere && cf.plane)
+            fprintf(stderr, ", sphere points within %.1e of the infinite-ground limit", (double)cf.ground_error);
+        if (grid)
+            fprintf(stderr, ", %dx%d sub-pixel grid", grid, grid);
+        fprintf(stderr, ")\n");
+    }
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    struct ao_options opts;
+    char message[512];
+    if (!ao_cli_parse(argc, argv, &opts, message, sizeof message)) {
+        fprintf(stderr, "aoview-exact: %s (try --help)\n", message);
+        return EXIT_USAGE;
+    }
+    if (opts.help || opts.version) {
+        fputs(opts.help ? USAGE : "aoview-exact " AO_VERSION "\n", stdout);
+        return 0;
+    }
+    struct app app = {0};
+    int status = run(&app, &opts);
+    free(app.rgb);
+    ao_tracer_destroy(app.tracer);
+    ao_scene_finish(&app.scene);
+    return status;
+}
