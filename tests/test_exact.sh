@@ -1,0 +1,64 @@
+#!/usr/bin/env bash
+# aoview-exact against aoview: identical images where the estimator is exact (cosine sampling on an
+# open plane gives rho per sample, a closed box 0), the whole analytic image's mean error within
+# 4 predicted standard errors for every sampler, and one-line refusals of scenes without a closed form.
+set -u
+bin=${AO_BINARY:?AO_BINARY not set}
+exact=${AO_EXACT:?AO_EXACT not set}
+root=${AO_SOURCE_ROOT:?AO_SOURCE_ROOT not set}
+scenes=$root/assets/scenes
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+failures=0
+
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# Exact estimators: the same bytes.
+for scene in open-plane closed-box; do
+  "$exact" -q --no-aa --size 40x30 -o "$scene-exact.pfm" "$scenes/$scene.scene" || fail "$scene: aoview-exact failed"
+  "$bin" --headless -q --no-aa --size 40x30 --spp 64 --spppp 16 -o "$scene.pfm" "$scenes/$scene.scene" ||
+    fail "$scene: aoview failed"
+  cmp -s "$scene.pfm" "$scene-exact.pfm" || fail "$scene: aoview differs from the exact image"
+done
+
+# Unbiased estimators: the mean error over the image, per sampler, with AA against the box-filtered
+# exact image. Pixels are independent (their own random streams), so the mean of the per-pixel
+# errors of two seeds has standard error sqrt(sum of per-pixel variances / 2) / pixels, each
+# variance estimated from the two seeds as (a - b)^2 / 2; the exact image's sub-pixel residual
+# (below 1e-5 on the image mean at this grid, docs/README.md) is far below it. Bound: 4 of those.
+"$exact" -q --size 64x48 --spp 4096 -o sphere-exact.pfm "$scenes/sphere-on-plane.scene" || fail "sphere: aoview-exact failed"
+for sampling in uniform hemisphere cosine; do
+  for seed in 1 2; do
+    "$bin" --headless -q --size 64x48 --spp 256 --spppp 64 --sampling "$sampling" --seed "$seed" \
+      -o "sphere-$sampling-$seed.pfm" "$scenes/sphere-on-plane.scene" || fail "sphere: aoview $sampling failed"
+  done
+  python3 - "$sampling" sphere-exact.pfm "sphere-$sampling-1.pfm" "sphere-$sampling-2.pfm" <<'PY' || fail "sphere: $sampling is biased"
+import math, struct, sys
+def read(path):
+    parts = open(path, 'rb').read().split(b'\n', 3)
+    w, h = map(int, parts[1].split())
+    v = struct.unpack('<%df' % (3 * w * h), parts[3])
+    return [sum(v[k:k + 3]) / 3 for k in range(0, len(v), 3)]
+ref, a, b = (read(p) for p in sys.argv[2:])
+n = len(ref)
+mean = sum((x + y) / 2 - r for x, y, r in zip(a, b, ref)) / n
+se = math.sqrt(sum((x - y) ** 2 / 2 for x, y in zip(a, b)) / 2) / n
+print('%s: mean error %+.2e, standard error %.2e (%+.2f)' % (sys.argv[1], mean, se, mean / se))
+sys.exit(0 if abs(mean) <= 4 * se else 1)
+PY
+done
+
+# Refusals: exit 1, one line naming the scene, no output.
+for scene in spheres bunny; do
+  "$exact" -o refused.pfm "$scenes/$scene.scene" 2>err.txt
+  status=$?
+  [ $status -eq 1 ] || fail "$scene: exit status $status, expected 1"
+  [ "$(wc -l <err.txt)" -eq 1 ] && grep -q "$scene.scene: no closed form" err.txt || fail "$scene: message: $(cat err.txt)"
+  [ ! -e refused.pfm ] || fail "$scene: wrote an image"
+done
+"$exact" -q -o x.png "$scenes/open-plane.scene" 2>/dev/null
+[ $? -eq 2 ] || fail "a .png output is not a usage error"
+
+[ $failures -eq 0 ] && echo "all passed"
+exit $((failures > 0))

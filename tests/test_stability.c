@@ -1,0 +1,455 @@
+/* Stability where the methods could fail: self-intersection at extreme scales and contact occlusion,
+ * degenerate meshes, grazing eye rays and silhouettes under AA, long accumulation, and the cost of
+ * uniform-sphere sampling. Each test prints its measured figure (docs/README.md, "Stability");
+ * bounds are derived next to each check; seeds are fixed; random (not Sobol) numbers throughout,
+ * so that samples are independent and the standard errors below hold. */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "accum.h"
+#include "ao.h"
+#include "render.h"
+#include "scene.h"
+#include "tracer.h"
+
+/* A scene and its tracer. */
+struct fixture {
+    struct ao_scene scene;
+    struct ao_tracer *tracer;
+};
+
+static void setup(struct fixture *f, const char *text, const char *path)
+{
+    assert_true(ao_scene_parse(&f->scene, text, path));
+    f->tracer = ao_tracer_create(&f->scene);
+    assert_non_null(f->tracer);
+}
+
+static void teardown(struct fixture *f)
+{
+    ao_tracer_destroy(f->tracer);
+    ao_scene_finish(&f->scene);
+}
+
+/* Renders the fixture's scene through the renderer (one sample per pass, two threads) and returns
+ * a malloc'd copy of the final linear image. */
+static float *render(const struct fixture *f, int width, int height, uint32_t spp, enum ao_sampling sampling,
+                     bool aa)
+{
+    struct ao_render_config config = {.scene = &f->scene, .tracer = f->tracer, .width = width, .height = height,
+                                      .threads = 2, .seed = 9, .target_spp = spp, .ao_distance = INFINITY};
+    struct ao_settings settings = {.sampling = sampling, .aa = aa, .spppp = 1, .camera = f->scene.camera};
+    struct ao_render *r = ao_render_create(&config, &settings);
+    assert_non_null(r);
+    assert_true(ao_render_wait(r));
+    const struct ao_frame *frame = ao_render_take_frame(r);
+    assert_non_null(frame);
+    size_t bytes = 3 * sizeof(float) * (size_t)width * (size_t)height;
+    float *copy = malloc(bytes);
+    assert_non_null(copy);
+    memcpy(copy, frame->rgb, bytes);
+    ao_render_destroy(r);
+    return copy;
+}
+
+/* A fresh directory for files the scenes load, removed with its files by remove_dir. */
+struct temp_dir {
+    char path[64];
+};
+
+static void make_dir(struct temp_dir *d)
+{
+    snprintf(d->path, sizeof d->path, "/tmp/aoview-stability-XXXXXX");
+    assert_non_null(mkdtemp(d->path));
+}
+
+static void write_file(const struct temp_dir *d, const char *name, const char *text)
+{
+    char path[128];
+    snprintf(path, sizeof path, "%s/%s", d->path, name);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    assert_true(fputs(text, f) >= 0);
+    assert_int_equal(fclose(f), 0);
+}
+
+static void remove_dir(const struct temp_dir *d, const char *file)
+{
+    char path[128];
+    snprintf(path, sizeof path, "%s/%s", d->path, file);
+    assert_int_equal(unlink(path), 0);
+    assert_int_equal(rmdir(d->path), 0);
+}
+
+/* ------------------------------------------------------------------ self-intersection */
+
+/* One large triangle in a tilted plane through the origin, spanned by U and V (normal U x V). */
+static const struct ao_vec3 U = {1.0f, 0.3f, -0.2f}, V = {-0.25f, 1.0f, 0.4f};
+static const char TILTED_TRIANGLE[] = "v -7.5 -13 -2\n"       /* -10 U - 10 V */
+                                      "v 32.5 -1 -10\n"        /*  30 U - 10 V */
+                                      "v -17.5 27 14\n"        /* -10 U + 30 V */
+                                      "f 1 2 3\n";
+
+static void test_open_plane_at_any_scale_has_no_acne(void **state)
+{
+    (void)state;
+    /* The tilted triangle, scaled by s and translated by (1e4, 1e4, 1e4), seen obliquely from
+     * 5 s above its plane so that it fills the view. Nothing can occlude a lone plane, and cosine
+     * sampling weighs every open direction exactly 1, so each pass adds exactly rho to a pixel; the
+     * double sums of rho over 256 passes are exact and so is their mean. Any pixel below rho is a
+     * self-hit (acne); any at the background (0.25) a miss. Bound: exactly rho everywhere. At
+     * s = 1e-3 the plane spans about 40 float ulps of its position (1e-3 at 1e4), the extreme case. */
+    struct temp_dir dir;
+    make_dir(&dir);
+    write_file(&dir, "plane.obj", TILTED_TRIANGLE);
+    char path[128];
+    snprintf(path, sizeof path, "%s/plane.scene", dir.path);
+    const float scales[] = {1e-3f, 1.0f, 1e3f}, rho = 0.7f, t = 1e4f;
+    const struct ao_vec3 shift = {t, t, t};
+    struct ao_vec3 n = ao_vec3_normalize(ao_vec3_cross(U, V));
+    enum { W = 32, H = 24, SPP = 256 };
+    for (int k = 0; k < 3; k++) {
+        float s = scales[k];
+        struct ao_vec3 eye = ao_vec3_add(shift, ao_vec3_scale(ao_vec3_add(ao_vec3_scale(n, 5.0f), ao_vec3_scale(U, 2.0f)), s));
+        struct ao_vec3 target = ao_vec3_add(shift, ao_vec3_scale(V, 0.5f * s));
+        char text[512];
+        snprintf(text, sizeof text,
+                 "camera eye %.9g %.9g %.9g target %.9g %.9g %.9g up 0 1 0 fov 40\nbackground 0.25\n"
+                 "mesh plane.obj albedo %.9g scale %.9g translate %.9g %.9g %.9g\n",
+                 (double)eye.x, (double)eye.y, (double)eye.z, (double)target.x, (double)target.y, (double)target.z,
+                 (double)rho, (double)s, (double)t, (double)t, (double)t);
+        struct fixture f;
+        setup(&f, text, path);
+        float *rgb = render(&f, W, H, SPP, AO_SAMPLING_COSINE, true);
+        int acne = 0, missed = 0;
+        float lowest = rho;
+        for (int p = 0; p < W * H; p++) {
+            acne += rgb[3 * p] < rho && rgb[3 * p] != 0.25f;
+            missed += rgb[3 * p] == 0.25f;
+            lowest = fminf(lowest, rgb[3 * p]);
+        }
+        print_message("plane at 1e4, scale %g: %d of %d pixels below rho (lowest %.6f, %d missed), %d samples each\n",
+                      (double)s, acne, W * H, (double)lowest, missed, SPP);
+        assert_int_equal(acne, 0);
+        assert_int_equal(missed, 0);
+        for (int p = 0; p < 3 * W * H; p++)
+            assert_true(rgb[p] == rho);
+        free(rgb);
+        teardown(&f);
+    }
+    remove_dir(&dir, "plane.obj");
+}
+
+static void test_contact_occlusion_is_kept(void **state)
+{
+    (void)state;
+    /* A sphere of radius r resting on a ground quad, both scaled by s and translated by T, seen
+     * from about 8 r away. A ground point at distance x from the contact, d = sqrt(x^2 + r^2) from
+     * the centre, has AO rho (1 - F0) with F0 = r^3 / d^3 (the form factor of a sphere wholly above
+     * it). Occlusion rays start delta = ao_surface_offset above the point, where the sphere's
+     * lower surface is g = r - sqrt(r^2 - x^2) above the ground.
+     * - Contact occlusion is never lost: a point lifted by delta sees the sphere (centre now
+     *   u = r - delta above it) at least as much as F(u) = r^2 u / (x^2 + u^2)^(3/2) (the signed
+     *   form factor, which counts the part dipping below its horizon negatively), and dF/du < 0
+     *   for x^2 < 2 u^2, true for every x <= r here: so the estimate's mean is at most the exact
+     *   AO. Bound: mean <= exact + 4 standard errors, where with cosine sampling each sample is rho
+     *   with probability q = 1 - F0 and 0 otherwise: standard error rho sqrt(q (1-q) / N).
+     * - Where the origin is outside the sphere (g > delta), the estimate is also not darker than
+     *   the offset explains: to first order in delta the occlusion grows by
+     *   -F'(r) delta = delta r^2 (2 r^2 - x^2) / (x^2 + r^2)^(5/2) <= 2 delta / r; the part below
+     *   the horizon is second order (a quadrature of the exact occluded fraction at the lifted
+     *   points agrees with the first-order term within 1 %). Bound: |mean - exact| <= 4 standard
+     *   errors + 1.25 rho times that term.
+     * - Where g <= delta the origin lies inside the sphere and every ray is occluded: contact
+     *   closer than the offset resolves as touching, the estimate is 0 (checked by the first bound
+     *   and printed). */
+    enum { N = 1000000 };
+    static const struct {
+        float scale, shift;
+    } cases[] = {{1.0f, 0.0f}, {1e3f, 1e4f}};
+    for (int c = 0; c < 2; c++) {
+        float s = cases[c].scale, t = cases[c].shift, r = 0.5f * s, rho = 0.8f;
+        char text[512];
+        snprintf(text, sizeof text,
+                 "camera eye %.9g %.9g %.9g target %.9g %.9g %.9g\n"
+                 "quad corner %.9g %.9g %.9g edge1 0 0 %.9g edge2 %.9g 0 0 albedo 0.8\n"
+                 "sphere center %.9g %.9g %.9g radius %.9g albedo 0.8\n",
+                 (double)t, (double)(t + 3 * s), (double)(t + 3 * s), (double)t, (double)t, (double)t,
+                 (double)(t - 10 * s), (double)t, (double)(t - 10 * s), (double)(20 * s), (double)(20 * s),
+                 (double)t, (double)(t + r), (double)t, (double)r);
+        struct fixture f;
+        setup(&f, text, "contact.scene");
+        struct ao_context ctx = {.scene = &f.scene, .tracer = f.tracer, .sampling = AO_SAMPLING_COSINE,
+                                 .ao_distance = INFINITY, .seed = 17};
+        const float fractions[] = {0.01f, 0.02f, 0.05f, 0.1f, 0.3f, 1.0f};
+        for (int k = 0; k < 6; k++) {
+            struct ao_vec3 up = ao_vec3_make(0, 1, 0), p = ao_vec3_make(t + fractions[k] * r, t, t);
+            struct ao_vec3 eye = ao_vec3_add(p, ao_vec3_make(6 * r, 6 * r, 0));
+            struct ao_surface surface = {.position = p, .ng = up, .ns = up, .albedo = ao_vec3_make(rho, rho, rho)};
+            surface.offset = ao_surface_offset(eye, ao_vec3_length(ao_vec3_sub(eye, p)), p);
+            uint64_t rays = 0;
+            double mean = ao_estimate_surface(&ctx, &surface, (uint64_t)k, 0, N, &rays).x / N;
+            double x = (double)p.x - t, rr = (double)r, d2 = x * x + rr * rr, delta = surface.offset;
+            double q = 1.0 - rr * rr * rr / (d2 * sqrt(d2)), expected = rho * q;
+            double se = rho * sqrt(q * (1.0 - q) / N), gap = rr - sqrt(rr * rr - x * x);
+            double first_order = delta * rr * rr * (2.0 * rr * rr - x * x) / (d2 * d2 * sqrt(d2));
+            print_message("contact, scale %g at %g: x/r = %.2f AO %.6f, exact %.6f (%+.1f se); offset %.2g r, "
+                          "gap %.2g r%s\n", (double)s, (double)t, (double)fractions[k], mean, expected,
+                          (mean - expected) / se, delta / rr, gap / rr, gap > delta ? "" : ": origin in the sphere");
+            assert_true(mean <= expected + 4.0 * se);
+            if (gap > delta)
+                assert_true(fabs(mean - expected) <= 4.0 * se + 1.25 * rho * first_order);
+            else
+                assert_true(mean == 0.0);
+        }
+        teardown(&f);
+    }
+}
+
+/* ------------------------------------------------------------------ degenerate geometry */
+
+/* Zero-area triangles (collinear, repeated index, duplicate vertices), zero-length vertex normals,
+ * normals that cancel, and a sliver whose geometric normal underflows in single precision, next to
+ * one sound triangle; all on a ground quad. */
+static const char DEGENERATE_OBJ[] = "v 0 0 0\n"
+                                     "v 1 0 0\n"
+                                     "v 0 1 0\n"
+                                     "v 1 0 0\n"            /* 4: duplicate of 2 */
+                                     "v 2 0 0\n"            /* 5: collinear with 1 and 2 */
+                                     "v 0 1 0\n"            /* 6: duplicate of 3 */
+                                     "v 0.5 1e-30 0\n"      /* 7: apex of a sliver */
+                                     "v 1 1 0\n"
+                                     "vn 0 0 0\n"           /* 1: zero length */
+                                     "vn 0 0 1\n"
+                                     "vn 0 0 -1\n"          /* 3: cancels 2 */
+                                     "f 1//1 2//1 3//1\n"   /* zero-length normals on every corner */
+                                     "f 2//2 4//2 8//2\n"   /* duplicate vertex: zero area */
+                                     "f 1 2 5\n"            /* collinear: zero area */
+                                     "f 1 1 3\n"            /* repeated index: zero area */
+                                     "f 3//2 6//3 8//2\n"   /* duplicate position: zero area */
+                                     "f 1//2 2//3 7//1\n"   /* sliver, normals that cancel */
+                                     "f 2//2 8//3 3//2\n";  /* normals that cancel on an edge */
+
+static void test_degenerate_geometry_gives_no_nan(void **state)
+{
+    (void)state;
+    /* Every pixel of every sampler, with and without AA, from the front and edge-on (the eye in
+     * the triangles' plane, so eye rays graze them), must be finite and within [0, w rho]: one
+     * sample weighs at most w = 4 (uniform sphere), 2 (hemisphere) or 1 (cosine), albedos are at
+     * most 1, and so is the background. */
+    const float largest[3] = {4.0f, 2.0f, 1.0f};
+    struct temp_dir dir;
+    make_dir(&dir);
+    write_file(&dir, "degenerate.obj", DEGENERATE_OBJ);
+    char path[128];
+    snprintf(path, sizeof path, "%s/degenerate.scene", dir.path);
+    static const char *const cameras[] = {"camera eye 0.6 0.5 2 target 0.5 0.4 0\n",
+                                          "camera eye 3 0.4 0 target 0.5 0.4 0\n"};
+    enum { W = 24, H = 24 };
+    for (int c = 0; c < 2; c++) {
+        char text[512];
+        snprintf(text, sizeof text, "%smesh degenerate.obj translate 0 0.2 0\n"
+                 "quad corner -5 0 -5 edge1 0 0 10 edge2 10 0 0\n", cameras[c]);
+        struct fixture f;
+        setup(&f, text, path);
+        int bad = 0;
+        for (int mode = 0; mode < 3; mode++)
+            for (int aa = 0; aa < 2; aa++) {
+                float *rgb = render(&f, W, H, 16, (enum ao_sampling)mode, aa);
+                for (int p = 0; p < 3 * W * H; p++)
+                    bad += !(rgb[p] >= 0.0f && rgb[p] <= largest[mode]);
+                free(rgb);
+            }
+        print_message("degenerate mesh, %s: %zu zero-area triangles skipped, %zu kept; %d of %d pixel values "
+                      "not finite in [0, w] over 3 samplers x AA on/off\n", c ? "edge-on" : "front",
+                      f.scene.degenerate_count, f.scene.triangle_count - 2, bad, 6 * 3 * W * H);
+        assert_true(f.scene.degenerate_count >= 4);
+        assert_int_equal(bad, 0);
+        teardown(&f);
+    }
+    remove_dir(&dir, "degenerate.obj");
+}
+
+/* ------------------------------------------------------------------ silhouettes */
+
+/* Fraction of pixel (i, j) whose eye rays hit the sphere: for each of `rows` sub-rows (midpoints),
+ * the rays that hit form an interval of the image-plane coordinate, the roots of a quadratic; its
+ * overlap with the pixel is summed. Double precision throughout. */
+static double coverage(const struct ao_view *v, const struct ao_sphere *sp, int i, int j, int rows)
+{
+    double oc[3] = {(double)sp->center.x - v->eye.x, (double)sp->center.y - v->eye.y,
+                    (double)sp->center.z - v->eye.z};
+    double r2 = (double)sp->radius * sp->radius, k = oc[0] * oc[0] + oc[1] * oc[1] + oc[2] * oc[2] - r2;
+    double a = v->right.x * oc[0] + v->right.y * oc[1] + v->right.z * oc[2];
+    double uo = v->up.x * oc[0] + v->up.y * oc[1] + v->up.z * oc[2];
+    double fo = v->forward.x * oc[0] + v->forward.y * oc[1] + v->forward.z * oc[2];
+    double tx = (double)v->tan_half_fov * v->aspect, covered = 0.0;
+    for (int row = 0; row < rows; row++) {
+        /* Direction sx right + sy up + forward hits when (a sx + b)^2 >= (sx^2 + sy^2 + 1) k. */
+        double y = j + (row + 0.5) / rows, sy = (1.0 - 2.0 * y / v->height) * v->tan_half_fov;
+        double b = sy * uo + fo, qa = a * a - k, qb = 2.0 * a * b, qc = b * b - (sy * sy + 1.0) * k;
+        double disc = qb * qb - 4.0 * qa * qc;
+        if (disc <= 0.0)
+            continue;
+        double s0 = (-qb + sqrt(disc)) / (2.0 * qa), s1 = (-qb - sqrt(disc)) / (2.0 * qa);
+        double x0 = (fmin(s0, s1) / tx + 1.0) * v->width / 2.0, x1 = (fmax(s0, s1) / tx + 1.0) * v->width / 2.0;
+        covered += fmax(0.0, fmin(x1, i + 1.0) - fmax(x0, (double)i));
+    }
+    return covered / rows;
+}
+
+static void test_silhouettes_converge_to_the_box_filter(void **state)
+{
+    (void)state;
+    /* A lone sphere (albedo rho) over a background b: no point of it is occluded, so with cosine
+     * sampling each pass gives a pixel exactly rho where its jittered eye ray hits and b where it
+     * misses. With AA the mean of P passes estimates rho c + b (1 - c), c the pixel's covered
+     * fraction (coverage() above, whose midpoint rule over 4096 rows errs by O(4096^-1.5) ~ 4e-6
+     * where a row is tangent), with standard error |rho - b| sqrt(c (1-c) / P). Bounds, over the
+     * silhouette pixels (0 < c < 1): each within 5 standard errors where the binomial count is
+     * near normal (P c (1-c) >= 25; Bonferroni over < 100 pixels: 100 x 5.7e-7), and the sum of
+     * all their errors within 4 standard errors of the sum (independent pixels). Any grazing
+     * self-hit or NaN shows as a value off that lattice of rho and b. Without AA the same pixels
+     * are all or nothing; their RMS error against the box filter is printed for contrast. */
+    static const char SCENE[] = "camera eye 0 0 4 target 0 0 0 fov 30\nbackground 0.2\n"
+                                "sphere center 0.13 -0.07 0 radius 0.6 albedo 0.8\n";
+    enum { W = 32, H = 32, P = 4096, ROWS = 4096 };
+    const double rho = 0.8, b = 0.2;
+    struct fixture f;
+    setup(&f, SCENE, "silhouette.scene");
+    struct ao_view view;
+    assert_true(ao_camera_view(&f.scene.camera, W, H, &view));
+    float *aa = render(&f, W, H, P, AO_SAMPLING_COSINE, true);
+    float *no_aa = render(&f, W, H, 1, AO_SAMPLING_COSINE, false);
+    int edge = 0;
+    double max_z = 0.0, sum_error = 0.0, sum_variance = 0.0, no_aa_sq = 0.0;
+    for (int j = 0; j < H; j++)
+        for (int i = 0; i < W; i++) {
+            int p = j * W + i;
+            assert_true(isfinite(aa[3 * p]) && isfinite(no_aa[3 * p]));
+            double c = coverage(&view, &f.scene.spheres[0], i, j, ROWS);
+            double expected = rho * c + b * (1.0 - c), error = aa[3 * p] - expected;
+            if (c <= 0.0 || c >= 1.0) {
+                assert_true(fabs(error) < 1e-6);
+                continue;
+            }
+            double variance = (rho - b) * (rho - b) * c * (1.0 - c) / P;
+            edge++;
+            sum_error += error;
+            sum_variance += variance;
+            no_aa_sq += (no_aa[3 * p] - expected) * (no_aa[3 * p] - expected);
+            if (P * c * (1.0 - c) >= 25.0) {
+                max_z = fmax(max_z, fabs(error) / sqrt(variance));
+                assert_true(fabs(error) <= 5.0 * sqrt(variance));
+            }
+        }
+    print_message("silhouette: %d edge pixels, AA %d passes: largest |z| %.2f, summed error %+.2f se, RMS "
+                  "error %.4f; without AA %.4f\n", edge, P, max_z, sum_error / sqrt(sum_variance),
+                  sqrt(sum_variance / edge), sqrt(no_aa_sq / edge));
+    assert_true(edge > 40);
+    assert_true(fabs(sum_error) <= 4.0 * sqrt(sum_variance));
+    free(aa);
+    free(no_aa);
+    teardown(&f);
+}
+
+/* ------------------------------------------------------------------ long accumulation */
+
+static void test_long_accumulation_resolves_exactly(void **state)
+{
+    (void)state;
+    /* 10^6 passes adding the constant c to one pixel. A float c has a 24-bit significand, so every
+     * partial sum k c (k <= 10^6 < 2^20) needs at most 44 bits and is exact in a double; the
+     * quotient (10^6 c) / 10^6 is then c exactly. Bound: exact equality. A float32 sum is not
+     * exact: each addition rounds c to a multiple of the sum's ulp, which grows with the sum (2^-7
+     * from 2^16 on, 2^-4 from 2^19), so c is added as a rounded value over long stretches: 0.1f as
+     * 13/128 = 0.1016 while the sum is in [2^16, 2^17), 0.7f as 11/16 = 0.6875 in [2^19, 2^20).
+     * The mean drifts by about 1 %; the test computes the float32 mean and prints it (+0.96 % for
+     * 0.1, -1.00 % for 0.7, +0.15 % for 1/3). */
+    enum { PASSES = 1000000 };
+    struct ao_accum a;
+    assert_true(ao_accum_init(&a, 1, 1));
+    struct ao_vec3 c = ao_vec3_make(0.1f, 0.7f, 1.0f / 3.0f);
+    float single[3] = {0.0f, 0.0f, 0.0f};
+    for (int k = 0; k < PASSES; k++) {
+        ao_accum_add(&a, 0, c, 1);
+        single[0] += c.x;
+        single[1] += c.y;
+        single[2] += c.z;
+    }
+    float rgb[3];
+    ao_accum_resolve(&a, rgb);
+    const float *exact = &c.x;
+    for (int k = 0; k < 3; k++) {
+        float drift = single[k] / (float)PASSES;
+        print_message("accumulation of 10^6 x %.9g: double sums resolve to %.9g; float32 sums give %.9g "
+                      "(off by %+.3g, %+.2f %%)\n", (double)exact[k], (double)rgb[k], (double)drift,
+                      (double)(drift - exact[k]), 100.0 * (double)(drift - exact[k]) / (double)exact[k]);
+        assert_true(rgb[k] == exact[k]);
+    }
+    ao_accum_finish(&a);
+}
+
+/* ------------------------------------------------------------------ uniform-sphere cost */
+
+static void test_uniform_sphere_variance_is_five_times_the_hemisphere(void **state)
+{
+    (void)state;
+    /* On an open plane one sample weighs 4 max(0, cos) (uniform sphere) or 2 cos (hemisphere), with
+     * per-sample variances 5/3 and 1/3 (rho = 1): ratio 5, the price of drawing half the
+     * directions below the surface. Over N = 10^6 independent samples each (different pixel
+     * streams), the variances' standard errors are sqrt((mu4 - sigma^4) / N) = 0.00196 and
+     * 0.00030 (moments E X^k = 4^k / (2 (k+1)) and 2^k / (k+1)), relative 1.18e-3 and 0.90e-3, so
+     * the ratio's relative standard error is their root sum of squares, 1.48e-3: 4 of those allow
+     * |ratio - 5| < 0.030. */
+    enum { N = 1000000 };
+    struct fixture f;
+    setup(&f, "camera eye 0 5 5 target 0 0 0\nquad corner -1e4 0 -1e4 edge1 0 0 2e4 edge2 2e4 0 0 albedo 1\n",
+          "open.scene");
+    struct ao_context ctx = {.scene = &f.scene, .tracer = f.tracer, .ao_distance = INFINITY, .seed = 23};
+    struct ao_vec3 up = ao_vec3_make(0, 1, 0), p = ao_vec3_make(0.3f, 0, -0.2f);
+    struct ao_surface s = {.position = p, .ng = up, .ns = up, .albedo = ao_vec3_make(1, 1, 1)};
+    s.offset = ao_surface_offset(ao_vec3_make(0, 5, 5), 5.0f, p);
+    double variance[2];
+    const enum ao_sampling modes[2] = {AO_SAMPLING_UNIFORM, AO_SAMPLING_HEMISPHERE};
+    for (int m = 0; m < 2; m++) {
+        ctx.sampling = modes[m];
+        double sum = 0.0, sum2 = 0.0;
+        uint64_t rays = 0;
+        for (int k = 0; k < N; k++) {
+            double x = ao_estimate_surface(&ctx, &s, (uint64_t)m, (uint64_t)k, 1, &rays).x;
+            sum += x;
+            sum2 += x * x;
+        }
+        double mean = sum / N;
+        variance[m] = sum2 / N - mean * mean;
+        print_message("open plane, %s, 1 spp: mean %.5f, per-sample variance %.5f\n",
+                      ao_sampling_name(modes[m]), mean, variance[m]);
+    }
+    double ratio = variance[0] / variance[1];
+    print_message("uniform / hemisphere variance: %.4f (expected 5, bound 0.030)\n", ratio);
+    assert_true(fabs(ratio - 5.0) < 0.030);
+    teardown(&f);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_open_plane_at_any_scale_has_no_acne),
+        cmocka_unit_test(test_contact_occlusion_is_kept),
+        cmocka_unit_test(test_degenerate_geometry_gives_no_nan),
+        cmocka_unit_test(test_silhouettes_converge_to_the_box_filter),
+        cmocka_unit_test(test_long_accumulation_resolves_exactly),
+        cmocka_unit_test(test_uniform_sphere_variance_is_five_times_the_hemisphere),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
