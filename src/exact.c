@@ -3,8 +3,9 @@
  * what each pixel sees is exactly what aoview sees; only the AO integral is replaced by its
  * closed form. Scenes with a closed form (anything else is refused with one line, exit 1):
  *
- * - coplanar triangles (a plane) and at most one sphere wholly on one side of it (centre at height
- *   h >= r). A plane point at distance d from the centre, on the sphere's side, sees the sphere as
+ * - coplanar triangles (a plane: every vertex within 1e-6 of the largest coordinate of the plane
+ *   of the largest triangle, about the float resolution of the plane's far corners) and at most
+ *   one sphere wholly on one side of it (centre at height h >= r). A plane point at distance d from the centre, on the sphere's side, sees the sphere as
  *   a disc of projected solid angle pi r^2 h / d^3 (the form factor of a sphere above a
  *   differential area whose horizon it does not cross), so AO = rho (1 - r^2 h / d^3); on the
  *   far side AO = rho. A sphere point whose unit normal n makes angle alpha with the plane's
@@ -159,7 +160,7 @@ static float distance_to_outline(const struct edge *e, size_t count, struct ao_v
 }
 
 /* Sets *n to the unit normal of the largest triangle and returns true when every vertex lies
- * within a few ulps of its plane. */
+ * within 1e-6 of the largest coordinate of that plane (a few ulps of its far corners). */
 static bool coplanar(const struct ao_scene *s, struct ao_vec3 *n)
 {
     float best = 0.0f, extent = 0.0f;
@@ -247,8 +248,9 @@ static bool classify(const struct ao_scene *s, float ao_distance, struct closed_
             h = -h;
         }
         struct ao_vec3 foot = ao_vec3_sub(sp->center, ao_vec3_scale(cf->up, h));
-        float eps = atanf((h + sp->radius) / (distance_to_outline(edges, count, foot) - sp->radius));
-        cf->ground_error = 2.0f * eps / PI + eps * eps;
+        float reach = distance_to_outline(edges, count, foot) - sp->radius;
+        float eps = reach > 0.0f ? atanf((h + sp->radius) / reach) : 0.5f * PI;
+        cf->ground_error = fminf(1.0f, 2.0f * eps / PI + eps * eps);   /* AO lies in [0, rho] */
         if (h < sp->radius * (1.0f - 1e-6f)) {
             snprintf(why, why_size, "the sphere cuts the plane (centre height %g < radius %g)", (double)h,
                      (double)sp->radius);
