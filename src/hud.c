@@ -29,7 +29,7 @@ struct ao_hud {
     char *text;                  /* sanitised copy of the text being drawn */
     size_t text_size;
     struct glyph_vertex *quads;  /* stb_easy_font output */
-    float *triangles;            /* x, y pairs: the box, then two triangles per quad */
+    float *triangles;            /* x, y pairs: two triangles per glyph quad */
     size_t quad_capacity;
 };
 
@@ -125,16 +125,13 @@ static bool sanitise(struct ao_hud *hud, const char *text)
     return true;
 }
 
-/* Inner margin of the box around the text, in font pixels. */
-#define PADDING 4
-
 void ao_hud_measure(struct ao_hud *hud, const char *text, float scale, int *width, int *height)
 {
     *width = *height = 0;
     if (!sanitise(hud, text))
         return;
-    *width = (int)ceilf((float)(stb_easy_font_width(hud->text) + 2 * PADDING) * scale);
-    *height = (int)ceilf((float)(stb_easy_font_height(hud->text) + 2 * PADDING) * scale);
+    *width = (int)ceilf((float)stb_easy_font_width(hud->text) * scale);
+    *height = (int)ceilf((float)stb_easy_font_height(hud->text) * scale);
 }
 
 /* Writes the two triangles of the rectangle (x0, y0)-(x1, y1) at t; returns the next slot. */
@@ -145,7 +142,7 @@ static float *rectangle(float *t, float x0, float y0, float x1, float y1)
     return t + 12;
 }
 
-/* Makes room for quads glyph quads (plus the box) in the scratch buffers. */
+/* Makes room for quads glyph quads in the scratch buffers. */
 static bool reserve(struct ao_hud *hud, size_t quads)
 {
     if (quads <= hud->quad_capacity)
@@ -154,7 +151,7 @@ static bool reserve(struct ao_hud *hud, size_t quads)
     if (!q)
         return false;
     hud->quads = q;
-    float *t = realloc(hud->triangles, (quads + 1) * 12 * sizeof *t);
+    float *t = realloc(hud->triangles, quads * 12 * sizeof *t);
     if (!t)
         return false;
     hud->triangles = t;
@@ -162,27 +159,18 @@ static bool reserve(struct ao_hud *hud, size_t quads)
     return true;
 }
 
-void ao_hud_draw(struct ao_hud *hud, const char *text, int x, int y, float scale, int fb_width,
-                 int fb_height)
+/* Draws count x, y pairs from xy as mode in the colour. */
+static void draw_points(struct ao_hud *hud, GLenum mode, const float *xy, int count, struct ao_hud_colour c)
 {
     const struct ao_glapi *gl = hud->gl;
-    int box_width, box_height;
-    ao_hud_measure(hud, text, scale, &box_width, &box_height);
-    /* No glyph has more than 16 segments, each one quad of 64 bytes. */
-    size_t length = strlen(hud->text);
-    if (!box_width || !reserve(hud, 16 * length + 1))
-        return;
-    int quads = stb_easy_font_print(0, 0, hud->text, NULL, hud->quads,
-                                    (int)(hud->quad_capacity * 4 * sizeof *hud->quads));
+    gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)count * 2 * sizeof(float)), xy, GL_STREAM_DRAW);
+    gl->Uniform4f(hud->tint, c.r, c.g, c.b, c.a);
+    gl->DrawArrays(mode, 0, count);
+}
 
-    /* The box, then each glyph quad as two triangles, scaled and moved into place. */
-    float ox = (float)x + PADDING * scale, oy = (float)y + PADDING * scale;
-    float *t = rectangle(hud->triangles, (float)x, (float)y, (float)(x + box_width), (float)(y + box_height));
-    for (int i = 0; i < quads; i++) {
-        const struct glyph_vertex *q = hud->quads + 4 * i;
-        t = rectangle(t, ox + q[0].x * scale, oy + q[0].y * scale, ox + q[2].x * scale, oy + q[2].y * scale);
-    }
-
+void ao_hud_begin(struct ao_hud *hud, int fb_width, int fb_height)
+{
+    const struct ao_glapi *gl = hud->gl;
     gl->Viewport(0, 0, fb_width, fb_height);
     gl->Enable(GL_BLEND);
     gl->BlendFunc(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA);
@@ -190,12 +178,52 @@ void ao_hud_draw(struct ao_hud *hud, const char *text, int x, int y, float scale
     gl->Uniform2f(hud->screen, (float)fb_width, (float)fb_height);
     gl->BindVertexArray(hud->vao);
     gl->BindBuffer(GL_ARRAY_BUFFER, hud->vbo);
-    gl->BufferData(GL_ARRAY_BUFFER, (GLsizeiptr)((size_t)(quads + 1) * 12 * sizeof(float)),
-                   hud->triangles, GL_STREAM_DRAW);
-    gl->Uniform4f(hud->tint, 0.0f, 0.0f, 0.0f, 0.7f);
-    gl->DrawArrays(GL_TRIANGLES, 0, 6);
-    gl->Uniform4f(hud->tint, 1.0f, 1.0f, 0.85f, 1.0f);
-    gl->DrawArrays(GL_TRIANGLES, 6, 6 * quads);
-    gl->BindVertexArray(0);
-    gl->Disable(GL_BLEND);
+}
+
+void ao_hud_end(struct ao_hud *hud)
+{
+    hud->gl->BindVertexArray(0);
+    hud->gl->Disable(GL_BLEND);
+}
+
+void ao_hud_fill(struct ao_hud *hud, float x0, float y0, float x1, float y1, struct ao_hud_colour colour)
+{
+    float t[12];
+    rectangle(t, x0, y0, x1, y1);
+    draw_points(hud, GL_TRIANGLES, t, 6, colour);
+}
+
+void ao_hud_lines(struct ao_hud *hud, const float *xy, int count, bool strip, struct ao_hud_colour colour)
+{
+    draw_points(hud, strip ? GL_LINE_STRIP : GL_LINES, xy, count, colour);
+}
+
+void ao_hud_text(struct ao_hud *hud, const char *text, float x, float y, float scale,
+                 struct ao_hud_colour colour)
+{
+    /* No glyph has more than 16 segments, each one quad of 64 bytes. */
+    if (!sanitise(hud, text) || !reserve(hud, 16 * strlen(hud->text) + 1))
+        return;
+    int quads = stb_easy_font_print(0, 0, hud->text, NULL, hud->quads,
+                                    (int)(hud->quad_capacity * 4 * sizeof *hud->quads));
+    /* Each glyph quad as two triangles, scaled and moved into place. */
+    float *t = hud->triangles;
+    for (int i = 0; i < quads; i++) {
+        const struct glyph_vertex *q = hud->quads + 4 * i;
+        t = rectangle(t, x + q[0].x * scale, y + q[0].y * scale, x + q[2].x * scale, y + q[2].y * scale);
+    }
+    draw_points(hud, GL_TRIANGLES, hud->triangles, 6 * quads, colour);
+}
+
+void ao_hud_draw(struct ao_hud *hud, const char *text, int x, int y, float scale, int fb_width,
+                 int fb_height)
+{
+    int width, height;
+    ao_hud_measure(hud, text, scale, &width, &height);
+    float pad = AO_HUD_PADDING * scale;
+    ao_hud_begin(hud, fb_width, fb_height);
+    ao_hud_fill(hud, (float)x, (float)y, (float)x + (float)width + 2 * pad, (float)y + (float)height + 2 * pad,
+                (struct ao_hud_colour){0.0f, 0.0f, 0.0f, 0.7f});
+    ao_hud_text(hud, text, (float)x + pad, (float)y + pad, scale, (struct ao_hud_colour){1.0f, 1.0f, 0.85f, 1.0f});
+    ao_hud_end(hud);
 }

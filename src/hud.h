@@ -1,5 +1,5 @@
-/* The on-screen overlay: text drawn with stb_easy_font over a translucent box in GL core, and the
- * status text that the overlay and the window title share. */
+/* The on-screen overlay: text drawn with stb_easy_font, boxes and lines in GL core, and the status
+ * text that the overlay and the window title share. */
 #ifndef AO_HUD_H
 #define AO_HUD_H
 
@@ -26,6 +26,14 @@ void ao_hud_format(const struct ao_hud_status *status, const char *separator, ch
 /* The overlay's GL objects and scratch buffers; opaque. */
 struct ao_hud;
 
+/* Inner margin of ao_hud_draw's box around its text, in font pixels (times the scale). */
+#define AO_HUD_PADDING 4
+
+/* An overlay colour: red, green, blue and opacity, each in [0, 1]. */
+struct ao_hud_colour {
+    float r, g, b, a;
+};
+
 /* Builds the overlay's program and buffers in the current context; gl must outlive it. NULL with
  * one message. GL thread. */
 struct ao_hud *ao_hud_create(const struct ao_glapi *gl);
@@ -33,12 +41,32 @@ struct ao_hud *ao_hud_create(const struct ao_glapi *gl);
 /* Deletes the GL objects (context still current) and frees; accepts NULL. GL thread. */
 void ao_hud_destroy(struct ao_hud *hud);
 
-/* Size in pixels of the box that ao_hud_draw draws for text at scale. GL thread (uses scratch). */
+/* Size in pixels of text ('\n' between lines) at scale, without a box. GL thread (uses scratch). */
 void ao_hud_measure(struct ao_hud *hud, const char *text, float scale, int *width, int *height);
 
 /* Draws text ('\n' between lines; bytes outside printable ASCII shown as '?') at scale in a
- * translucent box whose top left corner is (x, y) pixels from the framebuffer's top left. GL thread. */
+ * translucent box, AO_HUD_PADDING wider on each side, whose top left corner is (x, y) pixels from
+ * the framebuffer's top left. GL thread. */
 void ao_hud_draw(struct ao_hud *hud, const char *text, int x, int y, float scale, int fb_width,
                  int fb_height);
+
+/* Starts drawing the primitives below into a fb_width x fb_height framebuffer, blended over what
+ * it holds, in pixels from its top left. GL thread. */
+void ao_hud_begin(struct ao_hud *hud, int fb_width, int fb_height);
+
+/* Fills the rectangle from (x0, y0) to (x1, y1). Between ao_hud_begin and ao_hud_end. */
+void ao_hud_fill(struct ao_hud *hud, float x0, float y0, float x1, float y1, struct ao_hud_colour colour);
+
+/* Draws text as ao_hud_draw does, without the box, its top left at (x, y). Between ao_hud_begin
+ * and ao_hud_end. */
+void ao_hud_text(struct ao_hud *hud, const char *text, float x, float y, float scale,
+                 struct ao_hud_colour colour);
+
+/* Draws one-pixel lines through count points (x, y pairs in xy): one polyline when strip, else a
+ * segment per two points. Between ao_hud_begin and ao_hud_end. */
+void ao_hud_lines(struct ao_hud *hud, const float *xy, int count, bool strip, struct ao_hud_colour colour);
+
+/* Ends drawing primitives. GL thread. */
+void ao_hud_end(struct ao_hud *hud);
 
 #endif

@@ -11,6 +11,8 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
+#include "chart.h"
+#include "chartview.h"
 #include "display.h"
 #include "glapi.h"
 #include "hud.h"
@@ -59,6 +61,7 @@ struct viewer {
     int drag;                        /* mouse button held over the window, or -1 */
     double cursor_x, cursor_y;
     double orbit_x, orbit_y, pan_x, pan_y, wheel;   /* mouse input not yet applied */
+    struct ao_chart chart;           /* RMSE against time of the frames taken (with --reference) */
     struct look drawn;               /* as last drawn */
     bool dirty;                      /* redraw even if the look is the same: new frame, expose */
 };
@@ -222,22 +225,45 @@ static struct ao_hud_status status(const struct viewer *v, const struct ao_setti
     return s;
 }
 
-/* Draws the image, then the overlay or the help, into the framebuffer look describes. */
+/* The error chart's panel in the bottom right corner, in font pixels at its text scale. */
+#define CHART_WIDTH 200
+#define CHART_HEIGHT 130
+
+/* Draws the error chart, when there is one, in the bottom right corner: its text at twice the
+ * content scale where the panel then fits into a quarter of the window, else at the content scale
+ * with the panel at most half the window wide and tall. */
+static void draw_chart(struct viewer *v, const struct look *look, float content_scale)
+{
+    float scale = content_scale;
+    if (2 * CHART_WIDTH * scale <= 0.5f * (float)look->width && 2 * CHART_HEIGHT * scale <= 0.5f * (float)look->height)
+        scale *= 2;
+    int margin = (int)(8 * content_scale);
+    int width = (int)fminf(CHART_WIDTH * scale, 0.5f * (float)look->width);
+    int height = (int)fminf(CHART_HEIGHT * scale, 0.5f * (float)look->height);
+    ao_chartview_draw(v->hud, &v->chart, look->width - margin - width, look->height - margin - height,
+                      width, height, scale, look->width, look->height);
+}
+
+/* Draws the image, then the overlay and the chart or the help, into the framebuffer look
+ * describes. */
 static void draw(struct viewer *v, const struct look *look, const struct ao_hud_status *s)
 {
     ao_display_draw(v->display, look->width, look->height);
-    float scale;
-    glfwGetWindowContentScale(v->window, &scale, NULL);
-    scale *= look->height >= 360 ? 2.0f : 1.0f;
+    float content_scale;
+    glfwGetWindowContentScale(v->window, &content_scale, NULL);
+    float scale = content_scale * (look->height >= 360 ? 2.0f : 1.0f);
     if (look->help) {
         int w, h;
         ao_hud_measure(v->hud, HELP, scale, &w, &h);
+        w += (int)(2 * AO_HUD_PADDING * scale);
+        h += (int)(2 * AO_HUD_PADDING * scale);
         ao_hud_draw(v->hud, HELP, (look->width - w) / 2, (look->height - h) / 2, scale, look->width,
                     look->height);
     } else if (look->hud) {
         char text[sizeof look->status];
         ao_hud_format(s, "\n", text, sizeof text);
         ao_hud_draw(v->hud, text, (int)(8 * scale), (int)(8 * scale), scale, look->width, look->height);
+        draw_chart(v, look, content_scale);
     }
 }
 
@@ -321,6 +347,7 @@ static bool take_frame(struct viewer *v)
         return true;
     v->shown = f;
     v->shown_at = glfwGetTime();
+    ao_chart_add(&v->chart, &f->info);
     v->dirty = true;
     return ao_display_upload(v->display, f->rgb, f->width, f->height);
 }

@@ -4,6 +4,9 @@
 #                          screenshot files and a clean exit within a second of Esc
 #   test_window.sh stress  200 random keys, drags and resizes in a few seconds, then a screenshot
 #                          (no NaN in its PFM) and a clean exit
+#   test_window.sh chart   with --reference: a run in each sampling mode (H, then U, then C) leaves
+#                          a curve in its colour on the screen, read from Xvfb's framebuffer file;
+#                          F2 hides the chart
 # Needs AO_BINARY and AO_SOURCE_ROOT (tests/meson.build sets both); exits 77 when Xvfb or
 # xdotool is missing.
 set -u
@@ -16,8 +19,11 @@ for tool in xvfb-run xdotool python3; do
     fi
 done
 if [ -z "${AO_UNDER_XVFB:-}" ]; then
-    # A 24-bit screen: xvfb-run's default depth has no OpenGL visual.
-    AO_UNDER_XVFB=1 exec xvfb-run -a -s "-screen 0 1280x1024x24" "$0" "$@"
+    # A 24-bit screen: xvfb-run's default depth has no OpenGL visual. The server keeps its screen
+    # in an XWD file under AO_FBDIR, which the chart test reads.
+    AO_FBDIR=$(mktemp -d)
+    export AO_FBDIR
+    AO_UNDER_XVFB=1 exec xvfb-run -a -s "-screen 0 1280x1024x24 -fbdir $AO_FBDIR" "$0" "$@"
 fi
 
 fail() {
@@ -81,13 +87,48 @@ assert not bad, '%d non-finite values' % len(bad)
 EOF
 }
 
-# Starts the viewer on the small spheres scene with a target it will not reach.
+# Counts, in the window's bottom right quarter on the screen, the pixels in each sampling mode's
+# chart colour (chartview.c's MODE_COLOUR, within 8 in each channel): prints the counts for
+# uniform, hemisphere and cosine, "0 0 0" without a chart.
+chart_colours() {
+    eval "$(xdotool getwindowgeometry --shell "$wid")"
+    python3 - "$AO_FBDIR/Xvfb_screen0" "$X" "$Y" "$WIDTH" "$HEIGHT" <<'EOF'
+import struct, sys
+path, x0, y0, w, h = sys.argv[1], *map(int, sys.argv[2:])
+data = open(path, 'rb').read()
+header = struct.unpack('>25I', data[:100])
+size, bits, stride, ncolours = header[0], header[11], header[12], header[19]
+assert bits == 32 and header[7] == 0 and header[14:17] == (0xff0000, 0xff00, 0xff), 'not 24-bit BGRX'
+pixels = size + 12 * ncolours
+colours = [(255, 128, 0), (0, 255, 64), (0, 191, 255)]
+counts = [0, 0, 0]
+for y in range(y0 + h // 2, y0 + h):
+    row = pixels + y * stride
+    for x in range(x0 + w // 2, x0 + w):
+        b, g, r = data[row + 4 * x:row + 4 * x + 3]
+        for i, (cr, cg, cb) in enumerate(colours):
+            if abs(r - cr) <= 8 and abs(g - cg) <= 8 and abs(b - cb) <= 8:
+                counts[i] += 1
+print(*counts)
+EOF
+}
+
+# Starts the viewer on the small spheres scene with a target it will not reach; for the chart,
+# at a size that leaves it room and against a reference made first.
 W=160
 H=120
 work=$(mktemp -d)
-trap 'kill "$pid" 2>/dev/null; rm -rf "$work"' EXIT
+trap 'kill "$pid" 2>/dev/null; rm -rf "$work" "$AO_FBDIR"' EXIT
 cd "$work" || exit 1
-"$AO_BINARY" --size ${W}x$H --spp 1000000 --threads 2 --sampling hemisphere \
+args=()
+if [ "$mode" = chart ]; then
+    W=320
+    H=240
+    "$AO_BINARY" --headless -q --size ${W}x$H --spp 64 --spppp 16 -o ref.pfm \
+        "$AO_SOURCE_ROOT/assets/scenes/spheres.scene" || { echo "FAIL: no reference"; exit 1; }
+    args=(--reference ref.pfm)
+fi
+"$AO_BINARY" --size ${W}x$H --spp 1000000 --threads 2 --sampling hemisphere "${args[@]}" \
     "$AO_SOURCE_ROOT/assets/scenes/spheres.scene" >stdout 2>stderr &
 pid=$!
 wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window appeared"
@@ -126,6 +167,29 @@ if [ "$mode" = keys ]; then
         sleep 0.05
     done
     [ "$(pass)" -lt "$before" ] || fail "R did not restart (pass stayed at or above $before)"
+elif [ "$mode" = chart ]; then
+    # The legend shows every mode's colour from the start; each run's curve adds to its mode's
+    # count. Each run lasts 1.5 s: scores of frames, a line across most of the plot.
+    wait_title " — RMSE [0-9.e-]+"
+    sleep 1.5
+    read -r u0 h0 c0 < <(chart_colours)
+    press u
+    wait_title " — uniform — .* — RMSE "
+    sleep 1.5
+    read -r u1 h1 c1 < <(chart_colours)
+    press c
+    wait_title " — cosine — .* — RMSE "
+    sleep 1.5
+    read -r u2 h2 c2 < <(chart_colours)
+    echo "chart colour pixels (uniform hemisphere cosine): H run $u0 $h0 $c0, U run $u1 $h1 $c1, C run $u2 $h2 $c2"
+    [ "$u0" -gt 0 ] && [ "$h0" -gt 0 ] && [ "$c0" -gt 0 ] || fail "no legend on screen"
+    [ $((u1 - u0)) -ge 30 ] || fail "no uniform curve after U"
+    [ $((c2 - c1)) -ge 30 ] || fail "no cosine curve after C"
+    [ $((u2 - u0)) -ge 30 ] || fail "the uniform run's curve was not kept after C"
+    press F2
+    sleep 0.5
+    read -r u3 h3 c3 < <(chart_colours)
+    [ $((u3 + h3 + c3)) -le 3 ] || fail "F2 left the chart on screen ($u3 $h3 $c3)"
 else
     # Random keys (no S, Q or Esc), drags, wheel steps and resizes, as fast as xdotool goes.
     keys=(u h c a space r plus minus equal KP_Add KP_Subtract F1 F2 question)
