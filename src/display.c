@@ -19,13 +19,19 @@ struct ao_display {
 
 struct ao_display *ao_display_create(const struct ao_glapi *gl)
 {
+    return ao_display_create_from_source(gl, ao_shader_display_vert, ao_shader_display_frag);
+}
+
+struct ao_display *ao_display_create_from_source(const struct ao_glapi *gl, const char *vertex,
+                                                 const char *fragment)
+{
     struct ao_display *d = calloc(1, sizeof *d);
     if (!d) {
         fprintf(stderr, "aoview: out of memory for the display\n");
         return NULL;
     }
     d->gl = gl;
-    d->program = ao_glapi_program(gl, "display", ao_shader_display_vert, ao_shader_display_frag);
+    d->program = ao_glapi_program(gl, "display", vertex, fragment);
     if (!d->program) {
         free(d);
         return NULL;

@@ -17,9 +17,14 @@ struct ao_display_rect {
 /* The display's GL objects; opaque. */
 struct ao_display;
 
-/* Compiles the shaders (their info log printed with the shader's name on failure) and creates the
- * GL objects in the current context; gl must outlive it. NULL with one message. GL thread. */
+/* Compiles the embedded display shaders and creates the GL objects in the current context; gl
+ * must outlive it. NULL with one message (naming the shader that failed). GL thread. */
 struct ao_display *ao_display_create(const struct ao_glapi *gl);
+
+/* ao_display_create with the given GLSL in place of shaders/display.vert and .frag, so that tests
+ * can feed it a broken shader. GL thread. */
+struct ao_display *ao_display_create_from_source(const struct ao_glapi *gl, const char *vertex,
+                                                 const char *fragment);
 
 /* Deletes the GL objects (context still current) and frees; accepts NULL. GL thread. */
 void ao_display_destroy(struct ao_display *display);

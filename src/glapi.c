@@ -1,6 +1,7 @@
 #include "glapi.h"
 
 #include <stdio.h>
+#include <string.h>
 
 bool ao_glapi_load(struct ao_glapi *gl, ao_glapi_proc (*get_proc)(const char *name))
 {
@@ -16,10 +17,13 @@ bool ao_glapi_load(struct ao_glapi *gl, ao_glapi_proc (*get_proc)(const char *na
     return true;
 }
 
-/* Prints a shader's or program's info log under the file name it came from. */
-static void print_log(const char *what, const char *file, const char *log)
+/* Reports a shader or program that failed on one line: its file name and the first line of its
+ * info log (the first error; the driver's log runs on for each further one). */
+static void print_log(const char *file, const char *what, const char *log)
 {
-    fprintf(stderr, "aoview: %s %s failed:\n%s\n", what, file, log[0] ? log : "(no log)");
+    if (!log[0])
+        log = "the driver gives no reason";
+    fprintf(stderr, "aoview: %s %s: %.*s\n", file, what, (int)strcspn(log, "\n"), log);
 }
 
 /* One compiled shader stage, or 0 after printing its log. */
@@ -33,7 +37,7 @@ static GLuint compile(const struct ao_glapi *gl, GLenum stage, const char *file,
     if (!ok) {
         char log[4096] = "";
         gl->GetShaderInfoLog(shader, sizeof log, NULL, log);
-        print_log("compiling", file, log);
+        print_log(file, "does not compile", log);
         gl->DeleteShader(shader);
         return 0;
     }
@@ -43,9 +47,10 @@ static GLuint compile(const struct ao_glapi *gl, GLenum stage, const char *file,
 GLuint ao_glapi_program(const struct ao_glapi *gl, const char *name, const char *vertex,
                         const char *fragment)
 {
-    char vert_file[128], frag_file[128];
+    char vert_file[128], frag_file[128], both[160];
     snprintf(vert_file, sizeof vert_file, "shaders/%s.vert", name);
     snprintf(frag_file, sizeof frag_file, "shaders/%s.frag", name);
+    snprintf(both, sizeof both, "%s and .frag", vert_file);
 
     GLuint vs = compile(gl, GL_VERTEX_SHADER, vert_file, vertex);
     GLuint fs = vs ? compile(gl, GL_FRAGMENT_SHADER, frag_file, fragment) : 0;
@@ -64,7 +69,7 @@ GLuint ao_glapi_program(const struct ao_glapi *gl, const char *name, const char 
     if (!ok) {
         char log[4096] = "";
         gl->GetProgramInfoLog(program, sizeof log, NULL, log);
-        print_log("linking", name, log);
+        print_log(both, "do not link", log);
         gl->DeleteProgram(program);
         return 0;
     }

@@ -78,8 +78,9 @@ typedef void (*ao_glapi_proc)(void);
  * missing function. GL thread. */
 bool ao_glapi_load(struct ao_glapi *gl, ao_glapi_proc (*get_proc)(const char *name));
 
-/* Compiles and links a program from two embedded sources named name.vert and name.frag (the
- * files in shaders/); 0 after printing the failing shader's name and info log. GL thread. */
+/* Compiles and links a program from two sources named name.vert and name.frag (the files in
+ * shaders/); 0 after one line naming the failing shader with the first error of its log. GL
+ * thread. */
 GLuint ao_glapi_program(const struct ao_glapi *gl, const char *name, const char *vertex,
                         const char *fragment);
 

@@ -3,6 +3,7 @@
 #include <ctype.h>
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -10,6 +11,8 @@
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
+#define GLFW_EXPOSE_NATIVE_X11
+#include <GLFW/glfw3native.h>
 
 #include "chart.h"
 #include "chartview.h"
@@ -294,6 +297,24 @@ static void update(struct viewer *v, const struct ao_settings *settings)
 
 /* ---- life cycle ---- */
 
+/* Xlib's handler for a broken connection (the X server died or went away), on whichever thread's
+ * Xlib call noticed it (the GL thread's, or the render thread's glfwPostEmptyEvent): one line, and
+ * exit status 1 at once. This is the one exit outside main.c, because no way back is sound: after
+ * the handler returns Xlib calls exit(1) itself, from under the running threads, after printing
+ * its own message; and an exit handler (XSetIOErrorExitHandler) that returns resumes the Xlib
+ * call with the display's lock released twice (libX11 1.8 _XIOError; ThreadSanitizer reports it),
+ * while GLFW 3.3's glfwWaitEvents spins for ever on the dead connection. Nothing is lost: stats
+ * rows are flushed per pass, screenshots are renamed into place whole. */
+static int on_io_error(Display *display)
+{
+    static atomic_flag reported = ATOMIC_FLAG_INIT;
+    if (atomic_flag_test_and_set(&reported))
+        for (;;)
+            pause();   /* another thread is exiting */
+    fprintf(stderr, "aoview: lost the connection to the X display %s\n", DisplayString(display));
+    _exit(1);
+}
+
 /* Shrinks width x height, keeping its aspect, to fit 90 % of the primary monitor's work area. */
 static void fit_screen(int *width, int *height)
 {
@@ -319,8 +340,14 @@ static enum ao_window_result open_window(struct viewer *v)
     glfwWindowHint(GLFW_VISIBLE, GLFW_FALSE);
     v->window = glfwCreateWindow(640, 480, "aoview", NULL, NULL);
     if (!v->window) {
+        /* A display whose OpenGL is too old fails (the user asked for a window, and can ask for
+         * --headless); one without OpenGL at all is treated as no display. */
         const char *why = NULL;
-        glfwGetError(&why);
+        if (glfwGetError(&why) == GLFW_VERSION_UNAVAILABLE) {
+            fprintf(stderr, "aoview: the X display %s offers no OpenGL 3.3 core context (%s); "
+                    "--headless renders without a window\n", DisplayString(glfwGetX11Display()), why);
+            return AO_WINDOW_FAILED;
+        }
         fprintf(stderr, "aoview: cannot open an OpenGL 3.3 window: %s\n", why ? why : "unknown error");
         return AO_WINDOW_NO_DISPLAY;
     }
@@ -401,8 +428,11 @@ static enum ao_window_result loop(struct viewer *v)
 
 enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_window_info *info)
 {
-    if (!glfwInit())
+    XIOErrorHandler xlib_handler = XSetIOErrorHandler(on_io_error);
+    if (!glfwInit()) {
+        XSetIOErrorHandler(xlib_handler);
         return AO_WINDOW_NO_DISPLAY;
+    }
     set_glfw_running(true);
     struct viewer v = {.render = render, .info = info, .show_hud = true, .drag = -1};
     enum ao_window_result result = open_window(&v);
@@ -412,5 +442,6 @@ enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_wi
     ao_display_destroy(v.display);
     set_glfw_running(false);
     glfwTerminate();
+    XSetIOErrorHandler(xlib_handler);
     return result;
 }

@@ -1,5 +1,6 @@
 /* gl suite: the display shader path through OSMesa (no display server) against the CPU's sRGB
- * encoding, the display's letterbox geometry, and golden screenshots of the shipped scenes. */
+ * encoding, the display's letterbox geometry, golden screenshots of the shipped scenes, and shaders
+ * that fail to compile or link. */
 #include <math.h>
 #include <setjmp.h>
 #include <stdarg.h>
@@ -13,11 +14,16 @@
 #include <cmocka.h>
 
 #include "display.h"
+#include "glapi.h"
 #include "headless.h"
 #include "image.h"
 #include "render.h"
 #include "scene.h"
+#include "shaders/ao_shaders.h"
 #include "tracer.h"
+
+/* After glcorearb.h (through glapi.h): the GL/gl.h it includes would hide the 1.1 typedefs. */
+#include <GL/osmesa.h>
 
 /* A linear test image whose every pixel differs: negative values, values above 1, tiny values
  * around the curve's 0.0031308 knee, and a red ramp along x and a green ramp along y so that
@@ -316,6 +322,92 @@ static void test_golden_spheres_cosine(void **state)
     check_golden("spheres", AO_SAMPLING_COSINE);
 }
 
+/* ---- shaders that fail: one line on stderr naming the shader, and no display ---- */
+
+/* Calls ao_display_create_from_source in a fresh OSMesa core context with stderr captured into
+ * out; returns whether it made a display (destroyed at once). */
+static bool create_capturing(const char *vertex, const char *fragment, char *out, size_t size)
+{
+    static const int attribs[] = {
+        OSMESA_FORMAT, OSMESA_RGBA, OSMESA_PROFILE, OSMESA_CORE_PROFILE,
+        OSMESA_CONTEXT_MAJOR_VERSION, 3, OSMESA_CONTEXT_MINOR_VERSION, 3, 0,
+    };
+    OSMesaContext context = OSMesaCreateContextAttribs(attribs, NULL);
+    assert_non_null(context);
+    unsigned char buffer[4];
+    assert_true(OSMesaMakeCurrent(context, buffer, GL_UNSIGNED_BYTE, 1, 1));
+    struct ao_glapi gl;
+    assert_true(ao_glapi_load(&gl, OSMesaGetProcAddress));
+
+    FILE *capture = tmpfile();
+    assert_non_null(capture);
+    fflush(stderr);
+    int saved = dup(STDERR_FILENO);
+    assert_true(saved >= 0 && dup2(fileno(capture), STDERR_FILENO) >= 0);
+    struct ao_display *display = ao_display_create_from_source(&gl, vertex, fragment);
+    fflush(stderr);
+    assert_true(dup2(saved, STDERR_FILENO) >= 0);
+    close(saved);
+
+    rewind(capture);
+    size_t n = fread(out, 1, size - 1, capture);
+    out[n] = '\0';
+    fclose(capture);
+    bool made = display != NULL;
+    ao_display_destroy(display);
+    OSMesaDestroyContext(context);
+    return made;
+}
+
+/* Asserts that message is exactly one line and holds each of the needles. */
+static void check_one_line(const char *message, const char *needle1, const char *needle2)
+{
+    size_t length = strlen(message);
+    if (length == 0 || message[length - 1] != '\n' || strchr(message, '\n') != message + length - 1 ||
+        !strstr(message, needle1) || !strstr(message, needle2))
+        fail_msg("want one line with \"%s\" and \"%s\", got:\n%s", needle1, needle2, message);
+    printf("%s", message);
+}
+
+static void test_broken_fragment_shader_is_one_clear_error(void **state)
+{
+    (void)state;
+    char message[4096];
+    assert_false(create_capturing(ao_shader_display_vert,
+                                  "#version 330 core\nout vec4 colour;\nvoid main() { colour = nowhere; }\n",
+                                  message, sizeof message));
+    check_one_line(message, "aoview: shaders/display.frag does not compile: ", "nowhere");
+}
+
+static void test_broken_vertex_shader_is_one_clear_error(void **state)
+{
+    (void)state;
+    char message[4096];
+    assert_false(create_capturing("#version 330 core\nvoid main() { gl_Position = vec4(1.0) }\n",
+                                  ao_shader_display_frag, message, sizeof message));
+    check_one_line(message, "aoview: shaders/display.vert does not compile: ", "error");
+}
+
+/* Both stages compile, but the fragment shader has no main(). */
+static void test_unlinkable_shaders_are_one_clear_error(void **state)
+{
+    (void)state;
+    char message[4096];
+    assert_false(create_capturing(ao_shader_display_vert,
+                                  "#version 330 core\nout vec4 colour;\nvoid shade() { colour = vec4(1.0); }\n",
+                                  message, sizeof message));
+    check_one_line(message, "aoview: shaders/display.vert and .frag do not link: ", "main");
+}
+
+/* The shipped shaders, through the same entry point: a display, and nothing said. */
+static void test_shipped_shaders_build(void **state)
+{
+    (void)state;
+    char message[4096];
+    assert_true(create_capturing(ao_shader_display_vert, ao_shader_display_frag, message, sizeof message));
+    assert_string_equal(message, "");
+}
+
 /* Read by LeakSanitizer in sanitizer builds: Mesa's OSMesa keeps a few hundred bytes per context
  * that OSMesaDestroyContext does not free (a bare create/destroy leaks them too), so leaks whose
  * stack passes through libOSMesa are Mesa's, not ours. */
@@ -336,6 +428,10 @@ int main(void)
         cmocka_unit_test(test_golden_bunny_cosine),
         cmocka_unit_test(test_golden_spheres_uniform),
         cmocka_unit_test(test_golden_spheres_cosine),
+        cmocka_unit_test(test_broken_fragment_shader_is_one_clear_error),
+        cmocka_unit_test(test_broken_vertex_shader_is_one_clear_error),
+        cmocka_unit_test(test_unlinkable_shaders_are_one_clear_error),
+        cmocka_unit_test(test_shipped_shaders_build),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
