@@ -11,8 +11,7 @@
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
-#define GLFW_EXPOSE_NATIVE_X11
-#include <GLFW/glfw3native.h>
+#include <X11/Xlib.h>   /* the IO error handler: GLFW 3.3 leaves Xlib's in place */
 
 #include "chart.h"
 #include "chartview.h"
@@ -345,7 +344,7 @@ static enum ao_window_result open_window(struct viewer *v)
         const char *why = NULL;
         if (glfwGetError(&why) == GLFW_VERSION_UNAVAILABLE) {
             fprintf(stderr, "aoview: the X display %s offers no OpenGL 3.3 core context (%s); "
-                    "--headless renders without a window\n", DisplayString(glfwGetX11Display()), why);
+                    "--headless renders without a window\n", XDisplayName(NULL), why);
             return AO_WINDOW_FAILED;
         }
         fprintf(stderr, "aoview: cannot open an OpenGL 3.3 window: %s\n", why ? why : "unknown error");
