@@ -37,7 +37,7 @@ static const char HELP[] =
     "right drag  pan\n"
     "wheel  zoom\n"
     "F1 or ?  this help\n"
-    "F2  hide/show the overlay\n"
+    "F2  hide/show the overlay and error chart\n"
     "Esc or Q  quit";
 
 /* The redraw rate while the image changes; idle at the target spp. */
