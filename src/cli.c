@@ -256,7 +256,7 @@ static bool parse_option(int argc, char **argv, int *i, struct ao_options *opts,
     size_t name_len = eq ? (size_t)(eq - arg) : strlen(arg);
     const struct option_spec *spec = find_option(arg, name_len);
     if (!spec) {
-        snprintf(msg, msg_size, "unknown option '%.*s' (try --help)", (int)name_len, arg);
+        snprintf(msg, msg_size, "unknown option '%.*s'", (int)name_len, arg);
         return false;
     }
     if (!spec->has_value && eq) {
