@@ -30,7 +30,8 @@ float ao_surface_offset(struct ao_vec3 origin, float t, struct ao_vec3 position)
     /* org + t dir carries a rounding error of a few ulps of max(|org|, t, |p|) per component, and
      * Embree's t adds a few more; 2^-18 of their sum is 32 ulps of the largest, scale-free. */
     float scale = ao_vec3_max_abs(origin) + t + ao_vec3_max_abs(position);
-    return fmaxf(scale * 0x1.0p-18f, FLT_MIN);
+    float offset = scale * 0x1.0p-18f;
+    return offset > FLT_MIN ? offset : FLT_MIN; /* FLT_MIN for NaN too, as fmaxf would give */
 }
 
 void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,
@@ -65,88 +66,134 @@ void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struc
     s->offset = ao_surface_offset(org, hit->t, s->position);
 }
 
-/* Occlusion rays waiting for a full packet, each lane remembering its weight and whose sum the
- * weight joins when the ray is open. */
+/* Occlusion rays waiting for a full batch, in packets filled in order, each ray remembering its
+ * weight and whose sum the weight joins when the ray is open. The lanes of the packet being
+ * filled from `drawn` on hold their numbers and normals only: their directions are drawn together
+ * when the packet is full, so that the sampler runs across lanes even at one sample a pixel. */
+enum { QUEUE_RAYS = AO_BATCH_PACKETS * AO_PACKET_SIZE };
 struct queue {
     const struct ao_context *ctx;
-    struct ao_packet rays;
-    float weight[AO_PACKET_SIZE];
-    double *sum[AO_PACKET_SIZE];
+    struct ao_packet packets[AO_BATCH_PACKETS];
+    int full;                      /* packets filled; packets[full] takes the next rays */
+    int drawn;                     /* lanes of packets[full] whose directions are drawn */
+    float u1[AO_PACKET_SIZE], u2[AO_PACKET_SIZE];
+    float nx[AO_PACKET_SIZE], ny[AO_PACKET_SIZE], nz[AO_PACKET_SIZE];  /* shading normals */
+    float gx[AO_PACKET_SIZE], gy[AO_PACKET_SIZE], gz[AO_PACKET_SIZE];  /* geometric normals */
+    float weight[QUEUE_RAYS];
+    double *sum[QUEUE_RAYS];
     uint64_t traced;
 };
 
-static void flush(struct queue *q)
-{
-    uint8_t open[AO_PACKET_SIZE];
-    if (q->rays.count == 0)
-        return;
-    ao_tracer_occluded(q->ctx->tracer, &q->rays, open);
-    for (int k = 0; k < q->rays.count; k++)
-        *q->sum[k] += open[k] ? q->weight[k] : 0.0f;
-    q->traced += (uint64_t)q->rays.count;
-    q->rays.count = 0;
-}
-
-/* Mirrors the directions that point below the surface with geometric normal ng across it, keeping
+/* Mirrors the directions that point below the surface with geometric normal g across it, keeping
  * their weights (taken about the shading normal); branch-free so that it vectorizes. */
-static void reflect_below(struct ao_vec3 ng, int n, float *restrict x, float *restrict y, float *restrict z)
+static void reflect_below(int n, const float *restrict gx, const float *restrict gy, const float *restrict gz,
+                          float *restrict x, float *restrict y, float *restrict z)
 {
     for (int k = 0; k < n; k++) {
-        float d = x[k] * ng.x + y[k] * ng.y + z[k] * ng.z;
+        float d = x[k] * gx[k] + y[k] * gy[k] + z[k] * gz[k];
         float twice_below = d - fabsf(d); /* 2d below the surface, 0 above */
-        x[k] -= twice_below * ng.x;
-        y[k] -= twice_below * ng.y;
-        z[k] -= twice_below * ng.z;
+        x[k] -= twice_below * gx[k];
+        y[k] -= twice_below * gy[k];
+        z[k] -= twice_below * gz[k];
     }
 }
 
-/* Drops the lanes from `first` on whose weight is zero (directions that cannot contribute, such as
- * the lower half of the uniform sphere), keeping the others in order. */
-static void compact(struct queue *q, int first)
+/* Drops the lanes from `first` of packet r whose weight is zero (directions that cannot
+ * contribute, such as the lower half of the uniform sphere), keeping the others in order. */
+static void compact(struct ao_packet *r, float *weight, double **sum, int first)
 {
-    struct ao_packet *r = &q->rays;
     int kept = first;
     for (int k = first; k < r->count; k++) {
-        if (q->weight[k] <= 0.0f)
+        if (weight[k] <= 0.0f)
             continue;
+        r->org_x[kept] = r->org_x[k];
+        r->org_y[kept] = r->org_y[k];
+        r->org_z[kept] = r->org_z[k];
         r->dir_x[kept] = r->dir_x[k];
         r->dir_y[kept] = r->dir_y[k];
         r->dir_z[kept] = r->dir_z[k];
-        q->weight[kept++] = q->weight[k];
+        r->tfar[kept] = r->tfar[k];
+        sum[kept] = sum[k];
+        weight[kept++] = weight[k];
     }
     r->count = kept;
 }
 
-/* Queues the `count` AO samples of surface s (stream `key`, from first_sample) into *sum,
- * drawing the directions straight into the free lanes of the packet. */
+static void flush(struct queue *q);
+
+/* Draws the directions of the packet being filled, lanes `drawn` on; moves to the next packet
+ * when it is full, and traces the batch when that was the last. */
+static void draw_directions(struct queue *q)
+{
+    struct ao_packet *r = &q->packets[q->full];
+    float *weight = q->weight + q->full * AO_PACKET_SIZE;
+    int lane = q->drawn, n = r->count - lane;
+    ao_sample_directions(q->ctx->sampling, n, q->nx + lane, q->ny + lane, q->nz + lane, q->u1 + lane,
+                         q->u2 + lane, r->dir_x + lane, r->dir_y + lane, r->dir_z + lane, weight + lane);
+    if (q->ctx->below == AO_BELOW_REFLECT)
+        reflect_below(n, q->gx + lane, q->gy + lane, q->gz + lane, r->dir_x + lane, r->dir_y + lane,
+                      r->dir_z + lane);
+    if (q->ctx->sampling == AO_SAMPLING_UNIFORM)
+        compact(r, weight, q->sum + q->full * AO_PACKET_SIZE, lane);
+    q->drawn = r->count;
+    if (r->count == AO_PACKET_SIZE) {
+        q->drawn = 0;
+        if (++q->full == AO_BATCH_PACKETS)
+            flush(q);
+    }
+}
+
+/* Traces the queued rays and adds the weights of the open ones to their sums. */
+static void flush(struct queue *q)
+{
+    uint8_t open[QUEUE_RAYS];
+    if (q->full < AO_BATCH_PACKETS && q->drawn < q->packets[q->full].count)
+        draw_directions(q);
+    int count = q->full + (q->full < AO_BATCH_PACKETS && q->packets[q->full].count > 0);
+    if (count == 0)
+        return;
+    ao_tracer_occluded(q->ctx->tracer, q->packets, count, open);
+    /* Consecutive rays mostly share a sum: add their weights in a register, store once. */
+    double *target = q->sum[0], open_weight = 0.0;
+    for (int p = 0; p < count; p++) {
+        for (int k = 0; k < q->packets[p].count; k++) {
+            int ray = p * AO_PACKET_SIZE + k;
+            if (q->sum[ray] != target) {
+                *target += open_weight;
+                target = q->sum[ray];
+                open_weight = 0.0;
+            }
+            open_weight += open[ray] ? q->weight[ray] : 0.0f;
+        }
+        q->traced += (uint64_t)q->packets[p].count;
+        q->packets[p].count = 0;
+    }
+    *target += open_weight;
+    q->full = q->drawn = 0;
+}
+
+/* Queues the `count` AO samples of surface s (stream `key`, from first_sample) into *sum. */
 static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t key, uint64_t first_sample,
                           int count, double *sum)
 {
-    struct ao_basis basis = ao_basis_from_normal(s->ns);
     struct ao_vec3 origin = ao_vec3_add(s->position, ao_vec3_scale(s->ng, s->offset));
-    struct ao_packet *r = &q->rays;
     for (int done = 0; done < count;) {
+        struct ao_packet *r = &q->packets[q->full];
+        double **sums = q->sum + q->full * AO_PACKET_SIZE;
         int lane = r->count, n = count - done < AO_PACKET_SIZE - lane ? count - done : AO_PACKET_SIZE - lane;
-        float u1[AO_PACKET_SIZE], u2[AO_PACKET_SIZE];
         for (int k = 0; k < n; k++)
-            draw_pair(q->ctx, key, first_sample + (uint64_t)(done + k), &u1[k], &u2[k]);
-        ao_sample_directions(q->ctx->sampling, &basis, n, u1, u2, r->dir_x + lane, r->dir_y + lane,
-                             r->dir_z + lane, q->weight + lane);
-        if (q->ctx->below == AO_BELOW_REFLECT)
-            reflect_below(s->ng, n, r->dir_x + lane, r->dir_y + lane, r->dir_z + lane);
+            draw_pair(q->ctx, key, first_sample + (uint64_t)(done + k), &q->u1[lane + k], &q->u2[lane + k]);
+        for (int k = lane; k < lane + n; k++) {
+            q->nx[k] = s->ns.x, q->ny[k] = s->ns.y, q->nz[k] = s->ns.z;
+            q->gx[k] = s->ng.x, q->gy[k] = s->ng.y, q->gz[k] = s->ng.z;
+            r->org_x[k] = origin.x, r->org_y[k] = origin.y, r->org_z[k] = origin.z;
+            r->tfar[k] = q->ctx->ao_distance;
+            sums[k] = sum;
+        }
         r->count += n;
         done += n;
-        if (q->ctx->sampling == AO_SAMPLING_UNIFORM)
-            compact(q, lane);
-        for (int k = lane; k < r->count; k++) {
-            r->org_x[k] = origin.x;
-            r->org_y[k] = origin.y;
-            r->org_z[k] = origin.z;
-            r->tfar[k] = q->ctx->ao_distance;
-            q->sum[k] = sum;
-        }
         if (r->count == AO_PACKET_SIZE)
-            flush(q);
+            draw_directions(q);
     }
 }
 
@@ -168,6 +215,9 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
 {
     int width = tile->x1 - tile->x0, pixels = width * (tile->y1 - tile->y0);
     struct queue q = {.ctx = ctx};
+    double sum[AO_TILE_PIXELS] = {0};
+    struct ao_vec3 albedo[AO_TILE_PIXELS];
+    bool miss[AO_TILE_PIXELS];
     for (int first = 0; first < pixels; first += AO_PACKET_SIZE) {
         struct ao_packet eye = {.count = pixels - first < AO_PACKET_SIZE ? pixels - first : AO_PACKET_SIZE};
         struct ao_hit hits[AO_PACKET_SIZE];
@@ -190,22 +240,20 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
         }
         ao_tracer_intersect(ctx->tracer, &eye, hits);
         *eye_rays += (uint64_t)eye.count;
-        /* Their AO samples, queued across pixels so packets fill even at one sample per pass. */
-        double sum[AO_PACKET_SIZE] = {0};
-        struct ao_vec3 albedo[AO_PACKET_SIZE];
+        /* Their AO samples, queued across the tile so that batches fill at one sample per pass. */
         for (int k = 0; k < eye.count; k++) {
-            if (hits[k].t == INFINITY)
+            miss[first + k] = hits[k].t == INFINITY;
+            if (miss[first + k])
                 continue;
             struct ao_surface s;
             struct ao_vec3 d = ao_vec3_make(eye.dir_x[k], eye.dir_y[k], eye.dir_z[k]);
             ao_surface_from_hit(ctx->scene, ctx->view.eye, d, &hits[k], &s);
-            albedo[k] = s.albedo;
-            queue_samples(&q, &s, ao_rng_key(ctx->seed, index[k], AO_STREAM), first_sample, count, &sum[k]);
+            albedo[first + k] = s.albedo;
+            queue_samples(&q, &s, ao_rng_key(ctx->seed, index[k], AO_STREAM), first_sample, count, &sum[first + k]);
         }
-        flush(&q);
-        for (int k = 0; k < eye.count; k++)
-            sums[first + k] = hits[k].t == INFINITY ? ao_vec3_scale(ctx->scene->background, (float)count)
-                                                    : ao_vec3_scale(albedo[k], (float)sum[k]);
     }
+    flush(&q);
+    for (int k = 0; k < pixels; k++)
+        sums[k] = miss[k] ? ao_vec3_scale(ctx->scene->background, (float)count) : ao_vec3_scale(albedo[k], (float)sum[k]);
     *shadow_rays += q.traced;
 }

@@ -22,15 +22,6 @@ bool ao_camera_view(const struct ao_camera *c, int width, int height, struct ao_
     return true;
 }
 
-struct ao_vec3 ao_camera_ray(const struct ao_view *v, float x, float y)
-{
-    float sx = (2.0f * x / (float)v->width - 1.0f) * v->tan_half_fov * v->aspect;
-    float sy = (1.0f - 2.0f * y / (float)v->height) * v->tan_half_fov;
-    struct ao_vec3 d = ao_vec3_add(ao_vec3_add(ao_vec3_scale(v->right, sx), ao_vec3_scale(v->up, sy)),
-                                   v->forward);
-    return ao_vec3_normalize(d);
-}
-
 void ao_camera_orbit(struct ao_camera *c, float yaw, float pitch)
 {
     /* Spherical coordinates of the eye about the target, with the camera's up as the pole. */

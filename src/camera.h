@@ -23,8 +23,16 @@ struct ao_view {
  * degenerate (eye on target, up parallel to the view direction, fov outside (0, 180)). */
 bool ao_camera_view(const struct ao_camera *c, int width, int height, struct ao_view *v);
 
-/* Unit eye-ray direction through image position (x, y) = (i + u, j + v), in pixels. */
-struct ao_vec3 ao_camera_ray(const struct ao_view *v, float x, float y);
+/* Unit eye-ray direction through image position (x, y) = (i + u, j + v), in pixels; inline, as
+ * it runs once per pixel and pass. */
+static inline struct ao_vec3 ao_camera_ray(const struct ao_view *v, float x, float y)
+{
+    float sx = (2.0f * x / (float)v->width - 1.0f) * v->tan_half_fov * v->aspect;
+    float sy = (1.0f - 2.0f * y / (float)v->height) * v->tan_half_fov;
+    struct ao_vec3 d = ao_vec3_add(ao_vec3_add(ao_vec3_scale(v->right, sx), ao_vec3_scale(v->up, sy)),
+                                   v->forward);
+    return ao_vec3_normalize(d);
+}
 
 /* Orbits the eye about the target by yaw and pitch radians, keeping it off the poles. */
 void ao_camera_orbit(struct ao_camera *c, float yaw, float pitch);

@@ -117,32 +117,32 @@ float ao_cosine_pdf(struct ao_vec3 n, struct ao_vec3 w)
     return fmaxf(0.0f, ao_vec3_dot(n, w)) / PI;
 }
 
-void ao_sample_directions(enum ao_sampling mode, const struct ao_basis *f, int n,
-                          const float *restrict u1, const float *restrict u2, float *restrict x,
-                          float *restrict y, float *restrict z, float *restrict weight)
+void ao_sample_directions(enum ao_sampling mode, int n, const float *restrict nx, const float *restrict ny,
+                          const float *restrict nz, const float *restrict u1, const float *restrict u2,
+                          float *restrict x, float *restrict y, float *restrict z, float *restrict weight)
 {
     /* Weights have each pdf substituted by hand, so that cosine sampling's weight is exactly 1
      * rather than a rounded cos/(pi cos/pi). */
-    const struct ao_basis basis = *f; /* a local copy: no store below can change it */
-    const struct ao_vec3 normal = basis.n;
     switch (mode) {
     case AO_SAMPLING_UNIFORM:
         for (int k = 0; k < n; k++) {
             struct ao_vec3 w = uniform_sphere(u1[k], u2[k]);
             x[k] = w.x, y[k] = w.y, z[k] = w.z;
-            weight[k] = 4.0f * positive(ao_vec3_dot(normal, w));
+            weight[k] = 4.0f * positive(nx[k] * w.x + ny[k] * w.y + nz[k] * w.z);
         }
         break;
     case AO_SAMPLING_HEMISPHERE:
         for (int k = 0; k < n; k++) {
-            struct ao_vec3 w = hemisphere(&basis, u1[k], u2[k]);
+            struct ao_basis f = ao_basis_from_normal(ao_vec3_make(nx[k], ny[k], nz[k]));
+            struct ao_vec3 w = hemisphere(&f, u1[k], u2[k]);
             x[k] = w.x, y[k] = w.y, z[k] = w.z;
-            weight[k] = 2.0f * positive(ao_vec3_dot(normal, w));
+            weight[k] = 2.0f * positive(ao_vec3_dot(f.n, w));
         }
         break;
     case AO_SAMPLING_COSINE:
         for (int k = 0; k < n; k++) {
-            struct ao_vec3 w = cosine(&basis, u1[k], u2[k]);
+            struct ao_basis f = ao_basis_from_normal(ao_vec3_make(nx[k], ny[k], nz[k]));
+            struct ao_vec3 w = cosine(&f, u1[k], u2[k]);
             x[k] = w.x, y[k] = w.y, z[k] = w.z;
             weight[k] = 1.0f;
         }

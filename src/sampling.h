@@ -38,11 +38,12 @@ struct ao_vec3 ao_sample_cosine(const struct ao_basis *f, float u1, float u2);
 /* Density of ao_sample_cosine at w: max(0, n.w)/pi. */
 float ao_cosine_pdf(struct ao_vec3 n, struct ao_vec3 w);
 
-/* Draws n directions of the given mode, the k-th from (u1[k], u2[k]), into x/y/z[k], and their
- * estimator weights max(0, n.w) / (pi p(w)) into weight[k], simplified per mode (exactly 1 for
- * cosine). One branch-free loop per mode, so that the compiler vectorizes it. */
-void ao_sample_directions(enum ao_sampling mode, const struct ao_basis *f, int n,
-                          const float *restrict u1, const float *restrict u2, float *restrict x,
-                          float *restrict y, float *restrict z, float *restrict weight);
+/* Draws n directions of the given mode, the k-th about the unit normal (nx, ny, nz)[k] from
+ * (u1[k], u2[k]), into x/y/z[k], and their estimator weights max(0, n.w) / (pi p(w)) into
+ * weight[k], simplified per mode (exactly 1 for cosine). One branch-free loop per mode, so that
+ * the compiler vectorizes it across lanes, whether they share a surface or each has its own. */
+void ao_sample_directions(enum ao_sampling mode, int n, const float *restrict nx, const float *restrict ny,
+                          const float *restrict nz, const float *restrict u1, const float *restrict u2,
+                          float *restrict x, float *restrict y, float *restrict z, float *restrict weight);
 
 #endif

@@ -54,9 +54,14 @@ void ao_tracer_thread_init(void);
 /* Closest hits of the packet's rays (coherent eye rays), t in (0, tfar]. Any thread. */
 void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet *rays, struct ao_hit *hits);
 
-/* Sets open[k] to 1 when nothing lies on ray k within t in [0, tfar], else 0 (incoherent
- * occlusion rays). Any thread. */
-void ao_tracer_occluded(const struct ao_tracer *tracer, const struct ao_packet *rays, uint8_t *open);
+/* The most packets ao_tracer_occluded takes at once: Embree's stream sorts a batch this large into
+ * packets of one direction octant, which trace 1.45x faster than 16 incoherent rays (README). */
+enum { AO_BATCH_PACKETS = 16 };
+
+/* Sets open[AO_PACKET_SIZE p + k] to 1 when nothing lies on ray k of packet p (of count, at most
+ * AO_BATCH_PACKETS) within t in [0, tfar], else 0 (incoherent occlusion rays). Any thread. */
+void ao_tracer_occluded(const struct ao_tracer *tracer, const struct ao_packet *packets, int count,
+                        uint8_t *open);
 
 /* Benchmark instrument: every stride-th occlusion packet traced is copied, up to capacity. */
 struct ao_ray_recorder {

@@ -270,8 +270,8 @@ static void compare(const struct ao_scene *scene, uint64_t seed, int packets, st
         uint8_t oe[AO_PACKET_SIZE], od[AO_PACKET_SIZE];
         ao_tracer_intersect(embree, &rays, he);
         ao_tracer_intersect(direct, &rays, hd);
-        ao_tracer_occluded(embree, &rays, oe);
-        ao_tracer_occluded(direct, &rays, od);
+        ao_tracer_occluded(embree, &rays, 1, oe);
+        ao_tracer_occluded(direct, &rays, 1, od);
         for (int k = 0; k < rays.count; k++) {
             tally->rays++;
             if (skip[k]) {
@@ -412,7 +412,7 @@ static void test_no_self_occlusion(void **state)
                 rays.tfar[k] = INFINITY;
             }
             uint8_t open[AO_PACKET_SIZE];
-            ao_tracer_occluded(direct, &rays, open);
+            ao_tracer_occluded(direct, &rays, 1, open);
             for (int k = 0; k < AO_PACKET_SIZE; k++)
                 assert_int_equal(open[k], 1);
         }

@@ -25,9 +25,8 @@ static const float ALMOST_ONE = 0x1.fffffep-1f;
 
 static struct ao_vec3 draw(enum ao_sampling mode, struct ao_vec3 n, float u1, float u2, float *weight)
 {
-    struct ao_basis f = ao_basis_from_normal(n);
     float x, y, z;
-    ao_sample_directions(mode, &f, 1, &u1, &u2, &x, &y, &z, weight);
+    ao_sample_directions(mode, 1, &n.x, &n.y, &n.z, &u1, &u2, &x, &y, &z, weight);
     return ao_vec3_make(x, y, z);
 }
 
