@@ -42,11 +42,12 @@ struct ao_display *ao_display_create_from_source(const struct ao_glapi *gl, cons
     /* The triangle comes from gl_VertexID, but core profile still wants a vertex array bound. */
     gl->GenVertexArrays(1, &d->vao);
 
-    /* Linear filtering: exact at 1:1 (fragments sample texel centres), smooth when scaled. */
+    /* Exact at 1:1 (fragments sample texel centres); magnified, each pixel stays a block, so the
+     * noise under study is shown as it is rather than smoothed; shrunk, linear. */
     gl->GenTextures(1, &d->texture);
     gl->BindTexture(GL_TEXTURE_2D, d->texture);
     gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     return d;

@@ -314,9 +314,20 @@ static int on_io_error(Display *display)
     _exit(1);
 }
 
-/* Shrinks width x height, keeping its aspect, to fit 90 % of the primary monitor's work area. */
+/* The smallest window that keeps the overlay and the error chart readable. */
+#define READABLE_WIDTH 640
+#define READABLE_HEIGHT 480
+
+/* The window size for a width x height image: magnified by the whole factor that brings it to
+ * READABLE_WIDTH x READABLE_HEIGHT when it is smaller (pixels stay square blocks), and shrunk,
+ * keeping its aspect, to fit 90 % of the primary monitor's work area when it is larger. */
 static void fit_screen(int *width, int *height)
 {
+    int zoom = 1;
+    while (*width * zoom < READABLE_WIDTH && *height * zoom < READABLE_HEIGHT)
+        zoom++;
+    *width *= zoom;
+    *height *= zoom;
     GLFWmonitor *monitor = glfwGetPrimaryMonitor();
     int x, y, w = 0, h = 0;
     if (monitor)
