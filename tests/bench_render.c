@@ -3,6 +3,7 @@
  * time and key-press latency at 640x480, and a 4K image's memory. Prints figures; asserts nothing
  * (speed lives here, not in the tests). Run: meson test -C build --benchmark -v */
 #include <math.h>
+#include <stddef.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -15,7 +16,7 @@
 #include "scene.h"
 #include "tracer.h"
 
-enum { SIZE = 512, REPEATS = 3, RECORDED = 1 << 16 };
+enum { SIZE = 512, REPEATS = 5, RECORDED = 1 << 16 };
 
 /* The ceiling is always Embree's: for a scene aoview traces with its direct back end, the ratio
  * then says how much that back end beats Embree by. */
@@ -173,7 +174,44 @@ static void make_big_mesh(struct ao_scene *s, int n)
 
 /* ---- reports ---- */
 
-static void bench_scene(struct ao_scene *scene, double *bunny_rate)
+/* One row of a scene's table, or one repeat's figures for it. */
+struct row {
+    double total, shadow, ceiling, ratio, ms, scaling;
+};
+
+/* The median over n rows of the field at byte offset `field`. */
+static double median_of(const struct row *rows, int n, size_t field)
+{
+    double v[REPEATS];
+    for (int k = 0; k < n; k++)
+        v[k] = *(const double *)((const char *)&rows[k] + field);
+    return median(v, n);
+}
+
+/* One repeat at this spppp: aoview and then the ceiling, at one and then two threads, back to
+ * back into out[0] and out[1]. Ratio and scaling are this repeat's own quotients, so load from
+ * other users of the machine, which drifts over seconds, cancels in them rather than landing on
+ * one side of a quotient of medians. */
+static void measure(struct ao_scene *scene, const struct ao_tracer *tracer, const struct ao_tracer *embree,
+                    const struct ao_ray_recorder *rec, int spppp, struct row out[2])
+{
+    int passes = 64 / spppp < 4 ? 4 : 64 / spppp;
+    for (int t = 0; t < 2; t++) {
+        struct ao_frame_info info = run(scene, tracer, SIZE, SIZE, t + 1, spppp, (uint32_t)(spppp * passes));
+        double packets = bare_rate(embree, rec, t + 1, false), stream = bare_rate(embree, rec, t + 1, true);
+        struct row *r = &out[t];
+        r->total = (double)(info.eye_rays + info.shadow_rays) / info.seconds / 1e6;
+        r->shadow = (double)info.shadow_rays / info.seconds / 1e6;
+        r->ceiling = (packets > stream ? packets : stream) / 1e6;
+        r->ratio = r->shadow / r->ceiling;
+        r->ms = 1e3 * info.seconds / info.pass;
+        r->scaling = r->total / out[0].total;
+    }
+}
+
+/* Prints a scene's table: medians of REPEATS repeats per thread count and spppp. Stores the
+ * 2-thread, spppp-16 Mrays/s in *rate_2x16 when it is not NULL. */
+static void bench_scene(struct ao_scene *scene, double *rate_2x16)
 {
     double t0 = now();
     struct ao_tracer *embree = ao_tracer_create_with(scene, AO_BACKEND_EMBREE);
@@ -184,37 +222,38 @@ static void bench_scene(struct ao_scene *scene, double *bunny_rate)
     printf("\n%s: %zu triangles, %zu spheres; Embree BVH build %.0f ms; aoview traces with %s; peak RSS so "
            "far %.0f MiB\n", scene->name, scene->triangle_count, scene->sphere_count, build_ms,
            ao_tracer_backend(tracer), peak_rss_mib());
-    printf("%-7s %-5s %9s %9s %9s %7s %11s %7s %9s\n", "threads", "spppp", "Mrays/s", "shadow", "ceiling",
-           "ratio", "passes/s", "ms/pass", "scaling");
     static const int spppps[] = {1, 4, 16, 64};
     struct ao_ray_recorder rec = {.packets = malloc(RECORDED * sizeof(struct ao_packet)), .capacity = RECORDED};
-    double single[4] = {0};
-    for (int threads = 1; threads <= 2; threads++) {
-        for (int s = 0; s < 4; s++) {
-            int spppp = spppps[s], passes = 64 / spppp < 4 ? 4 : 64 / spppp;
-            record(embree, scene, spppp, &rec);
-            double total[REPEATS], shadow[REPEATS], ceiling[REPEATS], ms[REPEATS];
-            for (int k = 0; k < REPEATS; k++) {
-                struct ao_frame_info info = run(scene, tracer, SIZE, SIZE, threads, spppp, (uint32_t)(spppp * passes));
-                total[k] = (double)(info.eye_rays + info.shadow_rays) / info.seconds / 1e6;
-                shadow[k] = (double)info.shadow_rays / info.seconds / 1e6;
-                ms[k] = 1e3 * info.seconds / info.pass;
-                double packets = bare_rate(embree, &rec, threads, false), stream = bare_rate(embree, &rec, threads, true);
-                ceiling[k] = (packets > stream ? packets : stream) / 1e6;
-            }
-            double m_total = median(total, REPEATS), m_shadow = median(shadow, REPEATS);
-            double m_ceiling = median(ceiling, REPEATS), m_ms = median(ms, REPEATS);
-            printf("%-7d %-5d %9.2f %9.2f %9.2f %6.0f%% %11.1f %7.1f", threads, spppp, m_total, m_shadow, m_ceiling,
-                   100 * m_shadow / m_ceiling, 1e3 / m_ms, m_ms);
-            if (threads == 1)
-                single[s] = m_total;
-            else
-                printf(" %8.2fx", m_total / single[s]);
-            putchar('\n');
-            if (bunny_rate && threads == 2 && spppp == 16)
-                *bunny_rate = m_total;
+    struct row rows[2][4];
+    for (int s = 0; s < 4; s++) {
+        struct row repeats[2][REPEATS], pair[2];
+        record(embree, scene, spppps[s], &rec);
+        for (int k = 0; k < REPEATS; k++) {
+            measure(scene, tracer, embree, &rec, spppps[s], pair);
+            repeats[0][k] = pair[0], repeats[1][k] = pair[1];
         }
+        for (int t = 0; t < 2; t++)
+            rows[t][s] = (struct row){
+                median_of(repeats[t], REPEATS, offsetof(struct row, total)),
+                median_of(repeats[t], REPEATS, offsetof(struct row, shadow)),
+                median_of(repeats[t], REPEATS, offsetof(struct row, ceiling)),
+                median_of(repeats[t], REPEATS, offsetof(struct row, ratio)),
+                median_of(repeats[t], REPEATS, offsetof(struct row, ms)),
+                median_of(repeats[t], REPEATS, offsetof(struct row, scaling))};
     }
+    printf("%-7s %-5s %9s %9s %9s %7s %11s %7s %9s\n", "threads", "spppp", "Mrays/s", "shadow", "ceiling",
+           "ratio", "passes/s", "ms/pass", "scaling");
+    for (int t = 0; t < 2; t++)
+        for (int s = 0; s < 4; s++) {
+            const struct row *r = &rows[t][s];
+            printf("%-7d %-5d %9.2f %9.2f %9.2f %6.0f%% %11.1f %7.1f", t + 1, spppps[s], r->total, r->shadow,
+                   r->ceiling, 100 * r->ratio, 1e3 / r->ms, r->ms);
+            if (t == 1)
+                printf(" %8.2fx", r->scaling);
+            putchar('\n');
+        }
+    if (rate_2x16)
+        *rate_2x16 = rows[1][2].total;
     free(rec.packets);
     ao_tracer_destroy(tracer);
     ao_tracer_destroy(embree);
@@ -314,7 +353,8 @@ int main(int argc, char **argv)
     bench_scene(&scene, &big);
     ao_scene_finish(&scene);
     printf("\n1M-triangle mesh at 2 threads, 16 spp per pass: %.0f%% of the bunny's Mrays/s\n", 100 * big / bunny);
-    printf("(medians of %d runs; ceiling = best of rtcOccluded16 packets and an rtcOccluded1M stream on a "
-           "sample of the same pass's occlusion rays)\n", REPEATS);
+    printf("(medians of %d repeats, ratio and scaling of each repeat's own quotients; ceiling = best of "
+           "rtcOccluded16 packets and an rtcOccluded1M stream on a sample of the same pass's occlusion rays)\n",
+           REPEATS);
     return 0;
 }
