@@ -8,11 +8,14 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "simd.h"
+
 /* The rule of ao_direct_suits, measured on 25 scenes (the shipped ones and random spheres and quads,
- * SSE2 build, one core): the loops cost about 2.5 ns per primitive per occlusion ray, whatever
+ * one core, SSE2 code): the loops cost about 2.5 ns per primitive per occlusion ray, whatever
  * the ray does; Embree costs 45-75 ns per ray once the scene has a sphere (traversed as a curve)
  * but only 10-40 ns on a few triangles. So the loops win up to 16 primitives with a sphere (1.3x
- * there, break-even near 24) and up to 4 triangles without one. */
+ * there, break-even near 24) and up to 4 triangles without one. Their AVX clones (simd.h) have
+ * since made the loops up to 1.8x faster, so the rule now errs towards Embree. */
 enum { DIRECT_MAX_WITH_SPHERES = 16, DIRECT_MAX_TRIANGLES_ONLY = 4 };
 
 /* A sphere: centre and squared radius. */
@@ -122,6 +125,7 @@ static inline int triangle_hit(const struct triangle *tr, float ox, float oy, fl
     return (*u >= 0.0f) & (*v >= 0.0f) & (*u + *v <= 1.0f) & (*t >= 0.0f) & (*t <= tfar);
 }
 
+AO_VECTOR_CLONES
 void ao_direct_intersect(const struct ao_direct *direct, const struct ao_packet *rays, struct ao_hit *hits)
 {
     const float *restrict ox = rays->org_x, *restrict oy = rays->org_y, *restrict oz = rays->org_z;
@@ -172,6 +176,7 @@ void ao_direct_intersect(const struct ao_direct *direct, const struct ao_packet 
     }
 }
 
+AO_VECTOR_CLONES
 void ao_direct_occluded(const struct ao_direct *direct, const struct ao_packet *rays, uint8_t *open)
 {
     const float *restrict ox = rays->org_x, *restrict oy = rays->org_y, *restrict oz = rays->org_z;

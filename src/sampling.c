@@ -3,6 +3,8 @@
 
 #include <string.h>
 
+#include "simd.h"
+
 static const float PI = 3.14159265358979323846f;
 
 static const char *const NAMES[] = {
@@ -117,6 +119,7 @@ float ao_cosine_pdf(struct ao_vec3 n, struct ao_vec3 w)
     return fmaxf(0.0f, ao_vec3_dot(n, w)) / PI;
 }
 
+AO_VECTOR_CLONES
 void ao_sample_directions(enum ao_sampling mode, int n, const float *restrict nx, const float *restrict ny,
                           const float *restrict nz, const float *restrict u1, const float *restrict u2,
                           float *restrict x, float *restrict y, float *restrict z, float *restrict weight)

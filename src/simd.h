@@ -1,0 +1,15 @@
+/* Hot loops compiled once per x86 vector width and picked at load time for the CPU at hand, as
+ * Embree picks its own kernels: the default build targets SSE2 only. */
+#ifndef AO_SIMD_H
+#define AO_SIMD_H
+
+/* Put before a function whose loops vectorize: clones for AVX-512, AVX2 and the baseline (GCC on
+ * x86-64; elsewhere nothing). None of them enables FMA, so every clone rounds alike and images do
+ * not depend on the CPU. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+#define AO_VECTOR_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define AO_VECTOR_CLONES
+#endif
+
+#endif
