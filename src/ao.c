@@ -11,6 +11,8 @@
 
 #include <float.h>
 
+#include "simd.h"
+
 
 /* Keys of a pixel's eye-ray stream (indexed by pass) and AO stream (indexed by sample), in the
  * pass slot of the key, where no real pass number reaches. */
@@ -119,6 +121,14 @@ static void compact(struct ao_packet *r, float *weight, double **sum, int first)
     r->count = kept;
 }
 
+/* Pairs first .. first + n - 1 of the random stream `key` into u1/u2. */
+AO_VECTOR_CLONES
+static void random_pairs(uint64_t key, uint64_t first, int n, float *restrict u1, float *restrict u2)
+{
+    for (int k = 0; k < n; k++)
+        ao_rng_pair(key, first + (uint64_t)k, &u1[k], &u2[k]);
+}
+
 static void flush(struct queue *q);
 
 /* Draws the directions of the packet being filled, lanes `drawn` on; moves to the next packet
@@ -181,8 +191,11 @@ static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t 
         struct ao_packet *r = &q->packets[q->full];
         double **sums = q->sum + q->full * AO_PACKET_SIZE;
         int lane = r->count, n = count - done < AO_PACKET_SIZE - lane ? count - done : AO_PACKET_SIZE - lane;
-        for (int k = 0; k < n; k++)
-            draw_pair(q->ctx, key, first_sample + (uint64_t)(done + k), &q->u1[lane + k], &q->u2[lane + k]);
+        if (q->ctx->sequence == AO_SEQUENCE_SOBOL)
+            for (int k = 0; k < n; k++)
+                ao_rng_sobol_pair(key, first_sample + (uint64_t)(done + k), &q->u1[lane + k], &q->u2[lane + k]);
+        else
+            random_pairs(key, first_sample + (uint64_t)done, n, q->u1 + lane, q->u2 + lane);
         for (int k = lane; k < lane + n; k++) {
             q->nx[k] = s->ns.x, q->ny[k] = s->ns.y, q->nz[k] = s->ns.z;
             q->gx[k] = s->ng.x, q->gy[k] = s->ng.y, q->gz[k] = s->ng.z;
