@@ -79,7 +79,7 @@ static struct ao_frame_info run(const struct ao_scene *scene, const struct ao_tr
 
 struct bare_job {
     const struct ao_tracer *tracer;
-    const struct ao_packet *packets;
+    struct ao_packet *packets;
     size_t count;
     bool stream;
     double seconds;
@@ -93,23 +93,34 @@ static void *bare_main(void *arg)
     return NULL;
 }
 
-/* Rays per second of bare Embree on the recorded packets split over `threads` threads. */
+/* Rays per second of bare Embree on the recorded packets dealt out to `threads` threads in turn,
+ * so that each gets the same mix of cheap (soon blocked) and dear (open) rays from all over the
+ * image: all rays over the slower thread's time, as a pass waits for its last tile. (Contiguous
+ * halves differ in cost, and the slower thread's time then understates the ceiling by up to a
+ * third; the sum of the threads' own rates overstates it when one runs partly alone.) */
 static double bare_rate(const struct ao_tracer *tracer, const struct ao_ray_recorder *rec, int threads, bool stream)
 {
     struct bare_job jobs[2];
     pthread_t ids[2];
-    size_t rays = 0, half = rec->count / (size_t)threads;
-    for (size_t p = 0; p < rec->count; p++)
-        rays += (size_t)rec->packets[p].count;
+    size_t rays = 0;
     for (int k = 0; k < threads; k++) {
-        jobs[k] = (struct bare_job){tracer, rec->packets + (size_t)k * half,
-                                    k == threads - 1 ? rec->count - (size_t)k * half : half, stream, 0};
-        pthread_create(&ids[k], NULL, bare_main, &jobs[k]);
+        struct ao_packet *dealt = malloc((rec->count / (size_t)threads + 1) * sizeof *dealt);
+        if (!dealt)
+            exit(1);
+        size_t count = 0;
+        for (size_t p = (size_t)k; p < rec->count; p += (size_t)threads) {
+            dealt[count++] = rec->packets[p];
+            rays += (size_t)rec->packets[p].count;
+        }
+        jobs[k] = (struct bare_job){tracer, dealt, count, stream, 0};
     }
+    for (int k = 0; k < threads; k++)
+        pthread_create(&ids[k], NULL, bare_main, &jobs[k]);
     double slowest = 0;
     for (int k = 0; k < threads; k++) {
         pthread_join(ids[k], NULL);
         slowest = jobs[k].seconds > slowest ? jobs[k].seconds : slowest;
+        free(jobs[k].packets);
     }
     return (double)rays / slowest;
 }
