@@ -5,9 +5,10 @@
 
 /* Put before a function whose loops vectorize: clones for x86-64-v4 (AVX-512 with its 64-bit
  * multiplies, which the random-number hash needs), AVX2 and the baseline (GCC on x86-64; elsewhere
- * nothing). The build turns off FMA contraction (meson.build), so every clone rounds alike and
- * images do not depend on the CPU. */
-#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__)
+ * nothing; nor under TSan, whose runtime is not up yet when the loader runs the clones' resolvers,
+ * so that the program crashes on start). The build turns off FMA contraction (meson.build), so
+ * every clone rounds alike and images do not depend on the CPU. */
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && !defined(__SANITIZE_THREAD__)
 #define AO_VECTOR_CLONES __attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
 #else
 #define AO_VECTOR_CLONES
