@@ -18,6 +18,14 @@
  * pass slot of the key, where no real pass number reaches. */
 static const uint64_t EYE_STREAM = UINT64_MAX - 1, AO_STREAM = UINT64_MAX;
 
+/* Pairs first .. first + n - 1 of the random stream `key` into u1/u2; one loop that vectorizes. */
+AO_VECTOR_CLONES
+static void random_pairs(uint64_t key, uint64_t first, int n, float *restrict u1, float *restrict u2)
+{
+    for (int k = 0; k < n; k++)
+        ao_rng_pair(key, first + (uint64_t)k, &u1[k], &u2[k]);
+}
+
 /* The index-th pair of uniform numbers of the stream `key`, from the context's sequence. */
 static inline void draw_pair(const struct ao_context *ctx, uint64_t key, uint64_t index, float *u1, float *u2)
 {
@@ -25,6 +33,17 @@ static inline void draw_pair(const struct ao_context *ctx, uint64_t key, uint64_
         ao_rng_sobol_pair(key, index, u1, u2);
     else
         ao_rng_pair(key, index, u1, u2);
+}
+
+/* Pairs first .. first + n - 1 of the stream `key` into u1/u2, from the context's sequence: the
+ * random sequence's in one vectorized loop, others one by one. */
+static void draw_pairs(const struct ao_context *ctx, uint64_t key, uint64_t first, int n, float *u1, float *u2)
+{
+    if (ctx->sequence == AO_SEQUENCE_RANDOM)
+        random_pairs(key, first, n, u1, u2);
+    else
+        for (int k = 0; k < n; k++)
+            draw_pair(ctx, key, first + (uint64_t)k, &u1[k], &u2[k]);
 }
 
 float ao_surface_offset(struct ao_vec3 origin, float t, struct ao_vec3 position)
@@ -121,14 +140,6 @@ static void compact(struct ao_packet *r, float *weight, double **sum, int first)
     r->count = kept;
 }
 
-/* Pairs first .. first + n - 1 of the random stream `key` into u1/u2. */
-AO_VECTOR_CLONES
-static void random_pairs(uint64_t key, uint64_t first, int n, float *restrict u1, float *restrict u2)
-{
-    for (int k = 0; k < n; k++)
-        ao_rng_pair(key, first + (uint64_t)k, &u1[k], &u2[k]);
-}
-
 static void flush(struct queue *q);
 
 /* Draws the directions of the packet being filled, lanes `drawn` on; moves to the next packet
@@ -191,11 +202,7 @@ static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t 
         struct ao_packet *r = &q->packets[q->full];
         double **sums = q->sum + q->full * AO_PACKET_SIZE;
         int lane = r->count, n = count - done < AO_PACKET_SIZE - lane ? count - done : AO_PACKET_SIZE - lane;
-        if (q->ctx->sequence == AO_SEQUENCE_SOBOL)
-            for (int k = 0; k < n; k++)
-                ao_rng_sobol_pair(key, first_sample + (uint64_t)(done + k), &q->u1[lane + k], &q->u2[lane + k]);
-        else
-            random_pairs(key, first_sample + (uint64_t)done, n, q->u1 + lane, q->u2 + lane);
+        draw_pairs(q->ctx, key, first_sample + (uint64_t)done, n, q->u1 + lane, q->u2 + lane);
         for (int k = lane; k < lane + n; k++) {
             q->nx[k] = s->ns.x, q->ny[k] = s->ns.y, q->nz[k] = s->ns.z;
             q->gx[k] = s->ng.x, q->gy[k] = s->ng.y, q->gz[k] = s->ng.z;
