@@ -13,7 +13,6 @@
 
 #include "simd.h"
 
-
 /* Keys of a pixel's eye-ray stream (indexed by pass) and AO stream (indexed by sample), in the
  * pass slot of the key, where no real pass number reaches. */
 static const uint64_t EYE_STREAM = UINT64_MAX - 1, AO_STREAM = UINT64_MAX;
