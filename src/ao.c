@@ -86,23 +86,29 @@ void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struc
     s->offset = ao_surface_offset(org, hit->t, s->position);
 }
 
-/* Occlusion rays waiting for a full batch, in packets filled in order, each ray remembering its
- * weight and whose sum the weight joins when the ray is open. The lanes of the packet being
- * filled from `drawn` on hold their numbers and normals only: their directions are drawn together
- * when the packet is full, so that the sampler runs across lanes even at one sample a pixel. */
-enum { QUEUE_RAYS = AO_BATCH_PACKETS * AO_PACKET_SIZE };
+/* Occlusion rays waiting for a full batch, each remembering its weight and whose sum the weight
+ * joins when the ray is open. Rays from `drawn` on hold their origins only, with their numbers and
+ * normals in the pending arrays: their directions are drawn 16 at a time, so that the sampler runs
+ * across lanes even at one sample a pixel. */
 struct queue {
     const struct ao_context *ctx;
-    struct ao_packet packets[AO_BATCH_PACKETS];
-    int full;                      /* packets filled; packets[full] takes the next rays */
-    int drawn;                     /* lanes of packets[full] whose directions are drawn */
+    struct ao_batch rays;
+    int drawn;                     /* rays whose directions are drawn; fewer than 16 pending */
     float u1[AO_PACKET_SIZE], u2[AO_PACKET_SIZE];
     float nx[AO_PACKET_SIZE], ny[AO_PACKET_SIZE], nz[AO_PACKET_SIZE];  /* shading normals */
     float gx[AO_PACKET_SIZE], gy[AO_PACKET_SIZE], gz[AO_PACKET_SIZE];  /* geometric normals */
-    float weight[QUEUE_RAYS];
-    double *sum[QUEUE_RAYS];
+    float weight[AO_BATCH_RAYS];
+    double *sum[AO_BATCH_RAYS];
     uint64_t traced;
 };
+
+/* An empty queue for ctx's rays; only the counters are set (the arrays are large). */
+static void queue_start(struct queue *q, const struct ao_context *ctx)
+{
+    q->ctx = ctx;
+    q->rays.count = q->drawn = 0;
+    q->traced = 0;
+}
 
 /* Mirrors the directions that point below the surface with geometric normal g across it, keeping
  * their weights (taken about the shading normal); branch-free so that it vectorizes. */
@@ -118,9 +124,9 @@ static void reflect_below(int n, const float *restrict gx, const float *restrict
     }
 }
 
-/* Drops the lanes from `first` of packet r whose weight is zero (directions that cannot
- * contribute, such as the lower half of the uniform sphere), keeping the others in order. */
-static void compact(struct ao_packet *r, float *weight, double **sum, int first)
+/* Drops the rays from `first` whose weight is zero (directions that cannot contribute, such as
+ * the lower half of the uniform sphere), keeping the others in order. */
+static void compact(struct ao_batch *r, float *weight, double **sum, int first)
 {
     int kept = first;
     for (int k = first; k < r->count; k++) {
@@ -141,55 +147,51 @@ static void compact(struct ao_packet *r, float *weight, double **sum, int first)
 
 static void flush(struct queue *q);
 
-/* Draws the directions of the packet being filled, lanes `drawn` on; moves to the next packet
- * when it is full, and traces the batch when that was the last. */
+/* Draws the directions of the pending rays; traces the batch when it is full. */
 static void draw_directions(struct queue *q)
 {
-    struct ao_packet *r = &q->packets[q->full];
-    float *weight = q->weight + q->full * AO_PACKET_SIZE;
-    int lane = q->drawn, n = r->count - lane;
-    ao_sample_directions(q->ctx->sampling, n, q->nx + lane, q->ny + lane, q->nz + lane, q->u1 + lane,
-                         q->u2 + lane, r->dir_x + lane, r->dir_y + lane, r->dir_z + lane, weight + lane);
+    struct ao_batch *r = &q->rays;
+    int first = q->drawn, n = r->count - first;
+    ao_sample_directions(q->ctx->sampling, n, q->nx, q->ny, q->nz, q->u1, q->u2, r->dir_x + first,
+                         r->dir_y + first, r->dir_z + first, q->weight + first);
     if (q->ctx->below == AO_BELOW_REFLECT)
-        reflect_below(n, q->gx + lane, q->gy + lane, q->gz + lane, r->dir_x + lane, r->dir_y + lane,
-                      r->dir_z + lane);
+        reflect_below(n, q->gx, q->gy, q->gz, r->dir_x + first, r->dir_y + first, r->dir_z + first);
     if (q->ctx->sampling == AO_SAMPLING_UNIFORM)
-        compact(r, weight, q->sum + q->full * AO_PACKET_SIZE, lane);
+        compact(r, q->weight, q->sum, first);
     q->drawn = r->count;
-    if (r->count == AO_PACKET_SIZE) {
-        q->drawn = 0;
-        if (++q->full == AO_BATCH_PACKETS)
-            flush(q);
-    }
+    if (r->count == AO_BATCH_RAYS)
+        flush(q);
 }
 
 /* Traces the queued rays and adds the weights of the open ones to their sums. */
 static void flush(struct queue *q)
 {
-    uint8_t open[QUEUE_RAYS];
-    if (q->full < AO_BATCH_PACKETS && q->drawn < q->packets[q->full].count)
+    struct ao_batch *r = &q->rays;
+    if (q->drawn < r->count)
         draw_directions(q);
-    int count = q->full + (q->full < AO_BATCH_PACKETS && q->packets[q->full].count > 0);
-    if (count == 0)
+    if (r->count == 0)
         return;
-    ao_tracer_occluded(q->ctx->tracer, q->packets, count, open);
-    /* Consecutive rays mostly share a sum: add their weights in a register, store once. */
-    double *target = q->sum[0], open_weight = 0.0;
-    for (int p = 0; p < count; p++) {
-        for (int k = 0; k < q->packets[p].count; k++) {
-            int ray = p * AO_PACKET_SIZE + k;
-            if (q->sum[ray] != target) {
-                *target += open_weight;
-                target = q->sum[ray];
-                open_weight = 0.0;
-            }
-            open_weight += open[ray] ? q->weight[ray] : 0.0f;
-        }
-        q->traced += (uint64_t)q->packets[p].count;
-        q->packets[p].count = 0;
+    ao_tracer_occluded(q->ctx->tracer, r);
+    /* Blocked rays came back with tfar = -inf and count 0. */
+    float *weight = q->weight;
+    for (int k = 0; k < r->count; k++)
+        weight[k] = r->tfar[k] >= 0.0f ? weight[k] : 0.0f;
+    /* Consecutive rays mostly share a sum: add each run's weights in four independent chains,
+     * store once. */
+    for (int k = 0, end; k < r->count; k = end) {
+        double *target = q->sum[k], chain[4] = {0.0, 0.0, 0.0, 0.0};
+        for (end = k + 1; end < r->count && q->sum[end] == target;)
+            end++;
+        int j = k;
+        for (; j + 4 <= end; j += 4)
+            for (int c = 0; c < 4; c++)
+                chain[c] += weight[j + c];
+        for (; j < end; j++)
+            chain[0] += weight[j];
+        *target += (chain[0] + chain[1]) + (chain[2] + chain[3]);
     }
-    *target += open_weight;
-    q->full = q->drawn = 0;
+    q->traced += (uint64_t)r->count;
+    r->count = q->drawn = 0;
 }
 
 /* Queues the `count` AO samples of surface s (stream `key`, from first_sample) into *sum. */
@@ -197,21 +199,25 @@ static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t 
                           int count, double *sum)
 {
     struct ao_vec3 origin = ao_vec3_add(s->position, ao_vec3_scale(s->ng, s->offset));
+    struct ao_batch *r = &q->rays;
     for (int done = 0; done < count;) {
-        struct ao_packet *r = &q->packets[q->full];
-        double **sums = q->sum + q->full * AO_PACKET_SIZE;
-        int lane = r->count, n = count - done < AO_PACKET_SIZE - lane ? count - done : AO_PACKET_SIZE - lane;
+        /* As many as fit among the pending rays and in the batch. */
+        int lane = r->count - q->drawn, n = count - done;
+        n = n < AO_PACKET_SIZE - lane ? n : AO_PACKET_SIZE - lane;
+        n = n < AO_BATCH_RAYS - r->count ? n : AO_BATCH_RAYS - r->count;
         draw_pairs(q->ctx, key, first_sample + (uint64_t)done, n, q->u1 + lane, q->u2 + lane);
         for (int k = lane; k < lane + n; k++) {
             q->nx[k] = s->ns.x, q->ny[k] = s->ns.y, q->nz[k] = s->ns.z;
             q->gx[k] = s->ng.x, q->gy[k] = s->ng.y, q->gz[k] = s->ng.z;
+        }
+        for (int k = r->count; k < r->count + n; k++) {
             r->org_x[k] = origin.x, r->org_y[k] = origin.y, r->org_z[k] = origin.z;
             r->tfar[k] = q->ctx->ao_distance;
-            sums[k] = sum;
+            q->sum[k] = sum;
         }
         r->count += n;
         done += n;
-        if (r->count == AO_PACKET_SIZE)
+        if (lane + n == AO_PACKET_SIZE || r->count == AO_BATCH_RAYS)
             draw_directions(q);
     }
 }
@@ -220,7 +226,8 @@ struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao
                                    uint64_t pixel, uint64_t first_sample, int count,
                                    uint64_t *shadow_rays)
 {
-    struct queue q = {.ctx = ctx};
+    struct queue q;
+    queue_start(&q, ctx);
     double sum = 0.0;
     queue_samples(&q, s, ao_rng_key(ctx->seed, pixel, AO_STREAM), first_sample, count, &sum);
     flush(&q);
@@ -233,7 +240,8 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
                       uint64_t *shadow_rays)
 {
     int width = tile->x1 - tile->x0, pixels = width * (tile->y1 - tile->y0);
-    struct queue q = {.ctx = ctx};
+    struct queue q;
+    queue_start(&q, ctx);
     double sum[AO_TILE_PIXELS] = {0};
     struct ao_vec3 albedo[AO_TILE_PIXELS];
     bool miss[AO_TILE_PIXELS];

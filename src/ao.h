@@ -62,7 +62,7 @@ struct ao_tile {
 /* One pass over a tile: per pixel one eye ray (jittered with AA) and `count` AO samples; writes
  * each pixel's sum of sample values (background on a miss) to sums, row by row, and adds the rays
  * traced to *eye_rays / *shadow_rays. Eye rays go to the tracer in packets of 16, AO rays in
- * batches of up to 256 gathered across the tile. Any thread. */
+ * batches of up to AO_BATCH_RAYS gathered across the tile. Any thread. */
 void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, uint64_t pass,
                       uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
                       uint64_t *shadow_rays);

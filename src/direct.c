@@ -73,11 +73,12 @@ void ao_direct_destroy(struct ao_direct *direct)
     free(direct);
 }
 
-/* a = d.d and its inverse for each ray of a packet, shared by every sphere. */
-static void squared_lengths(const struct ao_packet *rays, float *restrict a, float *restrict inv_a)
+/* a = d.d and its inverse for each of n rays of directions d, shared by every sphere. */
+static inline void squared_lengths(int n, const float *restrict dx, const float *restrict dy,
+                                   const float *restrict dz, float *restrict a, float *restrict inv_a)
 {
-    for (int k = 0; k < rays->count; k++) {
-        a[k] = rays->dir_x[k] * rays->dir_x[k] + rays->dir_y[k] * rays->dir_y[k] + rays->dir_z[k] * rays->dir_z[k];
+    for (int k = 0; k < n; k++) {
+        a[k] = dx[k] * dx[k] + dy[k] * dy[k] + dz[k] * dz[k];
         inv_a[k] = 1.0f / a[k];
     }
 }
@@ -135,7 +136,7 @@ void ao_direct_intersect(const struct ao_direct *direct, const struct ao_packet 
     uint32_t prim[AO_PACKET_SIZE];
     int32_t found[AO_PACKET_SIZE], sphere[AO_PACKET_SIZE];
     float a[AO_PACKET_SIZE], inv_a[AO_PACKET_SIZE];
-    squared_lengths(rays, a, inv_a);
+    squared_lengths(n, dx, dy, dz, a, inv_a);
     for (int k = 0; k < n; k++) {
         best[k] = rays->tfar[k];
         prim[k] = 0;
@@ -176,16 +177,17 @@ void ao_direct_intersect(const struct ao_direct *direct, const struct ao_packet 
     }
 }
 
-AO_VECTOR_CLONES
-void ao_direct_occluded(const struct ao_direct *direct, const struct ao_packet *rays, uint8_t *open)
+/* Marks the blocked rays among rays first .. first + n - 1 (n at most AO_PACKET_SIZE) of the batch,
+ * as ao_direct_occluded: each primitive broadcast against the rays in registers. */
+static inline void occluded_packet(const struct ao_direct *direct, struct ao_batch *rays, int first, int n)
 {
-    const float *restrict ox = rays->org_x, *restrict oy = rays->org_y, *restrict oz = rays->org_z;
-    const float *restrict dx = rays->dir_x, *restrict dy = rays->dir_y, *restrict dz = rays->dir_z;
-    const float *restrict tfar = rays->tfar;
-    int n = rays->count;
+    const float *restrict ox = rays->org_x + first, *restrict oy = rays->org_y + first;
+    const float *restrict oz = rays->org_z + first, *restrict dx = rays->dir_x + first;
+    const float *restrict dy = rays->dir_y + first, *restrict dz = rays->dir_z + first;
+    float *restrict tfar = rays->tfar + first;
     int32_t blocked[AO_PACKET_SIZE] = {0};
     float a[AO_PACKET_SIZE], inv_a[AO_PACKET_SIZE];
-    squared_lengths(rays, a, inv_a);
+    squared_lengths(n, dx, dy, dz, a, inv_a);
     for (size_t i = 0; i < direct->sphere_count; i++) {
         const struct sphere s = direct->spheres[i];
         for (int k = 0; k < n; k++) {
@@ -201,5 +203,12 @@ void ao_direct_occluded(const struct ao_direct *direct, const struct ao_packet *
         }
     }
     for (int k = 0; k < n; k++)
-        open[k] = !blocked[k];
+        tfar[k] = blocked[k] ? -INFINITY : tfar[k];
+}
+
+AO_VECTOR_CLONES
+void ao_direct_occluded(const struct ao_direct *direct, struct ao_batch *rays)
+{
+    for (int first = 0; first < rays->count; first += AO_PACKET_SIZE)
+        occluded_packet(direct, rays, first, rays->count - first < AO_PACKET_SIZE ? rays->count - first : AO_PACKET_SIZE);
 }

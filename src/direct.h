@@ -28,8 +28,8 @@ void ao_direct_destroy(struct ao_direct *direct);
  * triangles, 0 on spheres. Any thread. */
 void ao_direct_intersect(const struct ao_direct *direct, const struct ao_packet *rays, struct ao_hit *hits);
 
-/* Open rays as ao_tracer_occluded: open[k] = 1 when nothing lies on ray k within [0, tfar]. Any
- * thread. */
-void ao_direct_occluded(const struct ao_direct *direct, const struct ao_packet *rays, uint8_t *open);
+/* Blocked rays as ao_tracer_occluded: tfar set to -INFINITY on each ray that something blocks
+ * within [0, tfar]. Any thread. */
+void ao_direct_occluded(const struct ao_direct *direct, struct ao_batch *rays);
 
 #endif

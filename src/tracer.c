@@ -193,55 +193,65 @@ void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet 
     }
 }
 
-/* Appends the packet to the recorder when it is every stride-th seen. */
-static void record(struct ao_ray_recorder *rec, const struct ao_packet *rays)
+/* Writes one ray into out in Embree's single-ray layout, field by field (a whole struct assigned
+ * from a temporary stalls on store forwarding: measured 30% of the time). */
+static inline void to_single(float ox, float oy, float oz, float dx, float dy, float dz, float tfar,
+                             struct RTCRay *out)
 {
-    if (rec && rec->seen++ % rec->stride == 0 && rec->count < rec->capacity)
-        rec->packets[rec->count++] = *rays;
-}
-
-/* Writes ray k of the packet into out in Embree's single-ray layout, field by field (a whole
- * struct assigned from a temporary stalls on store forwarding: measured 30% of the time). */
-static void to_single(const struct ao_packet *rays, int k, struct RTCRay *out)
-{
-    out->org_x = rays->org_x[k];
-    out->org_y = rays->org_y[k];
-    out->org_z = rays->org_z[k];
+    out->org_x = ox;
+    out->org_y = oy;
+    out->org_z = oz;
     out->tnear = 0.0f;
-    out->dir_x = rays->dir_x[k];
-    out->dir_y = rays->dir_y[k];
-    out->dir_z = rays->dir_z[k];
+    out->dir_x = dx;
+    out->dir_y = dy;
+    out->dir_z = dz;
     out->time = 0.0f;
-    out->tfar = rays->tfar[k];
+    out->tfar = tfar;
     out->mask = ~0u;
-    out->id = (unsigned)k;
+    out->id = 0;
     out->flags = 0;
 }
 
-void ao_tracer_occluded(const struct ao_tracer *tracer, const struct ao_packet *packets, int count,
-                        uint8_t *open)
+/* Offers the recorder the batch's rays 16 at a time; it keeps every stride-th as a packet. */
+static void record(struct ao_ray_recorder *rec, const struct ao_batch *rays)
+{
+    for (int first = 0; first < rays->count; first += AO_PACKET_SIZE) {
+        if (rec->seen++ % rec->stride != 0 || rec->count == rec->capacity)
+            continue;
+        struct ao_packet *p = &rec->packets[rec->count++];
+        p->count = rays->count - first < AO_PACKET_SIZE ? rays->count - first : AO_PACKET_SIZE;
+        for (int k = 0; k < p->count; k++) {
+            p->org_x[k] = rays->org_x[first + k];
+            p->org_y[k] = rays->org_y[first + k];
+            p->org_z[k] = rays->org_z[first + k];
+            p->dir_x[k] = rays->dir_x[first + k];
+            p->dir_y[k] = rays->dir_y[first + k];
+            p->dir_z[k] = rays->dir_z[first + k];
+            p->tfar[k] = rays->tfar[first + k];
+        }
+    }
+}
+
+void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_batch *rays)
 {
     if (tracer->direct) {
-        for (int p = 0; p < count; p++)
-            ao_direct_occluded(tracer->direct, &packets[p], open + p * AO_PACKET_SIZE);
+        ao_direct_occluded(tracer->direct, rays);
         return;
     }
-    /* One incoherent stream: Embree sorts it into packets by direction octant. */
-    _Alignas(64) struct RTCRay rays[AO_BATCH_PACKETS * AO_PACKET_SIZE];
-    int n = 0;
-    for (int p = 0; p < count; p++) {
-        record(tracer->recorder, &packets[p]);
-        for (int k = 0; k < packets[p].count; k++)
-            to_single(&packets[p], k, &rays[n++]);
-    }
+    if (tracer->recorder)
+        record(tracer->recorder, rays);
+    /* One incoherent stream: Embree sorts it into packets by direction octant, and marks each
+     * blocked ray by setting its tfar to -inf. */
+    _Alignas(64) struct RTCRay stream[AO_BATCH_RAYS];
+    int n = rays->count;
+    for (int k = 0; k < n; k++)
+        to_single(rays->org_x[k], rays->org_y[k], rays->org_z[k], rays->dir_x[k], rays->dir_y[k], rays->dir_z[k],
+                  rays->tfar[k], &stream[k]);
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    rtcOccluded1M(tracer->scene, &context, rays, (unsigned)n, sizeof *rays);
-    /* Embree marks an occluded ray by setting its tfar to -inf. */
-    n = 0;
-    for (int p = 0; p < count; p++)
-        for (int k = 0; k < packets[p].count; k++)
-            open[p * AO_PACKET_SIZE + k] = rays[n++].tfar >= 0.0f;
+    rtcOccluded1M(tracer->scene, &context, stream, (unsigned)n, sizeof *stream);
+    for (int k = 0; k < n; k++)
+        rays->tfar[k] = stream[k].tfar;
 }
 
 void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *recorder)
@@ -266,7 +276,8 @@ static struct RTCRay *to_stream(const struct ao_packet *packets, size_t count, s
     size_t n = 0;
     for (size_t p = 0; out && p < count; p++)
         for (int k = 0; k < packets[p].count; k++)
-            to_single(&packets[p], k, &out[n++]);
+            to_single(packets[p].org_x[k], packets[p].org_y[k], packets[p].org_z[k], packets[p].dir_x[k],
+                      packets[p].dir_y[k], packets[p].dir_z[k], packets[p].tfar[k], &out[n++]);
     return out;
 }
 

@@ -54,24 +54,31 @@ void ao_tracer_thread_init(void);
 /* Closest hits of the packet's rays (coherent eye rays), t in (0, tfar]. Any thread. */
 void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet *rays, struct ao_hit *hits);
 
-/* The most packets ao_tracer_occluded takes at once: Embree's stream sorts a batch this large into
- * packets of one direction octant, which trace 1.45x faster than 16 incoherent rays (README). */
-enum { AO_BATCH_PACKETS = 16 };
+/* Occlusion rays traced together, in structure-of-arrays layout, rays 0..count-1: Embree's stream
+ * sorts a batch into packets of one direction octant, faster the longer the batch (README). */
+enum { AO_BATCH_RAYS = 1024 };
+struct ao_batch {
+    _Alignas(64) float org_x[AO_BATCH_RAYS];
+    float org_y[AO_BATCH_RAYS], org_z[AO_BATCH_RAYS];
+    float dir_x[AO_BATCH_RAYS], dir_y[AO_BATCH_RAYS], dir_z[AO_BATCH_RAYS];
+    float tfar[AO_BATCH_RAYS];
+    int count;
+};
 
-/* Sets open[AO_PACKET_SIZE p + k] to 1 when nothing lies on ray k of packet p (of count, at most
- * AO_BATCH_PACKETS) within t in [0, tfar], else 0 (incoherent occlusion rays). Any thread. */
-void ao_tracer_occluded(const struct ao_tracer *tracer, const struct ao_packet *packets, int count,
-                        uint8_t *open);
+/* Traces the batch's rays as incoherent occlusion rays and sets tfar to -INFINITY on each one that
+ * something blocks within t in [0, tfar] (Embree's convention); open rays keep theirs. Any thread. */
+void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_batch *rays);
 
-/* Benchmark instrument: every stride-th occlusion packet traced is copied, up to capacity. */
+/* Benchmark instrument: every stride-th 16 occlusion rays traced are copied as a packet, up to
+ * capacity. */
 struct ao_ray_recorder {
     struct ao_packet *packets;
     size_t count, capacity;
     size_t stride, seen;
 };
 
-/* While recorder is set, every packet ao_tracer_occluded traces is also appended to it; NULL
- * stops. For a renderer with one thread only (the recorder takes no lock). */
+/* While recorder is set, ao_tracer_occluded offers it every 16 rays it traces; NULL stops. For a
+ * renderer with one thread only (the recorder takes no lock). */
 void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *recorder);
 
 /* Benchmark instrument: the bare-Embree ceiling on given rays. Traces count packets with plain
