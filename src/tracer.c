@@ -19,7 +19,7 @@ struct ao_tracer {
     RTCDevice device;
     RTCScene scene;
     unsigned triangles_id, spheres_id;   /* RTC_INVALID_GEOMETRY_ID when absent */
-    struct ao_ray_recorder *recorder;    /* benchmarks only */
+    struct ao_ray_recorder *occlusion_recorder, *eye_recorder;  /* benchmarks only */
 };
 
 static void report(void *user, enum RTCError code, const char *message)
@@ -166,22 +166,39 @@ static void to_embree(const struct ao_packet *rays, struct RTCRay16 *out, int *v
     }
 }
 
+/* The packet in Embree's layout for rtcIntersect16, with no hit yet. */
+static void to_embree_hit(const struct ao_packet *rays, struct RTCRayHit16 *out, int *valid)
+{
+    to_embree(rays, &out->ray, valid);
+    for (int k = 0; k < AO_PACKET_SIZE; k++) {
+        out->hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        out->hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+}
+
+/* The recorder's next slot when this is the stride-th packet offered and there is room, else NULL. */
+static struct ao_packet *recorder_slot(struct ao_ray_recorder *rec)
+{
+    if (rec->seen++ % rec->stride != 0 || rec->count == rec->capacity)
+        return NULL;
+    return &rec->packets[rec->count++];
+}
+
 void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet *rays, struct ao_hit *hits)
 {
     if (tracer->direct) {
         ao_direct_intersect(tracer->direct, rays, hits);
         return;
     }
+    struct ao_packet *copy = tracer->eye_recorder ? recorder_slot(tracer->eye_recorder) : NULL;
+    if (copy)
+        *copy = *rays;
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     _Alignas(64) struct RTCRayHit16 rh;
     _Alignas(64) int valid[AO_PACKET_SIZE];
-    to_embree(rays, &rh.ray, valid);
-    for (int k = 0; k < AO_PACKET_SIZE; k++) {
-        rh.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-        rh.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-    }
+    to_embree_hit(rays, &rh, valid);
     rtcIntersect16(valid, tracer->scene, &context, &rh);
     for (int k = 0; k < rays->count; k++) {
         bool found = rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID;
@@ -216,9 +233,9 @@ static inline void to_single(float ox, float oy, float oz, float dx, float dy, f
 static void record(struct ao_ray_recorder *rec, const struct ao_batch *rays)
 {
     for (int first = 0; first < rays->count; first += AO_PACKET_SIZE) {
-        if (rec->seen++ % rec->stride != 0 || rec->count == rec->capacity)
+        struct ao_packet *p = recorder_slot(rec);
+        if (!p)
             continue;
-        struct ao_packet *p = &rec->packets[rec->count++];
         p->count = rays->count - first < AO_PACKET_SIZE ? rays->count - first : AO_PACKET_SIZE;
         for (int k = 0; k < p->count; k++) {
             p->org_x[k] = rays->org_x[first + k];
@@ -238,8 +255,8 @@ void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_batch *rays)
         ao_direct_occluded(tracer->direct, rays);
         return;
     }
-    if (tracer->recorder)
-        record(tracer->recorder, rays);
+    if (tracer->occlusion_recorder)
+        record(tracer->occlusion_recorder, rays);
     /* One incoherent stream: Embree sorts it into packets by direction octant, and marks each
      * blocked ray by setting its tfar to -inf. */
     _Alignas(64) struct RTCRay stream[AO_BATCH_RAYS];
@@ -254,9 +271,10 @@ void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_batch *rays)
         rays->tfar[k] = stream[k].tfar;
 }
 
-void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *recorder)
+void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *occlusion, struct ao_ray_recorder *eye)
 {
-    tracer->recorder = recorder;
+    tracer->occlusion_recorder = occlusion;
+    tracer->eye_recorder = eye;
 }
 
 static double seconds_now(void)
@@ -282,11 +300,11 @@ static struct RTCRay *to_stream(const struct ao_packet *packets, size_t count, s
 }
 
 double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packet *packets, size_t count,
-                           bool stream)
+                           enum ao_bare how)
 {
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    if (stream) {
+    if (how == AO_BARE_OCCLUDED1M) {
         size_t rays;
         struct RTCRay *all = to_stream(packets, count, &rays);
         if (!all)
@@ -297,15 +315,21 @@ double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packe
         free(all);
         return seconds;
     }
-    struct RTCRay16 *converted = aligned_alloc(64, count * sizeof *converted + 64);
+    struct RTCRayHit16 *converted = aligned_alloc(64, count * sizeof *converted + 64);
     int (*valid)[AO_PACKET_SIZE] = aligned_alloc(64, count * sizeof *valid + 64);
     double seconds = NAN;
     if (converted && valid) {
         for (size_t p = 0; p < count; p++)
-            to_embree(&packets[p], &converted[p], valid[p]);
+            to_embree_hit(&packets[p], &converted[p], valid[p]);
         double start = seconds_now();
-        for (size_t p = 0; p < count; p++)
-            rtcOccluded16(valid[p], tracer->scene, &context, &converted[p]);
+        if (how == AO_BARE_INTERSECT16) {
+            context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+            for (size_t p = 0; p < count; p++)
+                rtcIntersect16(valid[p], tracer->scene, &context, &converted[p]);
+        } else {
+            for (size_t p = 0; p < count; p++)
+                rtcOccluded16(valid[p], tracer->scene, &context, &converted[p].ray);
+        }
         seconds = seconds_now() - start;
     }
     free(converted);

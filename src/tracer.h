@@ -69,22 +69,24 @@ struct ao_batch {
  * something blocks within t in [0, tfar] (Embree's convention); open rays keep theirs. Any thread. */
 void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_batch *rays);
 
-/* Benchmark instrument: every stride-th 16 occlusion rays traced are copied as a packet, up to
- * capacity. */
+/* Benchmark instrument: every stride-th packet of rays offered is copied, up to capacity. */
 struct ao_ray_recorder {
     struct ao_packet *packets;
     size_t count, capacity;
     size_t stride, seen;
 };
 
-/* While recorder is set, ao_tracer_occluded offers it every 16 rays it traces; NULL stops. For a
- * renderer with one thread only (the recorder takes no lock). */
-void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *recorder);
+/* While set, ao_tracer_occluded offers `occlusion` its rays 16 at a time and ao_tracer_intersect
+ * offers `eye` its packets; NULL stops. For a renderer with one thread only (no lock is taken). */
+void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *occlusion, struct ao_ray_recorder *eye);
 
-/* Benchmark instrument: the bare-Embree ceiling on given rays. Traces count packets with plain
- * rtcOccluded16 calls (stream false) or as one incoherent rtcOccluded1M stream (stream true),
+/* How ao_tracer_time_bare traces: occlusion rays with plain rtcOccluded16 calls, or as one
+ * incoherent rtcOccluded1M stream; eye rays with coherent rtcIntersect16 calls, as aoview does. */
+enum ao_bare { AO_BARE_OCCLUDED16, AO_BARE_OCCLUDED1M, AO_BARE_INTERSECT16 };
+
+/* Benchmark instrument: the bare-Embree ceiling on given rays. Traces count packets as `how` says,
  * converted to Embree's layout beforehand, and returns the seconds the tracing alone took. */
 double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packet *packets, size_t count,
-                           bool stream);
+                           enum ao_bare how);
 
 #endif

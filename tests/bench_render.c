@@ -81,7 +81,7 @@ struct bare_job {
     const struct ao_tracer *tracer;
     struct ao_packet *packets;
     size_t count;
-    bool stream;
+    enum ao_bare how;
     double seconds;
 };
 
@@ -89,7 +89,7 @@ static void *bare_main(void *arg)
 {
     struct bare_job *job = arg;
     ao_tracer_thread_init();
-    job->seconds = ao_tracer_time_bare(job->tracer, job->packets, job->count, job->stream);
+    job->seconds = ao_tracer_time_bare(job->tracer, job->packets, job->count, job->how);
     return NULL;
 }
 
@@ -98,7 +98,8 @@ static void *bare_main(void *arg)
  * image: all rays over the slower thread's time, as a pass waits for its last tile. (Contiguous
  * halves differ in cost, and the slower thread's time then understates the ceiling by up to a
  * third; the sum of the threads' own rates overstates it when one runs partly alone.) */
-static double bare_rate(const struct ao_tracer *tracer, const struct ao_ray_recorder *rec, int threads, bool stream)
+static double bare_rate(const struct ao_tracer *tracer, const struct ao_ray_recorder *rec, int threads,
+                        enum ao_bare how)
 {
     struct bare_job jobs[2];
     pthread_t ids[2];
@@ -112,7 +113,7 @@ static double bare_rate(const struct ao_tracer *tracer, const struct ao_ray_reco
             dealt[count++] = rec->packets[p];
             rays += (size_t)rec->packets[p].count;
         }
-        jobs[k] = (struct bare_job){tracer, dealt, count, stream, 0};
+        jobs[k] = (struct bare_job){tracer, dealt, count, how, 0};
     }
     for (int k = 0; k < threads; k++)
         pthread_create(&ids[k], NULL, bare_main, &jobs[k]);
@@ -125,15 +126,22 @@ static double bare_rate(const struct ao_tracer *tracer, const struct ao_ray_reco
     return (double)rays / slowest;
 }
 
-/* Records a sample of one pass's occlusion packets (every stride-th, spread over the image). */
-static void record(struct ao_tracer *tracer, const struct ao_scene *scene, int spppp, struct ao_ray_recorder *rec)
+/* Starts a recorder that keeps at most RECORDED of `expected` packets, spread evenly. */
+static void start_recording(struct ao_ray_recorder *rec, size_t expected)
 {
-    size_t expected = (size_t)SIZE * SIZE * (size_t)spppp / 16;
     rec->count = rec->seen = 0;
     rec->stride = expected / RECORDED + 1;
-    ao_tracer_record(tracer, rec);
+}
+
+/* Records a sample of one pass's occlusion and eye packets (every stride-th, spread over the image). */
+static void record(struct ao_tracer *tracer, const struct ao_scene *scene, int spppp, struct ao_ray_recorder *occlusion,
+                   struct ao_ray_recorder *eye)
+{
+    start_recording(occlusion, (size_t)SIZE * SIZE * (size_t)spppp / 16);
+    start_recording(eye, (size_t)SIZE * SIZE / 16);
+    ao_tracer_record(tracer, occlusion, eye);
     run(scene, tracer, SIZE, SIZE, 1, spppp, (uint32_t)spppp);
-    ao_tracer_record(tracer, NULL);
+    ao_tracer_record(tracer, NULL, NULL);
 }
 
 /* ---- scenes ---- */
@@ -187,7 +195,7 @@ static void make_big_mesh(struct ao_scene *s, int n)
 
 /* One row of a scene's table, or one repeat's figures for it. */
 struct row {
-    double total, shadow, ceiling, ratio, ms, scaling;
+    double total, shadow, ceiling, ratio, all_ceiling, all_ratio, ms, scaling;
 };
 
 /* The median over n rows of the field at byte offset `field`. */
@@ -204,17 +212,24 @@ static double median_of(const struct row *rows, int n, size_t field)
  * other users of the machine, which drifts over seconds, cancels in them rather than landing on
  * one side of a quotient of medians. */
 static void measure(struct ao_scene *scene, const struct ao_tracer *tracer, const struct ao_tracer *embree,
-                    const struct ao_ray_recorder *rec, int spppp, struct row out[2])
+                    const struct ao_ray_recorder *occlusion, const struct ao_ray_recorder *eye, int spppp,
+                    struct row out[2])
 {
     int passes = 64 / spppp < 4 ? 4 : 64 / spppp;
     for (int t = 0; t < 2; t++) {
         struct ao_frame_info info = run(scene, tracer, SIZE, SIZE, t + 1, spppp, (uint32_t)(spppp * passes));
-        double packets = bare_rate(embree, rec, t + 1, false), stream = bare_rate(embree, rec, t + 1, true);
+        double packets = bare_rate(embree, occlusion, t + 1, AO_BARE_OCCLUDED16);
+        double stream = bare_rate(embree, occlusion, t + 1, AO_BARE_OCCLUDED1M);
+        double eye_rate = bare_rate(embree, eye, t + 1, AO_BARE_INTERSECT16) / 1e6;
         struct row *r = &out[t];
         r->total = (double)(info.eye_rays + info.shadow_rays) / info.seconds / 1e6;
         r->shadow = (double)info.shadow_rays / info.seconds / 1e6;
         r->ceiling = (packets > stream ? packets : stream) / 1e6;
         r->ratio = r->shadow / r->ceiling;
+        /* Bare Embree's time for this run's eye and AO rays, each at its own ceiling rate. */
+        double eye_share = (double)info.eye_rays / (double)(info.eye_rays + info.shadow_rays);
+        r->all_ceiling = 1.0 / (eye_share / eye_rate + (1.0 - eye_share) / r->ceiling);
+        r->all_ratio = r->total / r->all_ceiling;
         r->ms = 1e3 * info.seconds / info.pass;
         r->scaling = r->total / out[0].total;
     }
@@ -234,13 +249,14 @@ static void bench_scene(struct ao_scene *scene, double *rate_2x16)
            "far %.0f MiB\n", scene->name, scene->triangle_count, scene->sphere_count, build_ms,
            ao_tracer_backend(tracer), peak_rss_mib());
     static const int spppps[] = {1, 4, 16, 64};
-    struct ao_ray_recorder rec = {.packets = malloc(RECORDED * sizeof(struct ao_packet)), .capacity = RECORDED};
+    struct ao_ray_recorder occlusion = {.packets = malloc(RECORDED * sizeof(struct ao_packet)), .capacity = RECORDED};
+    struct ao_ray_recorder eye = {.packets = malloc(RECORDED * sizeof(struct ao_packet)), .capacity = RECORDED};
     struct row rows[2][4];
     for (int s = 0; s < 4; s++) {
         struct row repeats[2][REPEATS], pair[2];
-        record(embree, scene, spppps[s], &rec);
+        record(embree, scene, spppps[s], &occlusion, &eye);
         for (int k = 0; k < REPEATS; k++) {
-            measure(scene, tracer, embree, &rec, spppps[s], pair);
+            measure(scene, tracer, embree, &occlusion, &eye, spppps[s], pair);
             repeats[0][k] = pair[0], repeats[1][k] = pair[1];
         }
         for (int t = 0; t < 2; t++)
@@ -249,23 +265,26 @@ static void bench_scene(struct ao_scene *scene, double *rate_2x16)
                 median_of(repeats[t], REPEATS, offsetof(struct row, shadow)),
                 median_of(repeats[t], REPEATS, offsetof(struct row, ceiling)),
                 median_of(repeats[t], REPEATS, offsetof(struct row, ratio)),
+                median_of(repeats[t], REPEATS, offsetof(struct row, all_ceiling)),
+                median_of(repeats[t], REPEATS, offsetof(struct row, all_ratio)),
                 median_of(repeats[t], REPEATS, offsetof(struct row, ms)),
                 median_of(repeats[t], REPEATS, offsetof(struct row, scaling))};
     }
-    printf("%-7s %-5s %9s %9s %9s %7s %11s %7s %9s\n", "threads", "spppp", "Mrays/s", "shadow", "ceiling",
-           "ratio", "passes/s", "ms/pass", "scaling");
+    printf("%-7s %-5s %9s %9s %9s %7s %9s %7s %11s %7s %9s\n", "threads", "spppp", "Mrays/s", "shadow", "ceiling",
+           "ratio", "all ceil", "all", "passes/s", "ms/pass", "scaling");
     for (int t = 0; t < 2; t++)
         for (int s = 0; s < 4; s++) {
             const struct row *r = &rows[t][s];
-            printf("%-7d %-5d %9.2f %9.2f %9.2f %6.0f%% %11.1f %7.1f", t + 1, spppps[s], r->total, r->shadow,
-                   r->ceiling, 100 * r->ratio, 1e3 / r->ms, r->ms);
+            printf("%-7d %-5d %9.2f %9.2f %9.2f %6.0f%% %9.2f %6.0f%% %11.1f %7.1f", t + 1, spppps[s], r->total,
+                   r->shadow, r->ceiling, 100 * r->ratio, r->all_ceiling, 100 * r->all_ratio, 1e3 / r->ms, r->ms);
             if (t == 1)
                 printf(" %8.2fx", r->scaling);
             putchar('\n');
         }
     if (rate_2x16)
         *rate_2x16 = rows[1][2].total;
-    free(rec.packets);
+    free(occlusion.packets);
+    free(eye.packets);
     ao_tracer_destroy(tracer);
     ao_tracer_destroy(embree);
 }
@@ -364,8 +383,9 @@ int main(int argc, char **argv)
     bench_scene(&scene, &big);
     ao_scene_finish(&scene);
     printf("\n1M-triangle mesh at 2 threads, 16 spp per pass: %.0f%% of the bunny's Mrays/s\n", 100 * big / bunny);
-    printf("(medians of %d repeats, ratio and scaling of each repeat's own quotients; ceiling = best of "
-           "rtcOccluded16 packets and an rtcOccluded1M stream on a sample of the same pass's occlusion rays)\n",
-           REPEATS);
+    printf("(medians of %d repeats, ratios and scaling of each repeat's own quotients; ceiling = best of "
+           "rtcOccluded16 packets and an rtcOccluded1M stream on a sample of the same pass's occlusion rays; "
+           "all ceil = bare Embree's rate on this run's eye and AO rays, eye rays by rtcIntersect16 on the same "
+           "pass's eye packets; all = Mrays/s / all ceil)\n", REPEATS);
     return 0;
 }
