@@ -179,7 +179,8 @@ void ao_direct_intersect(const struct ao_direct *direct, const struct ao_packet 
 
 /* Marks the blocked rays among rays first .. first + n - 1 (n at most AO_PACKET_SIZE) of the batch,
  * as ao_direct_occluded: each primitive broadcast against the rays in registers. */
-static inline void occluded_packet(const struct ao_direct *direct, struct ao_batch *rays, int first, int n)
+AO_VECTOR_CLONES
+static void occluded_packet(const struct ao_direct *direct, struct ao_batch *rays, int first, int n)
 {
     const float *restrict ox = rays->org_x + first, *restrict oy = rays->org_y + first;
     const float *restrict oz = rays->org_z + first, *restrict dx = rays->dir_x + first;
@@ -206,7 +207,6 @@ static inline void occluded_packet(const struct ao_direct *direct, struct ao_bat
         tfar[k] = blocked[k] ? -INFINITY : tfar[k];
 }
 
-AO_VECTOR_CLONES
 void ao_direct_occluded(const struct ao_direct *direct, struct ao_batch *rays)
 {
     for (int first = 0; first < rays->count; first += AO_PACKET_SIZE)
