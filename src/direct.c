@@ -209,6 +209,8 @@ static void occluded_packet(const struct ao_direct *direct, struct ao_batch *ray
 
 void ao_direct_occluded(const struct ao_direct *direct, struct ao_batch *rays)
 {
-    for (int first = 0; first < rays->count; first += AO_PACKET_SIZE)
-        occluded_packet(direct, rays, first, rays->count - first < AO_PACKET_SIZE ? rays->count - first : AO_PACKET_SIZE);
+    for (int first = 0; first < rays->count; first += AO_PACKET_SIZE) {
+        int left = rays->count - first;
+        occluded_packet(direct, rays, first, left < AO_PACKET_SIZE ? left : AO_PACKET_SIZE);
+    }
 }
