@@ -235,6 +235,31 @@ struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao
     return ao_vec3_scale(s->albedo, (float)sum);
 }
 
+/* The eye rays of pixels index[k] (at column[k], row[k]) in this pass, for the packet's count:
+ * through the pixel centres, or jittered inside the pixel with AA; loops that vectorize. */
+AO_VECTOR_CLONES
+static void make_eye_rays(const struct ao_context *ctx, uint64_t pass, const uint64_t *index, const int *column,
+                          const int *row, struct ao_packet *eye)
+{
+    float du[AO_PACKET_SIZE], dv[AO_PACKET_SIZE];
+    for (int k = 0; k < eye->count; k++) {
+        du[k] = dv[k] = 0.5f;
+        if (ctx->aa)
+            draw_pair(ctx, ao_rng_key(ctx->seed, index[k], EYE_STREAM), pass, &du[k], &dv[k]);
+    }
+    const struct ao_view *view = &ctx->view;
+    for (int k = 0; k < eye->count; k++) {
+        struct ao_vec3 d = ao_camera_ray(view, (float)column[k] + du[k], (float)row[k] + dv[k]);
+        eye->org_x[k] = view->eye.x;
+        eye->org_y[k] = view->eye.y;
+        eye->org_z[k] = view->eye.z;
+        eye->dir_x[k] = d.x;
+        eye->dir_y[k] = d.y;
+        eye->dir_z[k] = d.z;
+        eye->tfar[k] = INFINITY;
+    }
+}
+
 void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, uint64_t pass,
                       uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
                       uint64_t *shadow_rays)
@@ -249,22 +274,12 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
         struct ao_packet eye = {.count = pixels - first < AO_PACKET_SIZE ? pixels - first : AO_PACKET_SIZE};
         struct ao_hit hits[AO_PACKET_SIZE];
         uint64_t index[AO_PACKET_SIZE];
-        /* Eye rays of up to 16 pixels, jittered inside the pixel with AA. */
+        int column[AO_PACKET_SIZE], row[AO_PACKET_SIZE];
         for (int k = 0; k < eye.count; k++) {
-            int i = tile->x0 + (first + k) % width, j = tile->y0 + (first + k) / width;
-            float du = 0.5f, dv = 0.5f;
-            index[k] = (uint64_t)j * (uint64_t)ctx->view.width + (uint64_t)i;
-            if (ctx->aa)
-                draw_pair(ctx, ao_rng_key(ctx->seed, index[k], EYE_STREAM), pass, &du, &dv);
-            struct ao_vec3 d = ao_camera_ray(&ctx->view, (float)i + du, (float)j + dv);
-            eye.org_x[k] = ctx->view.eye.x;
-            eye.org_y[k] = ctx->view.eye.y;
-            eye.org_z[k] = ctx->view.eye.z;
-            eye.dir_x[k] = d.x;
-            eye.dir_y[k] = d.y;
-            eye.dir_z[k] = d.z;
-            eye.tfar[k] = INFINITY;
+            column[k] = tile->x0 + (first + k) % width, row[k] = tile->y0 + (first + k) / width;
+            index[k] = (uint64_t)row[k] * (uint64_t)ctx->view.width + (uint64_t)column[k];
         }
+        make_eye_rays(ctx, pass, index, column, row, &eye);
         ao_tracer_intersect(ctx->tracer, &eye, hits);
         *eye_rays += (uint64_t)eye.count;
         /* Their AO samples, queued across the tile so that batches fill at one sample per pass. */
