@@ -76,7 +76,7 @@ void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struc
         s->ns = len > 1e-6f && isfinite(len) ? ao_vec3_scale(n, 1.0f / len) : s->ng;
         s->albedo = scene->albedos[scene->triangle_albedo[hit->prim]];
     }
-    if (!(ao_vec3_length(s->ng) > 0.5f))
+    if (!(ao_vec3_dot(s->ng, s->ng) > 0.25f)) /* not a unit normal: degenerate triangle, NaN */
         s->ng = s->ns = ao_vec3_scale(dir, -1.0f);
     /* Turn the surface to the side the eye ray came from. */
     if (ao_vec3_dot(s->ng, dir) > 0.0f) {
