@@ -180,6 +180,9 @@ static int run(struct app *app, const struct ao_options *opts)
 {
     /* Before any thread starts (Embree's included), so that they all inherit the mask. */
     block_signals(&app->interrupt);
+    /* A write to a closed socket or pipe (an X server killed under the window, a --stats FIFO
+     * whose reader left) then fails and is reported, instead of killing aoview silently. */
+    signal(SIGPIPE, SIG_IGN);
 
     /* Scene, size, tracer. */
     if (!ao_scene_load(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE))
@@ -257,10 +260,12 @@ int main(int argc, char **argv)
     struct app app = {0};
     int status = run(&app, &opts);
     ao_render_destroy(app.render);
-    if (app.reporter.stats && fclose(app.reporter.stats) != 0 && status == 0) {
+    if (app.reporter.stats && fclose(app.reporter.stats) != 0 && !app.reporter.stats_failed) {
         fprintf(stderr, "%s: write failed\n", opts.stats_path);
-        status = EXIT_RUNTIME;
+        app.reporter.stats_failed = true;
     }
+    if (app.reporter.stats_failed && status == 0)
+        status = EXIT_RUNTIME;
     ao_tracer_destroy(app.tracer);
     ao_scene_finish(&app.scene);
     free(app.reference);

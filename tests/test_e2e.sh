@@ -55,6 +55,23 @@ assert [int(r[3]) for r in body] == [768, 1536, 2304], 'one eye ray per pixel pe
 assert all(float(r[6]) > 0 for r in body), 'rmse'
 PY
 
+# A --stats file that cannot be written: one line and status 1, also when it is a FIFO whose
+# reader has left (the write then fails with EPIPE instead of SIGPIPE killing aoview).
+"$bin" --headless -q --size 16x12 --spp 2 --stats /dev/full "$root/assets/scenes/spheres.scene" -o full.png \
+  2>err.txt
+status=$?
+[ "$status" = 1 ] || fail "--stats /dev/full exited $status, expected 1"
+[ "$(cat err.txt)" = "/dev/full: write failed" ] || fail "--stats /dev/full: $(cat err.txt)"
+# The reader leaves after the header; a row per pass follows, 5000 of them, so that later ones
+# find the pipe closed however the two processes are scheduled.
+mkfifo stats.fifo
+head -c 10 stats.fifo >/dev/null &
+timeout 60 "$bin" --headless -q --size 32x24 --spp 5000 --stats stats.fifo "$root/assets/scenes/spheres.scene" \
+  -o fifo.png 2>err.txt
+status=$?
+[ "$status" = 1 ] || fail "--stats to a FIFO whose reader left exited $status, expected 1"
+[ "$(cat err.txt)" = "stats.fifo: write failed" ] || fail "--stats to a FIFO whose reader left: $(cat err.txt)"
+
 # The same seed and settings give the same image for any thread count.
 "$bin" --headless -q --size 40x30 --spp 6 --spppp 2 --threads 1 --seed 9 "$root/assets/scenes/spheres.scene" -o t1.pfm
 "$bin" --headless -q --size 40x30 --spp 6 --spppp 2 --threads 2 --seed 9 "$root/assets/scenes/spheres.scene" -o t2.pfm
