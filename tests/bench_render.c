@@ -1,7 +1,8 @@
 /* Benchmark: aoview against the bare-Embree ceiling measured in the same run on the very same
  * occlusion rays (and, for the all-rays ratio, eye rays), per scene, thread count and samples per
  * pass; BVH build time, peak memory, pass time and key-press latency at 640x480, and a 4K image's
- * memory. Prints figures; asserts nothing (speed lives here, not in the tests). Run: meson test -C build --benchmark -v */
+ * memory. Prints figures; asserts nothing (speed lives here, not in the tests).
+ * Run: meson test -C build --benchmark -v */
 #include <math.h>
 #include <stddef.h>
 #include <pthread.h>
