@@ -242,11 +242,15 @@ static void make_eye_rays(const struct ao_context *ctx, uint64_t pass, const uin
                           const int *row, struct ao_packet *eye)
 {
     float du[AO_PACKET_SIZE], dv[AO_PACKET_SIZE];
-    for (int k = 0; k < eye->count; k++) {
-        du[k] = dv[k] = 0.5f;
-        if (ctx->aa)
+    if (!ctx->aa)
+        for (int k = 0; k < eye->count; k++)
+            du[k] = dv[k] = 0.5f;
+    else if (ctx->sequence == AO_SEQUENCE_RANDOM) /* the common case, in a loop that vectorizes */
+        for (int k = 0; k < eye->count; k++)
+            ao_rng_pair(ao_rng_key(ctx->seed, index[k], EYE_STREAM), pass, &du[k], &dv[k]);
+    else
+        for (int k = 0; k < eye->count; k++)
             draw_pair(ctx, ao_rng_key(ctx->seed, index[k], EYE_STREAM), pass, &du[k], &dv[k]);
-    }
     const struct ao_view *view = &ctx->view;
     for (int k = 0; k < eye->count; k++) {
         struct ao_vec3 d = ao_camera_ray(view, (float)column[k] + du[k], (float)row[k] + dv[k]);
@@ -270,14 +274,17 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
     double sum[AO_TILE_PIXELS] = {0};
     struct ao_vec3 albedo[AO_TILE_PIXELS];
     bool miss[AO_TILE_PIXELS];
+    int x = tile->x0, y = tile->y0; /* the next pixel's column and row */
     for (int first = 0; first < pixels; first += AO_PACKET_SIZE) {
         struct ao_packet eye = {.count = pixels - first < AO_PACKET_SIZE ? pixels - first : AO_PACKET_SIZE};
         struct ao_hit hits[AO_PACKET_SIZE];
         uint64_t index[AO_PACKET_SIZE];
         int column[AO_PACKET_SIZE], row[AO_PACKET_SIZE];
         for (int k = 0; k < eye.count; k++) {
-            column[k] = tile->x0 + (first + k) % width, row[k] = tile->y0 + (first + k) / width;
-            index[k] = (uint64_t)row[k] * (uint64_t)ctx->view.width + (uint64_t)column[k];
+            column[k] = x, row[k] = y;
+            index[k] = (uint64_t)y * (uint64_t)ctx->view.width + (uint64_t)x;
+            if (++x == tile->x1) /* row by row, without a division per pixel */
+                x = tile->x0, y++;
         }
         make_eye_rays(ctx, pass, index, column, row, &eye);
         ao_tracer_intersect(ctx->tracer, &eye, hits);
