@@ -254,13 +254,21 @@ static inline void to_single4(const struct ao_batch *rays, int first, struct RTC
 }
 #endif
 
-/* Offers the recorder the batch's rays 16 at a time; it keeps every stride-th as a packet. */
+static double seconds_now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Offers the recorder the batch; it keeps every stride-th whole, in order, 16 rays to a packet (so
+ * that a ceiling traced on the sample sees rays as coherent as aoview's batches). */
 static void record(struct ao_ray_recorder *rec, const struct ao_batch *rays)
 {
-    for (int first = 0; first < rays->count; first += AO_PACKET_SIZE) {
-        struct ao_packet *p = recorder_slot(rec);
-        if (!p)
-            continue;
+    if (rec->seen++ % rec->stride != 0)
+        return;
+    for (int first = 0; first < rays->count && rec->count < rec->capacity; first += AO_PACKET_SIZE) {
+        struct ao_packet *p = &rec->packets[rec->count++];
         p->count = rays->count - first < AO_PACKET_SIZE ? rays->count - first : AO_PACKET_SIZE;
         for (int k = 0; k < p->count; k++) {
             p->org_x[k] = rays->org_x[first + k];
@@ -295,7 +303,13 @@ void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_batch *rays)
                   rays->tfar[k], &stream[k]);
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
+    struct ao_ray_recorder *rec = tracer->occlusion_recorder;
+    double start = rec ? seconds_now() : 0.0;
     rtcOccluded1M(tracer->scene, &context, stream, (unsigned)n, sizeof *stream);
+    if (rec) {
+        rec->embree_seconds += seconds_now() - start;
+        rec->embree_rays += (uint64_t)n;
+    }
     for (int k = 0; k < n; k++)
         rays->tfar[k] = stream[k].tfar;
 }
@@ -306,26 +320,18 @@ void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *occlusio
     tracer->eye_recorder = eye;
 }
 
-static double seconds_now(void)
+/* Packets from *next on, as many whole ones as fit in one batch, into out in Embree's single-ray
+ * layout; advances *next and returns the rays written. */
+static unsigned fill_stream(const struct ao_packet *packets, size_t count, size_t *next, struct RTCRay *out)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* The packets as one array of single rays, for rtcOccluded1M; NULL when memory is short. */
-static struct RTCRay *to_stream(const struct ao_packet *packets, size_t count, size_t *rays)
-{
-    *rays = 0;
-    for (size_t p = 0; p < count; p++)
-        *rays += (size_t)packets[p].count;
-    struct RTCRay *out = malloc(*rays * sizeof *out + 1);
-    size_t n = 0;
-    for (size_t p = 0; out && p < count; p++)
-        for (int k = 0; k < packets[p].count; k++)
-            to_single(packets[p].org_x[k], packets[p].org_y[k], packets[p].org_z[k], packets[p].dir_x[k],
-                      packets[p].dir_y[k], packets[p].dir_z[k], packets[p].tfar[k], &out[n++]);
-    return out;
+    unsigned n = 0;
+    for (; *next < count && n + (unsigned)packets[*next].count <= AO_BATCH_RAYS; ++*next) {
+        const struct ao_packet *p = &packets[*next];
+        for (int k = 0; k < p->count; k++)
+            to_single(p->org_x[k], p->org_y[k], p->org_z[k], p->dir_x[k], p->dir_y[k], p->dir_z[k], p->tfar[k],
+                      &out[n++]);
+    }
+    return n;
 }
 
 double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packet *packets, size_t count,
@@ -334,14 +340,16 @@ double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packe
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     if (how == AO_BARE_OCCLUDED1M) {
-        size_t rays;
-        struct RTCRay *all = to_stream(packets, count, &rays);
-        if (!all)
-            return NAN;
-        double start = seconds_now();
-        rtcOccluded1M(tracer->scene, &context, all, (unsigned)rays, sizeof *all);
-        double seconds = seconds_now() - start;
-        free(all);
+        /* Batch by batch, each written just before it is traced and timed, as aoview's are: one
+         * array of all the rays would come from memory rather than the cache. */
+        _Alignas(64) struct RTCRay stream[AO_BATCH_RAYS];
+        double seconds = 0.0;
+        for (size_t next = 0; next < count;) {
+            unsigned n = fill_stream(packets, count, &next, stream);
+            double start = seconds_now();
+            rtcOccluded1M(tracer->scene, &context, stream, n, sizeof *stream);
+            seconds += seconds_now() - start;
+        }
         return seconds;
     }
     struct RTCRayHit16 *converted = aligned_alloc(64, count * sizeof *converted + 64);

@@ -69,19 +69,23 @@ struct ao_batch {
  * something blocks within t in [0, tfar] (Embree's convention); open rays keep theirs. Any thread. */
 void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_batch *rays);
 
-/* Benchmark instrument: every stride-th packet of rays offered is copied, up to capacity. */
+/* Benchmark instrument: copies of every stride-th packet (eye rays) or whole batch (occlusion rays,
+ * 16 to a packet) offered, up to capacity packets; an occlusion recorder also times Embree's calls
+ * on all the rays it is offered. */
 struct ao_ray_recorder {
     struct ao_packet *packets;
     size_t count, capacity;
     size_t stride, seen;
+    double embree_seconds;   /* inside rtcOccluded1M */
+    uint64_t embree_rays;
 };
 
-/* While set, ao_tracer_occluded offers `occlusion` its rays 16 at a time and ao_tracer_intersect
- * offers `eye` its packets; NULL stops. For a renderer with one thread only (no lock is taken). */
+/* While set, ao_tracer_occluded offers `occlusion` its batches and times its Embree calls, and
+ * ao_tracer_intersect offers `eye` its packets; NULL stops. For a renderer with one thread only (no lock is taken). */
 void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *occlusion, struct ao_ray_recorder *eye);
 
-/* How ao_tracer_time_bare traces: occlusion rays with plain rtcOccluded16 calls, or as one
- * incoherent rtcOccluded1M stream; eye rays with coherent rtcIntersect16 calls, as aoview does. */
+/* How ao_tracer_time_bare traces: occlusion rays with plain rtcOccluded16 calls, or as incoherent
+ * rtcOccluded1M streams of AO_BATCH_RAYS; eye rays with coherent rtcIntersect16 calls, as aoview. */
 enum ao_bare { AO_BARE_OCCLUDED16, AO_BARE_OCCLUDED1M, AO_BARE_INTERSECT16 };
 
 /* Benchmark instrument: the bare-Embree ceiling on given rays. Traces count packets as `how` says,

@@ -1,9 +1,11 @@
 /* Benchmark: aoview against the bare-Embree ceiling measured in the same run on the very same
  * occlusion rays (and, for the all-rays ratio, eye rays), per scene, thread count and samples per
- * pass; BVH build time, peak memory, pass time and key-press latency at 640x480, and a 4K image's
- * memory. Prints figures; asserts nothing (speed lives here, not in the tests).
+ * pass, with the share of a pass spent inside aoview's own Embree calls; BVH build time, peak
+ * memory, pass time and key-press latency at 640x480, and a 4K image's memory. Prints figures;
+ * asserts nothing (speed lives here, not in the tests).
  * Run: meson test -C build --benchmark -v */
 #include <math.h>
+#include <stdbool.h>
 #include <stddef.h>
 #include <pthread.h>
 #include <stdio.h>
@@ -127,6 +129,12 @@ static double bare_rate(const struct ao_tracer *tracer, const struct ao_ray_reco
     return (double)rays / slowest;
 }
 
+/* Passes a measured run renders at this spppp: 64 samples a pixel, and at least 4 passes. */
+static int passes_at(int spppp)
+{
+    return 64 / spppp < 4 ? 4 : 64 / spppp;
+}
+
 /* Starts a recorder that keeps at most RECORDED of `expected` packets, spread evenly. */
 static void start_recording(struct ao_ray_recorder *rec, size_t expected)
 {
@@ -134,7 +142,7 @@ static void start_recording(struct ao_ray_recorder *rec, size_t expected)
     rec->stride = expected / RECORDED + 1;
 }
 
-/* Records a sample of one pass's occlusion and eye packets (every stride-th, spread over the image). */
+/* Records a sample of one pass's occlusion batches and eye packets (every stride-th, spread over the image). */
 static void record(struct ao_tracer *tracer, const struct ao_scene *scene, int spppp, struct ao_ray_recorder *occlusion,
                    struct ao_ray_recorder *eye)
 {
@@ -196,7 +204,7 @@ static void make_big_mesh(struct ao_scene *s, int n)
 
 /* One row of a scene's table, or one repeat's figures for it. */
 struct row {
-    double total, shadow, ceiling, ratio, all_ceiling, all_ratio, ms, scaling;
+    double total, shadow, ceiling, ratio, all_ceiling, all_ratio, in_situ, inside, ms, scaling;
 };
 
 /* The median over n rows of the field at byte offset `field`. */
@@ -212,13 +220,18 @@ static double median_of(const struct row *rows, int n, size_t field)
  * back into out[0] and out[1]. Ratio and scaling are this repeat's own quotients, so load from
  * other users of the machine, which drifts over seconds, cancels in them rather than landing on
  * one side of a quotient of medians. */
-static void measure(struct ao_scene *scene, const struct ao_tracer *tracer, const struct ao_tracer *embree,
+static void measure(struct ao_scene *scene, struct ao_tracer *tracer, const struct ao_tracer *embree,
                     const struct ao_ray_recorder *occlusion, const struct ao_ray_recorder *eye, int spppp,
                     struct row out[2])
 {
-    int passes = 64 / spppp < 4 ? 4 : 64 / spppp;
+    int passes = passes_at(spppp);
     for (int t = 0; t < 2; t++) {
+        /* One thread on Embree: a recorder that keeps no packets times aoview's own Embree calls. */
+        struct ao_ray_recorder timer = {.stride = 1};
+        bool timed = t == 0 && strcmp(ao_tracer_backend(tracer), "embree") == 0;
+        ao_tracer_record(tracer, timed ? &timer : NULL, NULL);
         struct ao_frame_info info = run(scene, tracer, SIZE, SIZE, t + 1, spppp, (uint32_t)(spppp * passes));
+        ao_tracer_record(tracer, NULL, NULL);
         double packets = bare_rate(embree, occlusion, t + 1, AO_BARE_OCCLUDED16);
         double stream = bare_rate(embree, occlusion, t + 1, AO_BARE_OCCLUDED1M);
         double eye_rate = bare_rate(embree, eye, t + 1, AO_BARE_INTERSECT16) / 1e6;
@@ -231,6 +244,8 @@ static void measure(struct ao_scene *scene, const struct ao_tracer *tracer, cons
         double eye_share = (double)info.eye_rays / (double)(info.eye_rays + info.shadow_rays);
         r->all_ceiling = 1.0 / (eye_share / eye_rate + (1.0 - eye_share) / r->ceiling);
         r->all_ratio = r->total / r->all_ceiling;
+        r->in_situ = timed ? (double)timer.embree_rays / timer.embree_seconds / 1e6 : NAN;
+        r->inside = timed ? timer.embree_seconds / info.seconds : NAN;
         r->ms = 1e3 * info.seconds / info.pass;
         r->scaling = r->total / out[0].total;
     }
@@ -268,16 +283,23 @@ static void bench_scene(struct ao_scene *scene, double *rate_2x16)
                 median_of(repeats[t], REPEATS, offsetof(struct row, ratio)),
                 median_of(repeats[t], REPEATS, offsetof(struct row, all_ceiling)),
                 median_of(repeats[t], REPEATS, offsetof(struct row, all_ratio)),
+                median_of(repeats[t], REPEATS, offsetof(struct row, in_situ)),
+                median_of(repeats[t], REPEATS, offsetof(struct row, inside)),
                 median_of(repeats[t], REPEATS, offsetof(struct row, ms)),
                 median_of(repeats[t], REPEATS, offsetof(struct row, scaling))};
     }
-    printf("%-7s %-5s %9s %9s %9s %7s %9s %7s %11s %7s %9s\n", "threads", "spppp", "Mrays/s", "shadow", "ceiling",
-           "ratio", "all ceil", "all", "passes/s", "ms/pass", "scaling");
+    printf("%-7s %-5s %9s %9s %9s %7s %9s %7s %8s %7s %11s %7s %9s\n", "threads", "spppp", "Mrays/s", "shadow",
+           "ceiling", "ratio", "all ceil", "all", "in situ", "inside", "passes/s", "ms/pass", "scaling");
     for (int t = 0; t < 2; t++)
         for (int s = 0; s < 4; s++) {
             const struct row *r = &rows[t][s];
-            printf("%-7d %-5d %9.2f %9.2f %9.2f %6.0f%% %9.2f %6.0f%% %11.1f %7.1f", t + 1, spppps[s], r->total,
-                   r->shadow, r->ceiling, 100 * r->ratio, r->all_ceiling, 100 * r->all_ratio, 1e3 / r->ms, r->ms);
+            printf("%-7d %-5d %9.2f %9.2f %9.2f %6.0f%% %9.2f %6.0f%%", t + 1, spppps[s], r->total, r->shadow,
+                   r->ceiling, 100 * r->ratio, r->all_ceiling, 100 * r->all_ratio);
+            if (!isnan(r->inside))
+                printf(" %8.2f %6.0f%%", r->in_situ, 100 * r->inside);
+            else
+                printf(" %8s %7s", "-", "-");
+            printf(" %11.1f %7.1f", 1e3 / r->ms, r->ms);
             if (t == 1)
                 printf(" %8.2fx", r->scaling);
             putchar('\n');
@@ -385,8 +407,10 @@ int main(int argc, char **argv)
     ao_scene_finish(&scene);
     printf("\n1M-triangle mesh at 2 threads, 16 spp per pass: %.0f%% of the bunny's Mrays/s\n", 100 * big / bunny);
     printf("(medians of %d repeats, ratios and scaling of each repeat's own quotients; ceiling = best of "
-           "rtcOccluded16 packets and an rtcOccluded1M stream on a sample of the same pass's occlusion rays; "
-           "all ceil = bare Embree's rate on this run's eye and AO rays, eye rays by rtcIntersect16 on the same "
-           "pass's eye packets; all = Mrays/s / all ceil)\n", REPEATS);
+           "rtcOccluded16 packets and an rtcOccluded1M stream on a sample of the same run's occlusion rays; "
+           "all ceil = bare Embree's rate on this run's eye and AO rays, eye rays by rtcIntersect16 on a sample of the "
+           "same run's eye packets; all = Mrays/s / all ceil; in situ = Mrays/s of aoview's own rtcOccluded1M calls "
+           "in the one-thread runs, inside = the share of their time spent in those calls)\n",
+           REPEATS);
     return 0;
 }
