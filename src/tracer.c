@@ -145,24 +145,33 @@ void ao_tracer_thread_init(void)
 #endif
 }
 
-/* Copies our packet into Embree's ray layout, with a validity mask for the unused lanes. */
+/* Copies our packet into Embree's ray layout, with a validity mask for the unused lanes (which get
+ * lane 0's ray, so that no garbage reaches Embree). */
 static void to_embree(const struct ao_packet *rays, struct RTCRay16 *out, int *valid)
 {
-    for (int k = 0; k < AO_PACKET_SIZE; k++) {
-        int lane = k < rays->count ? k : 0;
+    for (int k = 0; k < AO_PACKET_SIZE; k++) { /* every lane, so that the loop vectorizes */
         valid[k] = k < rays->count ? -1 : 0;
-        out->org_x[k] = rays->org_x[lane];
-        out->org_y[k] = rays->org_y[lane];
-        out->org_z[k] = rays->org_z[lane];
-        out->dir_x[k] = rays->dir_x[lane];
-        out->dir_y[k] = rays->dir_y[lane];
-        out->dir_z[k] = rays->dir_z[lane];
+        out->org_x[k] = rays->org_x[k];
+        out->org_y[k] = rays->org_y[k];
+        out->org_z[k] = rays->org_z[k];
+        out->dir_x[k] = rays->dir_x[k];
+        out->dir_y[k] = rays->dir_y[k];
+        out->dir_z[k] = rays->dir_z[k];
         out->tnear[k] = 0.0f;
-        out->tfar[k] = rays->tfar[lane];
+        out->tfar[k] = rays->tfar[k];
         out->time[k] = 0.0f;
         out->mask[k] = ~0u;
         out->id[k] = (unsigned)k;
         out->flags[k] = 0;
+    }
+    for (int k = rays->count; k < AO_PACKET_SIZE; k++) {
+        out->org_x[k] = rays->org_x[0];
+        out->org_y[k] = rays->org_y[0];
+        out->org_z[k] = rays->org_z[0];
+        out->dir_x[k] = rays->dir_x[0];
+        out->dir_y[k] = rays->dir_y[0];
+        out->dir_z[k] = rays->dir_z[0];
+        out->tfar[k] = rays->tfar[0];
     }
 }
 
