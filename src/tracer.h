@@ -81,7 +81,8 @@ struct ao_ray_recorder {
 };
 
 /* While set, ao_tracer_occluded offers `occlusion` its batches and times its Embree calls, and
- * ao_tracer_intersect offers `eye` its packets; NULL stops. For a renderer with one thread only (no lock is taken). */
+ * ao_tracer_intersect offers `eye` its packets; NULL stops. For a renderer with one thread only
+ * (no lock is taken). */
 void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *occlusion, struct ao_ray_recorder *eye);
 
 /* How ao_tracer_time_bare traces: occlusion rays with plain rtcOccluded16 calls, or as incoherent

@@ -129,12 +129,6 @@ static double bare_rate(const struct ao_tracer *tracer, const struct ao_ray_reco
     return (double)rays / slowest;
 }
 
-/* Passes a measured run renders at this spppp: 64 samples a pixel, and at least 4 passes. */
-static int passes_at(int spppp)
-{
-    return 64 / spppp < 4 ? 4 : 64 / spppp;
-}
-
 /* Starts a recorder that keeps at most RECORDED of `expected` packets, spread evenly. */
 static void start_recording(struct ao_ray_recorder *rec, size_t expected)
 {
@@ -224,7 +218,7 @@ static void measure(struct ao_scene *scene, struct ao_tracer *tracer, const stru
                     const struct ao_ray_recorder *occlusion, const struct ao_ray_recorder *eye, int spppp,
                     struct row out[2])
 {
-    int passes = passes_at(spppp);
+    int passes = 64 / spppp < 4 ? 4 : 64 / spppp;
     for (int t = 0; t < 2; t++) {
         /* One thread on Embree: a recorder that keeps no packets times aoview's own Embree calls. */
         struct ao_ray_recorder timer = {.stride = 1};
@@ -407,10 +401,10 @@ int main(int argc, char **argv)
     ao_scene_finish(&scene);
     printf("\n1M-triangle mesh at 2 threads, 16 spp per pass: %.0f%% of the bunny's Mrays/s\n", 100 * big / bunny);
     printf("(medians of %d repeats, ratios and scaling of each repeat's own quotients; ceiling = best of "
-           "rtcOccluded16 packets and an rtcOccluded1M stream on a sample of the same run's occlusion rays; "
-           "all ceil = bare Embree's rate on this run's eye and AO rays, eye rays by rtcIntersect16 on a sample of the "
-           "same run's eye packets; all = Mrays/s / all ceil; in situ = Mrays/s of aoview's own rtcOccluded1M calls "
-           "in the one-thread runs, inside = the share of their time spent in those calls)\n",
-           REPEATS);
+           "rtcOccluded16 packets and rtcOccluded1M streams of aoview's batches on a sample of one pass's "
+           "occlusion batches; all ceil = bare Embree's rate on this run's eye and AO rays, eye rays by "
+           "rtcIntersect16 on a sample of the same pass's eye packets; all = Mrays/s / all ceil; in situ = Mrays/s "
+           "of aoview's own rtcOccluded1M calls in the one-thread runs, inside = the share of their time spent in "
+           "those calls)\n", REPEATS);
     return 0;
 }
