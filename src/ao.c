@@ -65,9 +65,7 @@ void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struc
         s->albedo = sp->albedo;
     } else {
         const uint32_t *i = &scene->indices[3 * hit->prim];
-        struct ao_vec3 p0 = scene->positions[i[0]];
-        s->ng = ao_vec3_normalize(ao_vec3_cross(ao_vec3_sub(scene->positions[i[1]], p0),
-                                                ao_vec3_sub(scene->positions[i[2]], p0)));
+        s->ng = ao_vec3_normalize(hit->ng);
         float w0 = 1.0f - hit->u - hit->v;
         struct ao_vec3 n = ao_vec3_scale(scene->normals[i[0]], w0);
         n = ao_vec3_add(n, ao_vec3_scale(scene->normals[i[1]], hit->u));

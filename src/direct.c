@@ -169,11 +169,14 @@ void ao_direct_intersect(const struct ao_direct *direct, const struct ao_packet 
      * above keeps GCC from vectorizing it). */
     for (int k = 0; k < n; k++) {
         float t, u = 0.0f, v = 0.0f;
-        if (found[k] && !sphere[k])
-            triangle_hit(&direct->triangles[prim[k]], ox[k], oy[k], oz[k], dx[k], dy[k], dz[k], INFINITY, &t, &u,
-                         &v);
+        struct ao_vec3 ng = {0.0f, 0.0f, 0.0f};
+        if (found[k] && !sphere[k]) {
+            const struct triangle *tr = &direct->triangles[prim[k]];
+            triangle_hit(tr, ox[k], oy[k], oz[k], dx[k], dy[k], dz[k], INFINITY, &t, &u, &v);
+            ng = ao_vec3_make(-tr->nx, -tr->ny, -tr->nz); /* the stored N is -(e1 x e2) */
+        }
         hits[k] = (struct ao_hit){.t = found[k] ? best[k] : INFINITY, .u = u, .v = v, .prim = prim[k],
-                                  .sphere = sphere[k]};
+                                  .sphere = sphere[k], .ng = ng};
     }
 }
 

@@ -216,6 +216,7 @@ void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet 
         hits[k].v = rh.hit.v[k];
         hits[k].prim = rh.hit.primID[k];
         hits[k].sphere = rh.hit.geomID[k] == tracer->spheres_id;
+        hits[k].ng = ao_vec3_make(rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]); /* Embree's: as ours */
     }
 }
 

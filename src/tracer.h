@@ -28,6 +28,7 @@ struct ao_hit {
     float u, v;             /* barycentrics of vertices 1 and 2 on triangles */
     uint32_t prim;          /* triangle index, or sphere index */
     bool sphere;            /* true for a sphere, false for a triangle */
+    struct ao_vec3 ng;      /* on triangles, the unnormalized geometric normal (p1 - p0) x (p2 - p0) */
 };
 
 /* Builds the tracer for `scene` (which must outlive it), Embree or direct as measured faster; NULL

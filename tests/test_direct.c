@@ -326,6 +326,15 @@ static void compare(const struct ao_scene *scene, uint64_t seed, int packets, st
                     fail_msg("ray (%a %a %a) + t (%a %a %a): embree u %.9g v %.9g, direct u %.9g v %.9g",
                              rays.org_x[k], rays.org_y[k], rays.org_z[k], d[0], d[1], d[2], he[k].u, he[k].v,
                              hd[k].u, hd[k].v);
+                /* Both geometric normals are (p1 - p0) x (p2 - p0) up to float rounding: within 1e-5
+                 * radians (a few ulps of the edges' products, relative to the normal's length). */
+                for (int b = 0; b < 2; b++) {
+                    struct ao_vec3 g = b ? hd[k].ng : he[k].ng;
+                    double ng[3] = {g.x, g.y, g.z};
+                    if (!(dot(ng, n) / sqrt(dot(ng, ng) * dot(n, n)) >= 1.0 - 5e-11))
+                        fail_msg("triangle %u: %s normal (%g %g %g), exact (%g %g %g)", hd[k].prim,
+                                 b ? "direct" : "embree", ng[0], ng[1], ng[2], n[0], n[1], n[2]);
+                }
             }
         }
     }
