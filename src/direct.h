@@ -24,8 +24,8 @@ struct ao_direct *ao_direct_create(const struct ao_scene *scene);
 /* Frees the copy; accepts NULL. */
 void ao_direct_destroy(struct ao_direct *direct);
 
-/* Closest hits as ao_tracer_intersect: t in [0, tfar], barycentrics of vertices 1 and 2 on
- * triangles, 0 on spheres. Any thread. */
+/* Closest hits as ao_tracer_intersect: t in [0, tfar], barycentrics of vertices 1 and 2 and the
+ * unnormalized geometric normal on triangles, 0 on spheres. Any thread. */
 void ao_direct_intersect(const struct ao_direct *direct, const struct ao_packet *rays, struct ao_hit *hits);
 
 /* Blocked rays as ao_tracer_occluded: tfar set to -INFINITY on each ray that something blocks

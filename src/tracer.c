@@ -298,8 +298,9 @@ void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_batch *rays)
         ao_direct_occluded(tracer->direct, rays);
         return;
     }
-    if (tracer->occlusion_recorder)
-        record(tracer->occlusion_recorder, rays);
+    struct ao_ray_recorder *rec = tracer->occlusion_recorder;
+    if (rec)
+        record(rec, rays);
     /* One incoherent stream: Embree sorts it into packets by direction octant, and marks each
      * blocked ray by setting its tfar to -inf. */
     _Alignas(64) struct RTCRay stream[AO_BATCH_RAYS];
@@ -313,14 +314,13 @@ void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_batch *rays)
                   rays->tfar[k], &stream[k]);
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    struct ao_ray_recorder *rec = tracer->occlusion_recorder;
     double start = rec ? seconds_now() : 0.0;
     rtcOccluded1M(tracer->scene, &context, stream, (unsigned)n, sizeof *stream);
     if (rec) {
         rec->embree_seconds += seconds_now() - start;
         rec->embree_rays += (uint64_t)n;
     }
-    for (int k = 0; k < n; k++)
+    for (k = 0; k < n; k++)
         rays->tfar[k] = stream[k].tfar;
 }
 

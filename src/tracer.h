@@ -91,7 +91,7 @@ void ao_tracer_record(struct ao_tracer *tracer, struct ao_ray_recorder *occlusio
 enum ao_bare { AO_BARE_OCCLUDED16, AO_BARE_OCCLUDED1M, AO_BARE_INTERSECT16 };
 
 /* Benchmark instrument: the bare-Embree ceiling on given rays. Traces count packets as `how` says,
- * converted to Embree's layout beforehand, and returns the seconds the tracing alone took. */
+ * converted to Embree's layout outside the timed calls, and returns the seconds the tracing took. */
 double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packet *packets, size_t count,
                            enum ao_bare how);
 
