@@ -16,6 +16,14 @@
 enum { TILE = 16, FRESH = 4 };
 _Static_assert(TILE * TILE <= AO_TILE_PIXELS, "a tile must fit ao_estimate_tile");
 
+/* A thread's share of a pass: the tile rows k, k + threads, k + 2 threads, ... for thread k, row
+ * by row, taken in order from `next`. Each thread keeps the same pixels pass after pass, so their
+ * sums stay in its own cache (handed round between threads, they crossed caches on every pass);
+ * a thread that has finished its share helps with the others'. */
+struct share {
+    _Alignas(64) atomic_int next;        /* a line of its own: the other threads take from it too */
+};
+
 struct ao_render {
     struct ao_render_config config;
     struct ao_accum accum;               /* render thread (and its workers, pixel-disjoint) only */
@@ -44,8 +52,8 @@ struct ao_render {
     bool quit;                           /* workers exit */
     struct ao_context ctx;
     uint64_t pass, first_sample, pass_restarts;
-    int samples, tiles_x, tile_count;
-    atomic_int next_tile;
+    int samples, tiles_x, tiles_y;
+    struct share *shares;                /* one per thread, the render thread's first */
     atomic_uint_fast64_t eye_rays, shadow_rays;
 
     pthread_t thread;
@@ -53,6 +61,7 @@ struct ao_render {
     struct ao_frame_info last_info;      /* the render thread's facts when it stopped */
     pthread_t *workers;
     int worker_count;
+    atomic_int workers_started;          /* numbers the workers' shares */
 };
 
 static double now_seconds(void)
@@ -70,33 +79,51 @@ static bool aborted(struct ao_render *r)
 
 /* ---- tiles: run by the render thread and every worker ---- */
 
-static void render_tiles(struct ao_render *r)
+/* The tiles in thread k's share (see struct share). */
+static int share_size(const struct ao_render *r, int k)
+{
+    int threads = r->config.threads;
+    return r->tiles_x * ((r->tiles_y - k + threads - 1) / threads);
+}
+
+/* Traces one tile and adds its sums to the accumulation. */
+static void render_tile(struct ao_render *r, int column, int row, uint64_t *eye, uint64_t *shadow)
 {
     const struct ao_context *ctx = &r->ctx;
     int width = ctx->view.width, height = ctx->view.height;
-    for (;;) {
-        int tile = atomic_fetch_add_explicit(&r->next_tile, 1, memory_order_relaxed);
-        if (tile >= r->tile_count || aborted(r))
-            return;
-        struct ao_tile t = {.x0 = (tile % r->tiles_x) * TILE, .y0 = (tile / r->tiles_x) * TILE};
-        t.x1 = t.x0 + TILE < width ? t.x0 + TILE : width;
-        t.y1 = t.y0 + TILE < height ? t.y0 + TILE : height;
-        struct ao_vec3 sums[AO_TILE_PIXELS];
-        uint64_t eye = 0, shadow = 0;
-        ao_estimate_tile(ctx, &t, r->pass, r->first_sample, r->samples, sums, &eye, &shadow);
-        for (int j = t.y0; j < t.y1; j++)
-            for (int i = t.x0; i < t.x1; i++)
-                ao_accum_add(&r->accum, (size_t)j * (size_t)width + (size_t)i,
-                             sums[(j - t.y0) * (t.x1 - t.x0) + (i - t.x0)], (uint32_t)r->samples);
-        atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
-        atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
+    struct ao_tile t = {.x0 = column * TILE, .y0 = row * TILE};
+    t.x1 = t.x0 + TILE < width ? t.x0 + TILE : width;
+    t.y1 = t.y0 + TILE < height ? t.y0 + TILE : height;
+    struct ao_vec3 sums[AO_TILE_PIXELS];
+    ao_estimate_tile(ctx, &t, r->pass, r->first_sample, r->samples, sums, eye, shadow);
+    for (int j = t.y0; j < t.y1; j++)
+        for (int i = t.x0; i < t.x1; i++)
+            ao_accum_add(&r->accum, (size_t)j * (size_t)width + (size_t)i,
+                         sums[(j - t.y0) * (t.x1 - t.x0) + (i - t.x0)], (uint32_t)r->samples);
+}
+
+/* Thread `self`'s part of a pass: its own share, then what is left of the others'. */
+static void render_tiles(struct ao_render *r, int self)
+{
+    int threads = r->config.threads;
+    uint64_t eye = 0, shadow = 0;
+    for (int v = 0; v < threads && !aborted(r); v++) {
+        int k = (self + v) % threads, size = share_size(r, k);
+        for (int n; (n = atomic_fetch_add_explicit(&r->shares[k].next, 1, memory_order_relaxed)) < size;) {
+            if (aborted(r))
+                break;
+            render_tile(r, n % r->tiles_x, k + threads * (n / r->tiles_x), &eye, &shadow);
+        }
     }
+    atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
+    atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
 }
 
 static void *worker_main(void *arg)
 {
     struct ao_render *r = arg;
     uint64_t seen = 0;
+    int self = 1 + atomic_fetch_add(&r->workers_started, 1);
     ao_tracer_thread_init();
     pthread_mutex_lock(&r->pass_lock);
     for (;;) {
@@ -106,7 +133,7 @@ static void *worker_main(void *arg)
             break;
         seen = r->pass_serial;
         pthread_mutex_unlock(&r->pass_lock);
-        render_tiles(r);
+        render_tiles(r, self);
         pthread_mutex_lock(&r->pass_lock);
         if (--r->busy == 0)
             pthread_cond_signal(&r->pass_end);
@@ -119,12 +146,13 @@ static void *worker_main(void *arg)
 static bool run_pass(struct ao_render *r)
 {
     pthread_mutex_lock(&r->pass_lock);
-    atomic_store(&r->next_tile, 0);
+    for (int k = 0; k < r->config.threads; k++)
+        atomic_store(&r->shares[k].next, 0);
     r->busy = r->worker_count;
     r->pass_serial++;
     pthread_cond_broadcast(&r->pass_start);
     pthread_mutex_unlock(&r->pass_lock);
-    render_tiles(r);
+    render_tiles(r, 0);
     pthread_mutex_lock(&r->pass_lock);
     while (r->busy > 0)
         pthread_cond_wait(&r->pass_end, &r->pass_lock);
@@ -248,9 +276,14 @@ static bool allocate(struct ao_render *r)
         }
     }
     r->workers = calloc((size_t)r->config.threads, sizeof *r->workers);
-    if (!r->workers)
+    r->shares = aligned_alloc(_Alignof(struct share), (size_t)r->config.threads * sizeof *r->shares);
+    if (!r->workers || !r->shares) {
         fprintf(stderr, "aoview: out of memory starting the renderer\n");
-    return r->workers != NULL;
+        return false;
+    }
+    for (int k = 0; k < r->config.threads; k++)
+        atomic_init(&r->shares[k].next, 0);
+    return true;
 }
 
 struct ao_render *ao_render_create(const struct ao_render_config *config,
@@ -265,12 +298,13 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
     r->settings = *settings;
     r->back = 0;
     atomic_init(&r->middle, 1u);
+    atomic_init(&r->workers_started, 0);
     r->front = 2;
     r->ctx = (struct ao_context){.scene = config->scene, .tracer = config->tracer,
                                  .ao_distance = config->ao_distance, .seed = config->seed,
                                  .sequence = config->sequence, .below = config->below};
     r->tiles_x = (config->width + TILE - 1) / TILE;
-    r->tile_count = r->tiles_x * ((config->height + TILE - 1) / TILE);
+    r->tiles_y = (config->height + TILE - 1) / TILE;
     pthread_mutex_init(&r->lock, NULL);
     pthread_mutex_init(&r->pass_lock, NULL);
     pthread_cond_init(&r->wake, NULL);
@@ -341,6 +375,7 @@ void ao_render_destroy(struct ao_render *render)
     for (int k = 0; k < 3; k++)
         free(render->frames[k].rgb);
     free(render->workers);
+    free(render->shares);
     ao_accum_finish(&render->accum);
     free(render);
 }
