@@ -40,18 +40,31 @@ interrupt_once TERM 143
 # of the same number sent together merge into one pending signal (the run then just finishes its
 # write), and waiting for the first to be taken races with a write that can end in 100 ms. The
 # kernel hands over the lower-numbered SIGINT first, so SIGTERM is the second and sets the status.
-"$bin" --headless --spp 1000000 --size 4000x3000 --threads 2 -o big.pfm 2>/dev/null &
-pid=$!
-sleep 2
-kill -INT "$pid"
-kill -TERM "$pid"
-start=$(date +%s%N)
-wait "$pid"
-status=$?
-elapsed_ms=$(( ($(date +%s%N) - start) / 1000000 ))
-[ "$status" = 143 ] || fail "SIGINT then SIGTERM: exit status $status, expected 143"
-[ "$elapsed_ms" -lt 2000 ] || fail "the second signal took ${elapsed_ms} ms to exit"
-[ -e big.pfm ] && fail "the second signal let the write finish (or left a partial big.pfm)"
+# The time bound is on exiting "at once"; a run that waits for the write takes seconds every time,
+# while this shared VM now and then stalls a whole process for about 2 s (the same CPU-bound loop
+# measured 1.3 to 1.7 s from one run to the next), so a slow trial is repeated, up to three.
+second_signal() {
+  rm -f big.pfm
+  "$bin" --headless --spp 1000000 --size 4000x3000 --threads 2 -o big.pfm 2>/dev/null &
+  local pid=$!
+  sleep 2
+  kill -INT "$pid"
+  kill -TERM "$pid"
+  local start
+  start=$(date +%s%N)
+  wait "$pid"
+  local status=$?
+  elapsed_ms=$(( ($(date +%s%N) - start) / 1000000 ))
+  [ "$status" = 143 ] || fail "SIGINT then SIGTERM: exit status $status, expected 143"
+  [ -e big.pfm ] && fail "the second signal let the write finish (or left a partial big.pfm)"
+}
+times=""
+for _ in 1 2 3; do
+  second_signal
+  times="$times ${elapsed_ms} ms"
+  [ "$elapsed_ms" -lt 2000 ] && break
+done
+[ "$elapsed_ms" -lt 2000 ] || fail "the second signal took${times} to exit"
 
 # kill -9 at assorted moments of a run that writes a 3000x2000 PFM (72 MB): the output is either
 # absent or complete, never truncated. The moments are fractions of a timed full run, so that
