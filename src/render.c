@@ -109,8 +109,9 @@ static void render_tiles(struct ao_render *r, int self)
     uint64_t eye = 0, shadow = 0;
     for (int v = 0; v < threads && !aborted(r); v++) {
         int k = (self + v) % threads, size = share_size(r, k);
-        for (int n; (n = atomic_fetch_add_explicit(&r->shares[k].next, 1, memory_order_relaxed)) < size;) {
-            if (aborted(r))
+        for (;;) {
+            int n = atomic_fetch_add_explicit(&r->shares[k].next, 1, memory_order_relaxed);
+            if (n >= size || aborted(r))
                 break;
             render_tile(r, n % r->tiles_x, k + threads * (n / r->tiles_x), &eye, &shadow);
         }
