@@ -201,13 +201,20 @@ struct row {
     double total, shadow, ceiling, ratio, all_ceiling, all_ratio, in_situ, inside, ms, scaling, bare_scaling;
 };
 
-/* The median over n rows of the field at byte offset `field`. */
-static double median_of(const struct row *rows, int n, size_t field)
+/* Field by field, the median over n rows (a row is doubles only, so its fields are taken by index). */
+static struct row median_row(const struct row *rows, int n)
 {
-    double v[REPEATS];
-    for (int k = 0; k < n; k++)
-        v[k] = *(const double *)((const char *)&rows[k] + field);
-    return median(v, n);
+    enum { FIELDS = sizeof(struct row) / sizeof(double) };
+    double out[FIELDS];
+    for (int f = 0; f < FIELDS; f++) {
+        double v[REPEATS];
+        for (int k = 0; k < n; k++)
+            memcpy(&v[k], (const char *)&rows[k] + f * sizeof(double), sizeof(double));
+        out[f] = median(v, n);
+    }
+    struct row r;
+    memcpy(&r, out, sizeof r);
+    return r;
 }
 
 /* One repeat at this spppp: aoview and then the ceiling, at one and then two threads, back to
@@ -271,18 +278,7 @@ static void bench_scene(struct ao_scene *scene, double *rate_2x16)
             repeats[0][k] = pair[0], repeats[1][k] = pair[1];
         }
         for (int t = 0; t < 2; t++)
-            rows[t][s] = (struct row){
-                median_of(repeats[t], REPEATS, offsetof(struct row, total)),
-                median_of(repeats[t], REPEATS, offsetof(struct row, shadow)),
-                median_of(repeats[t], REPEATS, offsetof(struct row, ceiling)),
-                median_of(repeats[t], REPEATS, offsetof(struct row, ratio)),
-                median_of(repeats[t], REPEATS, offsetof(struct row, all_ceiling)),
-                median_of(repeats[t], REPEATS, offsetof(struct row, all_ratio)),
-                median_of(repeats[t], REPEATS, offsetof(struct row, in_situ)),
-                median_of(repeats[t], REPEATS, offsetof(struct row, inside)),
-                median_of(repeats[t], REPEATS, offsetof(struct row, ms)),
-                median_of(repeats[t], REPEATS, offsetof(struct row, scaling)),
-                median_of(repeats[t], REPEATS, offsetof(struct row, bare_scaling))};
+            rows[t][s] = median_row(repeats[t], REPEATS);
     }
     printf("%-7s %-5s %9s %9s %9s %7s %9s %7s %8s %7s %11s %7s %9s %9s\n", "threads", "spppp", "Mrays/s", "shadow",
            "ceiling", "ratio", "all ceil", "all", "in situ", "inside", "passes/s", "ms/pass", "scaling", "bare x2");
