@@ -12,7 +12,8 @@ bool ao_accum_init(struct ao_accum *a, int width, int height)
     a->height = height;
     a->sum = calloc(3 * pixels, sizeof *a->sum);
     a->count = calloc(pixels, sizeof *a->count);
-    if (!a->sum || !a->count) {
+    a->odd_sum = calloc(pixels, sizeof *a->odd_sum);
+    if (!a->sum || !a->count || !a->odd_sum) {
         fprintf(stderr, "aoview: out of memory for a %dx%d accumulation buffer\n", width, height);
         ao_accum_finish(a);
         return false;
@@ -24,6 +25,7 @@ void ao_accum_finish(struct ao_accum *a)
 {
     free(a->sum);
     free(a->count);
+    free(a->odd_sum);
     memset(a, 0, sizeof *a);
 }
 
@@ -32,6 +34,7 @@ void ao_accum_reset(struct ao_accum *a)
     size_t pixels = (size_t)a->width * (size_t)a->height;
     memset(a->sum, 0, 3 * pixels * sizeof *a->sum);
     memset(a->count, 0, pixels * sizeof *a->count);
+    memset(a->odd_sum, 0, pixels * sizeof *a->odd_sum);
 }
 
 void ao_accum_resolve(const struct ao_accum *a, float *rgb)

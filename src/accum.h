@@ -1,4 +1,6 @@
-/* Accumulation buffer: per-pixel double RGB sums and sample counts (28 bytes a pixel). */
+/* Accumulation buffer: per-pixel double RGB sums and sample counts, plus the channel sums of the
+ * odd passes alone, from which the error of the running average is estimated without a reference
+ * (36 bytes a pixel). */
 #ifndef AO_ACCUM_H
 #define AO_ACCUM_H
 
@@ -11,8 +13,9 @@
 /* Running sums; owned by the render thread, workers write disjoint pixels. */
 struct ao_accum {
     int width, height;
-    double *sum;        /* 3 per pixel */
-    uint32_t *count;    /* samples per pixel */
+    double *sum;        /* 3 per pixel, all passes */
+    uint32_t *count;    /* samples per pixel, all passes */
+    double *odd_sum;    /* per pixel, the three channels' sum over the odd passes' samples */
 };
 
 /* Allocates zeroed sums for width x height; false (with a message) when out of memory. */
@@ -24,13 +27,15 @@ void ao_accum_finish(struct ao_accum *a);
 /* Zeroes every sum and count (a restart). */
 void ao_accum_reset(struct ao_accum *a);
 
-/* Adds the sum of n samples to pixel p. */
-static inline void ao_accum_add(struct ao_accum *a, size_t p, struct ao_vec3 sum, uint32_t n)
+/* Adds the sum of n samples to pixel p; `odd` says which half of the passes they belong to. */
+static inline void ao_accum_add(struct ao_accum *a, size_t p, struct ao_vec3 sum, uint32_t n, bool odd)
 {
     a->sum[3 * p + 0] += sum.x;
     a->sum[3 * p + 1] += sum.y;
     a->sum[3 * p + 2] += sum.z;
     a->count[p] += n;
+    if (odd)
+        a->odd_sum[p] += (double)sum.x + (double)sum.y + (double)sum.z;
 }
 
 /* Writes the running average as 3 floats per pixel, top row first (0 where no sample yet). */

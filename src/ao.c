@@ -13,9 +13,18 @@
 
 #include "simd.h"
 
-/* Keys of a pixel's eye-ray stream (indexed by pass) and AO stream (indexed by sample), in the
+/* Keys of a pixel's eye-ray stream (indexed by eye ray) and AO stream (indexed by sample), in the
  * pass slot of the key, where no real pass number reaches. */
 static const uint64_t EYE_STREAM = UINT64_MAX - 1, AO_STREAM = UINT64_MAX;
+
+/* The pass slot of a stream for the given half of the passes. Random numbers are independent in
+ * any split, so both halves share one stream and its numbering; an Owen-scrambled Sobol sequence
+ * split by parity would leave each half on its own part of the square, so the odd half draws from
+ * a second, independently scrambled sequence and the two halves are independent estimates. */
+static uint64_t stream_for_half(const struct ao_context *ctx, uint64_t stream, int half)
+{
+    return ctx->sequence == AO_SEQUENCE_SOBOL && half ? stream - 2 : stream;
+}
 
 /* Pairs first .. first + n - 1 of the random stream `key` into u1/u2; one loop that vectorizes. */
 AO_VECTOR_CLONES
@@ -233,11 +242,12 @@ struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao
     return ao_vec3_scale(s->albedo, (float)sum);
 }
 
-/* The eye rays of pixels index[k] (at column[k], row[k]) in this pass, for the packet's count:
- * through the pixel centres, or jittered inside the pixel with AA; loops that vectorize. */
+/* The eye rays of pixels index[k] (at column[k], row[k]), number `ray` of their eye streams
+ * (slot `stream`), for the packet's count: through the pixel centres, or jittered inside the pixel
+ * with AA; loops that vectorize. */
 AO_VECTOR_CLONES
-static void make_eye_rays(const struct ao_context *ctx, uint64_t pass, const uint64_t *index, const int *column,
-                          const int *row, struct ao_packet *eye)
+static void make_eye_rays(const struct ao_context *ctx, uint64_t stream, uint64_t ray, const uint64_t *index,
+                          const int *column, const int *row, struct ao_packet *eye)
 {
     float du[AO_PACKET_SIZE], dv[AO_PACKET_SIZE];
     if (!ctx->aa)
@@ -245,10 +255,10 @@ static void make_eye_rays(const struct ao_context *ctx, uint64_t pass, const uin
             du[k] = dv[k] = 0.5f;
     else if (ctx->sequence == AO_SEQUENCE_RANDOM) /* the common case, in a loop that vectorizes */
         for (int k = 0; k < eye->count; k++)
-            ao_rng_pair(ao_rng_key(ctx->seed, index[k], EYE_STREAM), pass, &du[k], &dv[k]);
+            ao_rng_pair(ao_rng_key(ctx->seed, index[k], stream), ray, &du[k], &dv[k]);
     else
         for (int k = 0; k < eye->count; k++)
-            draw_pair(ctx, ao_rng_key(ctx->seed, index[k], EYE_STREAM), pass, &du[k], &dv[k]);
+            draw_pair(ctx, ao_rng_key(ctx->seed, index[k], stream), ray, &du[k], &dv[k]);
     const struct ao_view *view = &ctx->view;
     for (int k = 0; k < eye->count; k++) {
         struct ao_vec3 d = ao_camera_ray(view, (float)column[k] + du[k], (float)row[k] + dv[k]);
@@ -262,10 +272,13 @@ static void make_eye_rays(const struct ao_context *ctx, uint64_t pass, const uin
     }
 }
 
-void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, uint64_t pass,
-                      uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
-                      uint64_t *shadow_rays)
+/* One eye ray per pixel of the tile (number `ray`) and `count` AO samples from `first_sample`; adds
+ * each pixel's sum of sample values (background on a miss) to sums. */
+static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile, int half, uint64_t ray,
+                        uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
+                        uint64_t *shadow_rays)
 {
+    uint64_t eye_stream = stream_for_half(ctx, EYE_STREAM, half), ao_stream = stream_for_half(ctx, AO_STREAM, half);
     int width = tile->x1 - tile->x0, pixels = width * (tile->y1 - tile->y0);
     struct queue q;
     queue_start(&q, ctx);
@@ -284,7 +297,7 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
             if (++x == tile->x1) /* row by row, without a division per pixel */
                 x = tile->x0, y++;
         }
-        make_eye_rays(ctx, pass, index, column, row, &eye);
+        make_eye_rays(ctx, eye_stream, ray, index, column, row, &eye);
         ao_tracer_intersect(ctx->tracer, &eye, hits);
         *eye_rays += (uint64_t)eye.count;
         /* Their AO samples, queued across the tile so that batches fill at one sample per pass. */
@@ -296,11 +309,24 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
             struct ao_vec3 d = ao_vec3_make(eye.dir_x[k], eye.dir_y[k], eye.dir_z[k]);
             ao_surface_from_hit(ctx->scene, ctx->view.eye, d, &hits[k], &s);
             albedo[first + k] = s.albedo;
-            queue_samples(&q, &s, ao_rng_key(ctx->seed, index[k], AO_STREAM), first_sample, count, &sum[first + k]);
+            queue_samples(&q, &s, ao_rng_key(ctx->seed, index[k], ao_stream), first_sample, count, &sum[first + k]);
         }
     }
     flush(&q);
     for (int k = 0; k < pixels; k++)
-        sums[k] = miss[k] ? ao_vec3_scale(ctx->scene->background, (float)count) : ao_vec3_scale(albedo[k], (float)sum[k]);
+        sums[k] = ao_vec3_add(sums[k], miss[k] ? ao_vec3_scale(ctx->scene->background, (float)count)
+                                               : ao_vec3_scale(albedo[k], (float)sum[k]));
     *shadow_rays += q.traced;
+}
+
+void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, const struct ao_tile_work *work,
+                      struct ao_vec3 *sums, uint64_t *eye_rays, uint64_t *shadow_rays)
+{
+    int pixels = (tile->x1 - tile->x0) * (tile->y1 - tile->y0);
+    for (int k = 0; k < pixels; k++)
+        sums[k] = ao_vec3_make(0.0f, 0.0f, 0.0f);
+    for (int r = 0; r < work->rounds; r++)
+        trace_round(ctx, tile, work->half, work->first_ray + (uint64_t)r,
+                    work->first_sample + (uint64_t)r * (uint64_t)work->count, work->count, sums, eye_rays,
+                    shadow_rays);
 }

@@ -59,12 +59,20 @@ struct ao_tile {
     int x0, y0, x1, y1;
 };
 
-/* One pass over a tile: per pixel one eye ray (jittered with AA) and `count` AO samples; writes
- * each pixel's sum of sample values (background on a miss) to sums, row by row, and adds the rays
- * traced to *eye_rays / *shadow_rays. Eye rays go to the tracer in packets of 16, AO rays in
- * batches of up to AO_BATCH_RAYS gathered across the tile. Any thread. */
-void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, uint64_t pass,
-                      uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
-                      uint64_t *shadow_rays);
+/* Which part of its pixels' random streams a tile traces in one pass: `rounds` eye rays per pixel
+ * (numbered from first_ray), each with `count` AO samples (numbered on from first_sample). `half`
+ * is the pass's half of the accumulation (0 even, 1 odd); with Sobol numbers each half has streams
+ * of its own, numbered within the half, so that the halves are independent estimates. */
+struct ao_tile_work {
+    uint64_t first_ray, first_sample;
+    int rounds, count, half;
+};
+
+/* One pass over a tile: per pixel `rounds` eye rays (jittered with AA), each with `count` AO
+ * samples; writes each pixel's sum of sample values (background on a miss) to sums, row by row,
+ * and adds the rays traced to *eye_rays / *shadow_rays. Eye rays go to the tracer in packets of
+ * 16, AO rays in batches of up to AO_BATCH_RAYS gathered across the tile. Any thread. */
+void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, const struct ao_tile_work *work,
+                      struct ao_vec3 *sums, uint64_t *eye_rays, uint64_t *shadow_rays);
 
 #endif

@@ -16,12 +16,13 @@ enum { MAX_SPP = 1 << 30, MAX_SPPPP = 65536, MAX_THREADS = 256 };
 enum option_id {
     OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
     OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
-    OPT_VERSION, OPT_SAMPLER, OPT_BELOW,
+    OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR,
 };
 
 /* Names of the --sampler and --below-surface values, in their enums' order. */
 static const char *const sequences[] = {[AO_SEQUENCE_RANDOM] = "random", [AO_SEQUENCE_SOBOL] = "sobol", NULL};
 static const char *const belows[] = {[AO_BELOW_REFLECT] = "reflect", [AO_BELOW_TRACE] = "trace", NULL};
+static const char *const switches[] = {"off", "on", NULL};
 
 /* One row of the option table: long name, short name (or 0), whether it takes a value. */
 struct option_spec {
@@ -50,6 +51,8 @@ static const struct option_spec specs[] = {
     {"--version", 0, false, OPT_VERSION},
     {"--sampler", 0, true, OPT_SAMPLER},
     {"--below-surface", 0, true, OPT_BELOW},
+    {"--adaptive", 0, true, OPT_ADAPTIVE},
+    {"--target-error", 0, true, OPT_TARGET_ERROR},
 };
 
 static const char usage[] =
@@ -61,7 +64,11 @@ static const char usage[] =
     "  -o, --output FILE     .png (displayed image) or .pfm (linear float);\n"
     "                        default aoview.png with --headless\n"
     "  --spp N               total AO samples per pixel (default 256)\n"
-    "  --spppp N             AO samples per pixel per pass (default 1)\n"
+    "  --spppp N|auto        AO samples per pixel per pass; auto: from 1, doubling up\n"
+    "                        to about 2^20 samples a pass (default 1)\n"
+    "  --adaptive on|off     samples go where the estimated error is (default off)\n"
+    "  --target-error E      stop once the estimated RMSE is at most E times the\n"
+    "                        image mean, e.g. 0.01 (default: run to --spp)\n"
     "  --sampling M          uniform | hemisphere | cosine (default cosine)\n"
     "  --sampler S           random | sobol (Owen-scrambled) numbers for jitter and\n"
     "                        directions (default random)\n"
@@ -79,8 +86,8 @@ static const char usage[] =
     "  --version             show the version\n"
     "\n"
     "Window keys: U/H/C sampling, A anti-aliasing, Space pause, R restart,\n"
-    "+/- samples per pass, S screenshot, drag/wheel orbit, pan, zoom,\n"
-    "F1 or ? help, Esc/Q quit.\n";
+    "+/- samples per pass, G adaptive sampling, S screenshot,\n"
+    "drag/wheel orbit, pan, zoom, F1 or ? help, Esc/Q quit.\n";
 
 const char *ao_cli_usage(void)
 {
@@ -140,6 +147,19 @@ static bool parse_distance(const char *name, const char *value, float *out, char
         return true;
     }
     snprintf(msg, msg_size, "%s: expected a finite number greater than 0, got '%s'", name, value);
+    return false;
+}
+
+/* A relative error: a finite number in (0, 1]. */
+static bool parse_fraction(const char *name, const char *value, double *out, char *msg, size_t msg_size)
+{
+    char *end;
+    double e = strtod(value, &end);
+    if (!isspace((unsigned char)*value) && *end == '\0' && e > 0.0 && e <= 1.0) {
+        *out = e;
+        return true;
+    }
+    snprintf(msg, msg_size, "%s: expected a relative error greater than 0 and at most 1, got '%s'", name, value);
     return false;
 }
 
@@ -211,6 +231,10 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
         opts->spp = (uint32_t)n;
         return true;
     case OPT_SPPPP:
+        if (strcmp(value, "auto") == 0) {
+            opts->spppp = 0;
+            return true;
+        }
         if (!parse_count(name, value, 1, MAX_SPPPP, &n, msg, msg_size))
             return false;
         opts->spppp = (uint32_t)n;
@@ -230,6 +254,12 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
             return false;
         opts->below = (enum ao_below)choice;
         return true;
+    case OPT_ADAPTIVE:
+        if (!parse_choice(name, value, switches, &choice, msg, msg_size))
+            return false;
+        opts->adaptive = choice;
+        return true;
+    case OPT_TARGET_ERROR: return parse_fraction(name, value, &opts->target_error, msg, msg_size);
     }
     return false;
 }

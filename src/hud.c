@@ -58,10 +58,18 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, char *o
     item(out, size, &used, separator, "%s", ao_sampling_name(f->sampling));
     item(out, size, &used, separator, "AA %s", f->aa ? "on" : "off");
     item(out, size, &used, separator, "spp %u of %u", (unsigned)f->spp, (unsigned)f->target_spp);
+    if (isfinite(f->error))
+        item(out, size, &used, separator, "error %.2f %%", 100.0 * f->error);
     item(out, size, &used, separator, "%.1fs", s->seconds);
     item(out, size, &used, separator, "%.1f Mrays/s", mrays);
     item(out, size, &used, separator, "pass %u", (unsigned)f->pass);
-    item(out, size, &used, separator, "%d spp/pass", s->spppp);
+    if (s->spppp)
+        item(out, size, &used, separator, "%d spp/pass", s->spppp);
+    else
+        item(out, size, &used, separator, "auto %u spp/pass", (unsigned)f->spppp);
+    if (s->adaptive)
+        item(out, size, &used, separator, "adaptive, mean %.0f spp, %.0f %% converged", f->mean_spp,
+             100.0 * f->converged);
     if (!isnan(f->rmse))
         item(out, size, &used, separator, "RMSE %.4g", f->rmse);
     if (s->paused)

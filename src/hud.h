@@ -14,13 +14,15 @@ struct ao_hud_status {
     const char *scene;
     struct ao_frame_info info;   /* of the frame on screen */
     double seconds;              /* elapsed since the restart, ticking between frames */
-    int spppp;                   /* samples per pass as set (the next pass's) */
+    int spppp;                   /* samples per pass as set (the next pass's); 0: auto */
+    bool adaptive;               /* adaptive sampling as set */
     bool paused;
 };
 
 /* Writes the status facts joined by separator into out (always terminated, truncated to size):
- * scene, sampling mode, "AA on|off", "spp X of Y", "Ns", "M Mrays/s", "pass P", "N spp/pass", then
- * "RMSE E" when the frame has one and "paused" when paused. Pure. */
+ * scene, sampling mode, "AA on|off", "spp X of Y", "error E %" once estimated, "Ns", "M Mrays/s",
+ * "pass P", "N spp/pass" (or "auto N spp/pass"), "adaptive, mean M spp, C % converged" when
+ * adaptive, then "RMSE E" when the frame has one and "paused" when paused. Pure. */
 void ao_hud_format(const struct ao_hud_status *status, const char *separator, char *out, size_t size);
 
 /* The overlay's GL objects and scratch buffers; opaque. */

@@ -45,7 +45,7 @@ static void on_pass(const struct ao_frame_info *info, void *user)
                 mrays_per_second(info));
         if (!isnan(info->rmse))
             fprintf(rep->stats, ",%.9g", info->rmse);
-        fputc('\n', rep->stats);
+        fprintf(rep->stats, ",%.3f,%.6g,%.4f\n", info->mean_spp, info->error, info->converged);
         if (fflush(rep->stats) != 0) {
             fprintf(stderr, "%s: write failed\n", rep->stats_path);
             rep->stats_failed = true;
@@ -53,9 +53,9 @@ static void on_pass(const struct ao_frame_info *info, void *user)
     }
     if (rep->progress) {
         int filled = (int)(30.0 * info->spp / info->target_spp);
-        fprintf(stderr, "\r[%.*s%*s] spp %u/%u  %.1f s  %.1f Mrays/s", filled,
+        fprintf(stderr, "\r[%.*s%*s] spp %u/%u  error %.2f %%  %.1f s  %.1f Mrays/s", filled,
                 "##############################", 30 - filled, "", info->spp, info->target_spp,
-                info->seconds, mrays_per_second(info));
+                100.0 * info->error, info->seconds, mrays_per_second(info));
         if (info->done)
             fputc('\n', stderr);
     }
@@ -206,7 +206,7 @@ static int run(struct app *app, const struct ao_options *opts)
             fprintf(stderr, "--stats: cannot write %s: %s\n", opts->stats_path, strerror(errno));
             return EXIT_RUNTIME;
         }
-        fprintf(app->reporter.stats, "pass,spp,seconds,eye_rays,shadow_rays,mrays_per_s%s\n",
+        fprintf(app->reporter.stats, "pass,spp,seconds,eye_rays,shadow_rays,mrays_per_s%s,mean_spp,error,converged\n",
                 app->reference ? ",rmse" : "");
     }
 
@@ -215,12 +215,12 @@ static int run(struct app *app, const struct ao_options *opts)
     struct ao_render_config config = {
         .scene = &app->scene, .tracer = app->tracer, .width = width, .height = height,
         .threads = opts->threads ? opts->threads : (cores > 0 ? (int)cores : 1),
-        .seed = opts->seed, .target_spp = opts->spp,
+        .seed = opts->seed, .target_spp = opts->spp, .target_error = opts->target_error,
         .ao_distance = isnan(opts->ao_distance) ? app->scene.ao_distance : opts->ao_distance,
         .sequence = opts->sequence, .below = opts->below,
         .reference = app->reference, .on_pass = on_pass, .user = &app->reporter};
     struct ao_settings settings = {.sampling = opts->sampling, .aa = opts->aa, .spppp = (int)opts->spppp,
-                                   .camera = app->scene.camera};
+                                   .adaptive = opts->adaptive, .camera = app->scene.camera};
     struct ao_view view;
     if (!ao_camera_view(&settings.camera, width, height, &view)) {
         fprintf(stderr, "%s: the camera cannot form an image\n", app->scene.name);

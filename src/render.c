@@ -16,12 +16,38 @@
 enum { TILE = 16, FRESH = 4 };
 _Static_assert(TILE * TILE <= AO_TILE_PIXELS, "a tile must fit ao_estimate_tile");
 
-/* A thread's share of a pass: the tile rows k, k + threads, k + 2 threads, ... for thread k, row
- * by row, taken in order from `next`. Each thread keeps the same pixels pass after pass, so their
- * sums stay in its own cache (handed round between threads, they crossed caches on every pass);
- * a thread that has finished its share helps with the others'. */
+/* Adaptive sampling works on whole tiles. A tile takes MIN_PASSES passes (two in each half) and
+ * MIN_SPP samples per pixel before its error estimate decides anything. Then it joins a pass when
+ * the error a sample removes there, variance / spp (the derivative of variance/n), is at least
+ * SKIP_BELOW of the largest such value among the tiles: the greedy rule for the least image RMSE
+ * per sample, so work goes where the error falls fastest. A tile whose estimate says "no error"
+ * is rechecked once the busiest tile has RECHECK times its samples, so that none is left behind on
+ * a lucky estimate. */
+enum { MIN_PASSES = 4, MIN_SPP = 16, RECHECK = 8 };
+static const double SKIP_BELOW = 0.25, ROUNDING = 1e-6;
+
+/* --spppp auto: the first pass after a restart takes one sample per pixel, so that the first
+ * frame comes at once; each next pass doubles, up to about AUTO_SAMPLES samples over the pixels
+ * it traces (about a display frame's worth on two cores), in rounds of one eye ray with
+ * AUTO_PER_RAY AO samples. The schedule depends on samples, not on seconds, so that the image
+ * stays a function of the seed and settings alone. */
+enum { AUTO_SAMPLES = 1 << 20, AUTO_PER_RAY = 1 };
+
+/* What a tile has taken since the last restart; written by the thread that traces it. */
+struct tile_state {
+    uint32_t passes;
+    uint32_t rays[2], spp[2];            /* eye rays and AO samples per pixel, even and odd passes */
+    double variance;                     /* over its pixels, the sum of their estimated variances */
+    double mean;                         /* over its pixels, the sum of their averages */
+};
+
+/* A thread's share of a pass: the tiles of the pass's work list in tile rows k, k + threads,
+ * k + 2 threads, ... for thread k, taken in order from `next`. Each thread keeps the same pixels
+ * pass after pass, so their sums stay in its own cache (handed round between threads, they crossed
+ * caches on every pass); a thread that has finished its share helps with the others'. */
 struct share {
     _Alignas(64) atomic_int next;        /* a line of its own: the other threads take from it too */
+    int begin, end;                      /* its tiles in the work list */
 };
 
 struct ao_render {
@@ -51,8 +77,13 @@ struct ao_render {
     int busy;                            /* workers still in the pass */
     bool quit;                           /* workers exit */
     struct ao_context ctx;
-    uint64_t pass, first_sample, pass_restarts;
-    int samples, tiles_x, tiles_y;
+    uint64_t pass_restarts;
+    int samples;                         /* AO samples per pixel of this pass (fewer where the tile
+                                            is that close to target_spp) */
+    int per_ray;                         /* AO samples per eye ray; 0: all on one eye ray */
+    int tiles_x, tiles_y;
+    struct tile_state *tiles;            /* tiles_x * tiles_y, row by row */
+    int *work;                           /* the pass's tiles, grouped by share */
     struct share *shares;                /* one per thread, the render thread's first */
     atomic_uint_fast64_t eye_rays, shadow_rays;
 
@@ -79,27 +110,62 @@ static bool aborted(struct ao_render *r)
 
 /* ---- tiles: run by the render thread and every worker ---- */
 
-/* The tiles in thread k's share (see struct share). */
-static int share_size(const struct ao_render *r, int k)
+/* The part of its pixels' streams tile ts traces in this pass. */
+static struct ao_tile_work tile_work(const struct ao_render *r, const struct tile_state *ts)
 {
-    int threads = r->config.threads;
-    return r->tiles_x * ((r->tiles_y - k + threads - 1) / threads);
+    int half = (int)(ts->passes & 1);
+    uint32_t spp = ts->spp[0] + ts->spp[1], left = r->config.target_spp - spp;
+    int samples = (uint32_t)r->samples < left ? r->samples : (int)left;
+    struct ao_tile_work w = {.half = half, .rounds = 1, .count = samples};
+    if (r->per_ray && samples > r->per_ray && samples % r->per_ray == 0)
+        w.rounds = samples / r->per_ray, w.count = r->per_ray;
+    /* Random streams are numbered since the restart; Sobol ones within the half (see ao.h). */
+    bool own = r->ctx.sequence == AO_SEQUENCE_SOBOL;
+    w.first_ray = own ? ts->rays[half] : ts->rays[0] + ts->rays[1];
+    w.first_sample = own ? ts->spp[half] : spp;
+    return w;
 }
 
-/* Traces one tile and adds its sums to the accumulation. */
-static void render_tile(struct ao_render *r, int column, int row, uint64_t *eye, uint64_t *shadow)
+/* Traces tile t, adds its sums to the accumulation and brings its state up to date. */
+static void render_tile(struct ao_render *r, int t, uint64_t *eye, uint64_t *shadow)
 {
     const struct ao_context *ctx = &r->ctx;
+    struct tile_state *ts = &r->tiles[t];
     int width = ctx->view.width, height = ctx->view.height;
-    struct ao_tile t = {.x0 = column * TILE, .y0 = row * TILE};
-    t.x1 = t.x0 + TILE < width ? t.x0 + TILE : width;
-    t.y1 = t.y0 + TILE < height ? t.y0 + TILE : height;
+    struct ao_tile rect = {.x0 = t % r->tiles_x * TILE, .y0 = t / r->tiles_x * TILE};
+    rect.x1 = rect.x0 + TILE < width ? rect.x0 + TILE : width;
+    rect.y1 = rect.y0 + TILE < height ? rect.y0 + TILE : height;
+    struct ao_tile_work work = tile_work(r, ts);
     struct ao_vec3 sums[AO_TILE_PIXELS];
-    ao_estimate_tile(ctx, &t, r->pass, r->first_sample, r->samples, sums, eye, shadow);
-    for (int j = t.y0; j < t.y1; j++)
-        for (int i = t.x0; i < t.x1; i++)
-            ao_accum_add(&r->accum, (size_t)j * (size_t)width + (size_t)i,
-                         sums[(j - t.y0) * (t.x1 - t.x0) + (i - t.x0)], (uint32_t)r->samples);
+    ao_estimate_tile(ctx, &rect, &work, sums, eye, shadow);
+    uint32_t samples = (uint32_t)(work.rounds * work.count);
+    ts->passes++;
+    ts->rays[work.half] += (uint32_t)work.rounds;
+    ts->spp[work.half] += samples;
+    /* Every pixel of a tile has the even and odd sample counts n_a and n_b of the tile. */
+    double n_a = ts->spp[0], n_b = ts->spp[1], total = 0.0, squares = 0.0;
+    for (int j = rect.y0; j < rect.y1; j++)
+        for (int i = rect.x0; i < rect.x1; i++) {
+            size_t p = (size_t)j * (size_t)width + (size_t)i;
+            ao_accum_add(&r->accum, p, sums[(j - rect.y0) * (rect.x1 - rect.x0) + (i - rect.x0)], samples,
+                         work.half);
+            double all = r->accum.sum[3 * p] + r->accum.sum[3 * p + 1] + r->accum.sum[3 * p + 2];
+            double odd = r->accum.odd_sum[p], d = (all - odd) * n_b - odd * n_a;
+            total += all;
+            squares += d * d;
+        }
+    /* A pixel's halves' means A = even/n_a and B = odd/n_b (of the channel mean) are independent
+     * estimates with variances s2/n_a and s2/n_b, so E[(A - B)^2] = s2 (1/n_a + 1/n_b), and the
+     * whole average's variance s2/(n_a + n_b) is (A - B)^2 n_a n_b / (n_a + n_b)^2 in expectation;
+     * with d = 3 (A - B) n_a n_b that is d^2 / (9 n_a n_b n^2). Passes, not samples, are the
+     * independent units (a pass's samples share an eye ray), hence halves made of whole passes.
+     * The float sums of a pass round at a few 1e-8 of their value: relative differences below
+     * ROUNDING are taken for rounding, not noise (a background pass after pass is exactly 0). */
+    double n = n_a + n_b, pixels = (double)((rect.x1 - rect.x0) * (rect.y1 - rect.y0));
+    ts->mean = total / (3.0 * n);
+    double variance = n_a > 0.0 && n_b > 0.0 ? squares / (9.0 * n_a * n_b * n * n) : 0.0;
+    double rounding = ROUNDING * ts->mean / pixels;
+    ts->variance = variance > rounding * rounding * pixels ? variance : 0.0;
 }
 
 /* Thread `self`'s part of a pass: its own share, then what is left of the others'. */
@@ -108,12 +174,12 @@ static void render_tiles(struct ao_render *r, int self)
     int threads = r->config.threads;
     uint64_t eye = 0, shadow = 0;
     for (int v = 0; v < threads && !aborted(r); v++) {
-        int k = (self + v) % threads, size = share_size(r, k);
+        struct share *sh = &r->shares[(self + v) % threads];
         for (;;) {
-            int n = atomic_fetch_add_explicit(&r->shares[k].next, 1, memory_order_relaxed);
-            if (n >= size || aborted(r))
+            int n = sh->begin + atomic_fetch_add_explicit(&sh->next, 1, memory_order_relaxed);
+            if (n >= sh->end || aborted(r))
                 break;
-            render_tile(r, n % r->tiles_x, k + threads * (n / r->tiles_x), &eye, &shadow);
+            render_tile(r, r->work[n], &eye, &shadow);
         }
     }
     atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
@@ -159,6 +225,111 @@ static bool run_pass(struct ao_render *r)
         pthread_cond_wait(&r->pass_end, &r->pass_lock);
     pthread_mutex_unlock(&r->pass_lock);
     return !aborted(r);
+}
+
+/* ---- planning: run by the render thread between passes ---- */
+
+/* The pixels of tile t (fewer than TILE x TILE at the right and bottom edges). */
+static int tile_pixels(const struct ao_render *r, int t)
+{
+    int x0 = t % r->tiles_x * TILE, y0 = t / r->tiles_x * TILE;
+    int w = r->config.width - x0 < TILE ? r->config.width - x0 : TILE;
+    int h = r->config.height - y0 < TILE ? r->config.height - y0 : TILE;
+    return w * h;
+}
+
+static uint32_t tile_spp(const struct tile_state *ts)
+{
+    return ts->spp[0] + ts->spp[1];
+}
+
+/* True once adaptive sampling may leave tile ts out of a pass. */
+static bool settled(const struct tile_state *ts)
+{
+    return ts->passes >= MIN_PASSES && tile_spp(ts) >= MIN_SPP;
+}
+
+/* The image variance one more sample per pixel removes from tile t, per pixel: the derivative of
+ * variance/n over its pixels (see MIN_PASSES). */
+static double gain(const struct ao_render *r, int t)
+{
+    const struct tile_state *ts = &r->tiles[t];
+    return ts->variance / tile_pixels(r, t) / tile_spp(ts);
+}
+
+/* Fills the work list with the tiles the next pass traces, dealt to the threads' shares by tile
+ * row, and returns how many pixels they hold: every tile short of target_spp, or with adaptive
+ * sampling those among them that MIN_PASSES's rule picks. */
+static size_t select_tiles(struct ao_render *r, bool adaptive)
+{
+    int threads = r->config.threads, tiles = r->tiles_x * r->tiles_y;
+    uint32_t target = r->config.target_spp, busiest = 0;
+    double fastest = 0.0;
+    for (int t = 0; adaptive && t < tiles; t++)
+        if (tile_spp(&r->tiles[t]) < target) {
+            busiest = tile_spp(&r->tiles[t]) > busiest ? tile_spp(&r->tiles[t]) : busiest;
+            fastest = settled(&r->tiles[t]) && gain(r, t) > fastest ? gain(r, t) : fastest;
+        }
+    size_t pixels = 0;
+    int n = 0;
+    for (int k = 0; k < threads; k++) {
+        r->shares[k].begin = n;
+        for (int t = k * r->tiles_x; t < tiles; t++) {
+            const struct tile_state *ts = &r->tiles[t];
+            uint32_t spp = tile_spp(ts);
+            bool wanted = spp < target &&
+                          (!adaptive || !settled(ts) || (gain(r, t) > 0.0 && gain(r, t) >= SKIP_BELOW * fastest) ||
+                           (uint64_t)spp * RECHECK < busiest);
+            if (wanted) {
+                r->work[n++] = t;
+                pixels += (size_t)tile_pixels(r, t);
+            }
+            if ((t + 1) % r->tiles_x == 0) /* the end of a row: on to this share's next row */
+                t += (threads - 1) * r->tiles_x;
+        }
+        r->shares[k].end = n;
+    }
+    return pixels;
+}
+
+/* Fills in info's per-pixel counts, error estimate, converged share and whether the run is done,
+ * and selects the next pass's tiles. */
+static void survey(struct ao_render *r, struct ao_frame_info *info, bool adaptive)
+{
+    int tiles = r->tiles_x * r->tiles_y;
+    double image = (double)r->config.width * (double)r->config.height, samples = 0.0, variance = 0.0, mean = 0.0;
+    bool halves = true, all_settled = true;
+    info->spp = 0;
+    for (int t = 0; t < tiles; t++) {
+        const struct tile_state *ts = &r->tiles[t];
+        uint32_t spp = tile_spp(ts);
+        info->spp = spp > info->spp ? spp : info->spp;
+        samples += (double)spp * tile_pixels(r, t);
+        variance += ts->variance;
+        mean += ts->mean;
+        halves = halves && ts->passes >= 2;
+        all_settled = all_settled && (settled(ts) || spp >= r->config.target_spp);
+    }
+    info->mean_spp = samples / image;
+    /* sqrt(variance / image) / (mean / image), 0 or infinite for a black image */
+    info->error = !halves ? NAN : mean > 0.0 ? sqrt(variance * image) / mean : variance > 0.0 ? INFINITY : 0.0;
+    size_t next = select_tiles(r, adaptive);
+    info->converged = adaptive ? 1.0 - (double)next / image : 0.0;
+    info->done = next == 0 || (r->config.target_error > 0.0 && all_settled && info->error <= r->config.target_error);
+}
+
+/* The AO samples per pixel of the next pass: the setting, or with auto the schedule's next step
+ * for `pixels` pixels after a pass of `last` samples (0 after a restart). */
+static int pass_samples(const struct ao_settings *s, int last, size_t pixels)
+{
+    if (s->spppp > 0)
+        return s->spppp;
+    if (last == 0)
+        return 1;
+    int cap = 1;
+    while ((size_t)cap * 2 * pixels <= AUTO_SAMPLES)
+        cap *= 2;
+    return 2 * last < cap ? 2 * last : cap;
 }
 
 /* ---- publishing ---- */
@@ -216,41 +387,46 @@ static void *render_main(void *arg)
         struct ao_settings s = r->settings;
         if (info.restarts != r->restarts) {
             ao_accum_reset(&r->accum);
+            memset(r->tiles, 0, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
             info = (struct ao_frame_info){.restarts = r->restarts, .target_spp = r->config.target_spp};
             r->done = false;
         }
         pthread_mutex_unlock(&r->lock);
 
-        /* Run one pass. */
-        double start = now_seconds();
-        r->ctx.sampling = s.sampling;
-        r->ctx.aa = s.aa;
-        ao_camera_view(&s.camera, r->config.width, r->config.height, &r->ctx.view);
-        r->pass = info.pass;
-        r->first_sample = info.spp;
-        r->pass_restarts = info.restarts;
-        uint32_t left = info.target_spp - info.spp;
-        r->samples = (uint32_t)s.spppp < left ? s.spppp : (int)left;
-        atomic_store(&r->eye_rays, 0);
-        atomic_store(&r->shadow_rays, 0);
-        bool complete = run_pass(r);
-        info.eye_rays += atomic_load(&r->eye_rays);
-        info.shadow_rays += atomic_load(&r->shadow_rays);
-        info.seconds += now_seconds() - start;
-        info.sampling = s.sampling;
-        info.aa = s.aa;
+        /* Plan the pass: its tiles, its samples. */
+        size_t pixels = select_tiles(r, s.adaptive);
+        r->samples = pass_samples(&s, info.pass ? (int)info.spppp : 0, pixels);
+        r->per_ray = s.spppp > 0 ? 0 : AUTO_PER_RAY;
+
+        /* Run it, unless nothing is left to sample (adaptive sampling was just turned on). */
+        bool complete = false;
+        if (pixels) {
+            double start = now_seconds();
+            r->ctx.sampling = s.sampling;
+            r->ctx.aa = s.aa;
+            ao_camera_view(&s.camera, r->config.width, r->config.height, &r->ctx.view);
+            r->pass_restarts = info.restarts;
+            atomic_store(&r->eye_rays, 0);
+            atomic_store(&r->shadow_rays, 0);
+            complete = run_pass(r);
+            info.eye_rays += atomic_load(&r->eye_rays);
+            info.shadow_rays += atomic_load(&r->shadow_rays);
+            info.seconds += now_seconds() - start;
+            info.sampling = s.sampling;
+            info.aa = s.aa;
+        }
 
         /* Publish it. */
         if (complete) {
             info.pass++;
-            info.spp += (uint32_t)r->samples;
-            info.done = info.spp >= info.target_spp;
+            info.spppp = (uint32_t)r->samples;
+            survey(r, &info, s.adaptive);
             publish(r, &info);
             if (r->config.on_pass)
                 r->config.on_pass(&info, r->config.user);
         }
         pthread_mutex_lock(&r->lock);
-        if (complete && info.done && info.restarts == r->restarts) {
+        if ((complete ? info.done : !pixels) && info.restarts == r->restarts) {
             r->done = true;
             pthread_cond_broadcast(&r->finished);
         }
@@ -276,9 +452,12 @@ static bool allocate(struct ao_render *r)
             return false;
         }
     }
+    size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y;
+    r->tiles = calloc(tiles, sizeof *r->tiles);
+    r->work = calloc(tiles, sizeof *r->work);
     r->workers = calloc((size_t)r->config.threads, sizeof *r->workers);
     r->shares = aligned_alloc(_Alignof(struct share), (size_t)r->config.threads * sizeof *r->shares);
-    if (!r->workers || !r->shares) {
+    if (!r->tiles || !r->work || !r->workers || !r->shares) {
         fprintf(stderr, "aoview: out of memory starting the renderer\n");
         return false;
     }
@@ -375,6 +554,8 @@ void ao_render_destroy(struct ao_render *render)
     pthread_mutex_destroy(&render->lock);
     for (int k = 0; k < 3; k++)
         free(render->frames[k].rgb);
+    free(render->tiles);
+    free(render->work);
     free(render->workers);
     free(render->shares);
     ao_accum_finish(&render->accum);
@@ -403,6 +584,8 @@ void ao_render_set_settings(struct ao_render *render, const struct ao_settings *
     const struct ao_settings *old = &render->settings;
     bool changes_estimate = old->sampling != settings->sampling || old->aa != settings->aa ||
                             memcmp(&old->camera, &settings->camera, sizeof old->camera) != 0;
+    if (old->adaptive != settings->adaptive) /* what is left to sample changes */
+        render->done = false;
     render->settings = *settings;
     if (changes_estimate)
         restart_locked(render);

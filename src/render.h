@@ -16,7 +16,8 @@
 struct ao_settings {
     enum ao_sampling sampling;
     bool aa;
-    int spppp;               /* AO samples per pixel per pass */
+    int spppp;               /* AO samples per pixel per pass; 0: auto (render.c's schedule) */
+    bool adaptive;           /* samples go where the estimated error is (render.c) */
     bool paused;
     struct ao_camera camera;
 };
@@ -25,14 +26,20 @@ struct ao_settings {
 struct ao_frame_info {
     uint64_t restarts;       /* how many times accumulation restarted before this frame */
     uint32_t pass;           /* passes since the last restart, this one included */
-    uint32_t spp;            /* AO samples per pixel since the last restart */
+    uint32_t spp;            /* AO samples per pixel since the last restart (the most any pixel has) */
     uint32_t target_spp;
+    uint32_t spppp;          /* AO samples per pixel of this pass */
+    double mean_spp;         /* AO samples per pixel, averaged over the image */
+    double error;            /* estimated RMSE relative to the image mean, from the even and odd
+                                passes without a reference; NAN until both halves have a pass */
+    double converged;        /* share of the pixels that adaptive sampling leaves out of the next pass */
     double seconds;          /* wall time since the last restart */
     uint64_t eye_rays, shadow_rays;
     double rmse;             /* against the reference; NAN without one */
     enum ao_sampling sampling;
     bool aa;
-    bool done;               /* spp reached target_spp */
+    bool done;               /* spp reached target_spp, or the estimated error reached target_error,
+                                or adaptive sampling found nothing left to sample */
 };
 
 /* A published frame: the running average, 3 linear floats per pixel, top row first. */
@@ -49,7 +56,8 @@ struct ao_render_config {
     int width, height;
     int threads;
     uint64_t seed;
-    uint32_t target_spp;
+    uint32_t target_spp;     /* per pixel; with adaptive sampling the most a pixel gets */
+    double target_error;     /* stop when the estimated relative RMSE is at most this; 0: never */
     float ao_distance;
     enum ao_sequence sequence;   /* random or Sobol numbers for jitter and directions */
     enum ao_below below;         /* directions below the geometric surface */

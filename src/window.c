@@ -31,7 +31,8 @@ static const char HELP[] =
     "A  anti-aliasing on/off\n"
     "Space  pause/resume\n"
     "R  restart accumulation\n"
-    "+ -  double/halve samples per pass\n"
+    "+ -  double/halve samples per pass (leaves auto)\n"
+    "G  adaptive sampling on/off\n"
     "S  save aoview-N.png and aoview-N.pfm\n"
     "left drag  orbit\n"
     "right drag  pan\n"
@@ -85,9 +86,12 @@ static void set_glfw_running(bool running)
 
 /* ---- input: callbacks change settings at once; mouse moves and screenshots wait for the loop ---- */
 
-/* Doubles (factor 2) or halves (factor 0) the samples per pass within 1..65536. */
-static int scale_spppp(int spppp, int factor)
+/* Doubles (factor 2) or halves (factor 0) the samples per pass within 1..65536; from auto (0),
+ * those of the pass on screen, so that the keys switch to manual where auto stood. */
+static int scale_spppp(const struct viewer *v, int spppp, int factor)
 {
+    if (spppp == 0)
+        spppp = v->shown && v->shown->info.spppp ? (int)v->shown->info.spppp : 1;
     long next = factor ? 2L * spppp : spppp / 2;
     return next < 1 ? 1 : next > 65536 ? 65536 : (int)next;
 }
@@ -107,8 +111,9 @@ static void on_char(GLFWwindow *window, unsigned int codepoint)
     case 'c': s.sampling = AO_SAMPLING_COSINE; break;
     case 'a': s.aa = !s.aa; break;
     case ' ': s.paused = !s.paused; break;
-    case '+': case '=': s.spppp = scale_spppp(s.spppp, 2); break;
-    case '-': s.spppp = scale_spppp(s.spppp, 0); break;
+    case '+': case '=': s.spppp = scale_spppp(v, s.spppp, 2); break;
+    case '-': s.spppp = scale_spppp(v, s.spppp, 0); break;
+    case 'g': s.adaptive = !s.adaptive; break;
     case 'r': ao_render_restart(v->render); return;
     case 's': v->save = true; return;
     case '?': v->show_help = !v->show_help; return;
@@ -220,7 +225,8 @@ static void save(struct viewer *v)
 static struct ao_hud_status status(const struct viewer *v, const struct ao_settings *settings)
 {
     struct ao_hud_status s = {.scene = v->info->scene_name, .info = v->shown->info,
-                              .spppp = settings->spppp, .paused = settings->paused};
+                              .spppp = settings->spppp, .adaptive = settings->adaptive,
+                              .paused = settings->paused};
     s.seconds = s.info.seconds;
     if (!s.paused && !s.info.done)
         s.seconds += glfwGetTime() - v->shown_at;

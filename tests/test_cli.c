@@ -179,6 +179,25 @@ static void test_bad_structure(void **state)
     REJECT("--spp", "'--headless'", "--spp", "--headless");
 }
 
+static void test_adaptive_options(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE(&o, "--spppp", "auto", "--adaptive", "on", "--target-error", "0.01"));
+    assert_int_equal(o.spppp, 0);
+    assert_true(o.adaptive);
+    assert_true(o.target_error == 0.01);
+    assert_true(PARSE(&o, "--adaptive=off", "--target-error=1", "--spppp=auto", "--spppp=3"));
+    assert_false(o.adaptive);
+    assert_true(o.target_error == 1.0);
+    assert_int_equal(o.spppp, 3);
+    const char *errors[] = {"0", "-0.1", "1.5", "nan", "inf", "", "0.01x", " 0.1", "1e-400"};
+    for (size_t i = 0; i < sizeof errors / sizeof errors[0]; i++)
+        REJECT("--target-error", errors[i], "--target-error", (char *)errors[i]);
+    REJECT("--adaptive", "yes", "--adaptive", "yes");
+    REJECT("--spppp", "Auto", "--spppp", "Auto");
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -202,6 +221,7 @@ int main(void)
         cmocka_unit_test(test_bad_strings),
         cmocka_unit_test(test_bad_distances),
         cmocka_unit_test(test_bad_structure),
+        cmocka_unit_test(test_adaptive_options),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -47,12 +47,16 @@ done
 python3 - <<'PY' || fail "stats.csv is malformed"
 import csv
 rows = list(csv.reader(open('stats.csv')))
-assert rows[0] == ['pass', 'spp', 'seconds', 'eye_rays', 'shadow_rays', 'mrays_per_s', 'rmse'], rows[0]
+assert rows[0] == ['pass', 'spp', 'seconds', 'eye_rays', 'shadow_rays', 'mrays_per_s', 'rmse', 'mean_spp',
+                   'error', 'converged'], rows[0]
 body = rows[1:]
 assert [int(r[0]) for r in body] == [1, 2, 3], 'passes = ceil(10 / 4)'
 assert [int(r[1]) for r in body] == [4, 8, 10], 'cumulative spp'
 assert [int(r[3]) for r in body] == [768, 1536, 2304], 'one eye ray per pixel per pass'
 assert all(float(r[6]) > 0 for r in body), 'rmse'
+assert [float(r[7]) for r in body] == [4, 8, 10], 'mean spp without adaptive sampling'
+assert body[0][8] == 'nan' and all(float(r[8]) > 0 for r in body[1:]), 'error estimate from the second pass on'
+assert all(float(r[9]) == 0 for r in body), 'nothing converged without adaptive sampling'
 PY
 
 # A --stats file that cannot be written: one line and status 1, also when it is a FIFO whose

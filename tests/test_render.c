@@ -22,36 +22,41 @@ static const char SCENE[] = "camera eye 0 1.5 4 target 0 0.5 0 fov 40\n"
 struct counter {
     int calls;
     uint32_t last_pass, last_spp;
+    uint32_t spppp[8];       /* of the first eight passes */
 };
 
 static void count_pass(const struct ao_frame_info *info, void *user)
 {
     struct counter *c = user;
+    if (c->calls < 8)
+        c->spppp[c->calls] = info->spppp;
     c->calls++;
     c->last_pass = info->pass;
     c->last_spp = info->spp;
 }
 
-/* Renders SCENE to completion and returns a malloc'd copy of the final frame. */
-static float *render_with(int threads, uint32_t spp, int spppp, bool aa, enum ao_sampling sampling,
-                          enum ao_sequence sequence, struct ao_frame_info *info, struct counter *counter)
+/* Renders scene_text with config (scene, tracer and callback filled in here) and settings (its
+ * camera the scene's) to completion; returns a malloc'd copy of the final frame. */
+static float *render_scene(const char *scene_text, struct ao_render_config config, struct ao_settings settings,
+                           struct ao_frame_info *info, struct counter *counter)
 {
     struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
+    assert_true(ao_scene_parse(&scene, scene_text, "render.scene"));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     assert_non_null(tracer);
-    struct ao_render_config config = {.scene = &scene, .tracer = tracer, .width = 37, .height = 29,
-                                      .threads = threads, .seed = 5, .target_spp = spp,
-                                      .ao_distance = INFINITY, .sequence = sequence,
-                                      .on_pass = count_pass, .user = counter};
-    struct ao_settings settings = {.sampling = sampling, .aa = aa, .spppp = spppp, .camera = scene.camera};
+    config.scene = &scene;
+    config.tracer = tracer;
+    config.ao_distance = INFINITY;
+    config.on_pass = count_pass;
+    config.user = counter;
+    settings.camera = scene.camera;
     struct ao_render *r = ao_render_create(&config, &settings);
     assert_non_null(r);
     assert_true(ao_render_wait(r));
     const struct ao_frame *frame = ao_render_take_frame(r);
     assert_non_null(frame);
     assert_null(ao_render_take_frame(r));
-    size_t bytes = 3 * sizeof(float) * 37 * 29;
+    size_t bytes = 3 * sizeof(float) * (size_t)config.width * (size_t)config.height;
     float *copy = malloc(bytes);
     memcpy(copy, frame->rgb, bytes);
     *info = frame->info;
@@ -59,6 +64,16 @@ static float *render_with(int threads, uint32_t spp, int spppp, bool aa, enum ao
     ao_tracer_destroy(tracer);
     ao_scene_finish(&scene);
     return copy;
+}
+
+/* Renders SCENE at 37x29, seed 5, to completion and returns a malloc'd copy of the final frame. */
+static float *render_with(int threads, uint32_t spp, int spppp, bool aa, enum ao_sampling sampling,
+                          enum ao_sequence sequence, struct ao_frame_info *info, struct counter *counter)
+{
+    struct ao_render_config config = {.width = 37, .height = 29, .threads = threads, .seed = 5,
+                                      .target_spp = spp, .sequence = sequence};
+    struct ao_settings settings = {.sampling = sampling, .aa = aa, .spppp = spppp};
+    return render_scene(SCENE, config, settings, info, counter);
 }
 
 /* render_with random numbers. */
@@ -177,6 +192,92 @@ static void test_stop_ends_an_unfinished_render(void **state)
     ao_scene_finish(&scene);
 }
 
+/* Adaptive sampling with auto passes, at 128x96 with the given threads and sequence. */
+static float *render_adaptive(int threads, enum ao_sequence sequence, struct ao_frame_info *info)
+{
+    struct counter counter = {0};
+    struct ao_render_config config = {.width = 128, .height = 96, .threads = threads, .seed = 3,
+                                      .target_spp = 200, .sequence = sequence};
+    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 0, .adaptive = true};
+    return render_scene(SCENE, config, settings, info, &counter);
+}
+
+static void test_adaptive_auto_image_does_not_depend_on_threads(void **state)
+{
+    (void)state;
+    for (int s = 0; s < 2; s++) {
+        enum ao_sequence sequence = s ? AO_SEQUENCE_SOBOL : AO_SEQUENCE_RANDOM;
+        struct ao_frame_info a, b;
+        float *one = render_adaptive(1, sequence, &a);
+        float *three = render_adaptive(3, sequence, &b);
+        assert_memory_equal(one, three, 3 * sizeof(float) * 128 * 96);
+        assert_int_equal(a.pass, b.pass);
+        assert_true(a.mean_spp == b.mean_spp);
+        /* Adaptive sampling left some tiles short of the maximum. */
+        print_message("mean spp %g passes %u\n", a.mean_spp, a.pass);
+        assert_true(a.mean_spp < 200.0);
+        free(one);
+        free(three);
+    }
+}
+
+static void test_auto_passes_start_at_one_and_double(void **state)
+{
+    (void)state;
+    struct counter counter = {0};
+    struct ao_frame_info info;
+    struct ao_render_config config = {.width = 37, .height = 29, .threads = 2, .seed = 5, .target_spp = 100};
+    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 0};
+    free(render_scene(SCENE, config, settings, &info, &counter));
+    /* 1 + 2 + 4 + 8 + 16 + 32 = 63, then the 37 left of 100 (37x29 pixels are far below the cap). */
+    static const uint32_t expected[] = {1, 2, 4, 8, 16, 32, 64};
+    assert_int_equal(counter.calls, 7);
+    assert_memory_equal(counter.spppp, expected, sizeof expected);
+    assert_int_equal(info.spp, 100);
+    assert_true(info.mean_spp == 100.0);
+}
+
+/* A plane that nothing occludes, seen from above: cosine-sampled AO is rho with no variance, with
+ * or without AA, so adaptive sampling stops every tile at the minimum (MIN_PASSES = 4 passes of 4
+ * samples reach MIN_SPP = 16 in render.c). */
+static void test_adaptive_stops_an_open_plane_after_the_minimum(void **state)
+{
+    (void)state;
+    static const char plane[] = "camera eye 0 3 0.1 target 0 0 0 fov 40\n"
+                                "quad corner -1e3 0 -1e3 edge1 0 0 2e3 edge2 2e3 0 0 albedo 0.7\n";
+    struct counter counter = {0};
+    struct ao_frame_info info;
+    struct ao_render_config config = {.width = 40, .height = 30, .threads = 2, .seed = 5, .target_spp = 4096};
+    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 4, .adaptive = true};
+    float *rgb = render_scene(plane, config, settings, &info, &counter);
+    assert_true(info.done);
+    assert_int_equal(info.pass, 4);
+    assert_int_equal(info.spp, 16);
+    assert_true(info.error == 0.0);
+    assert_true(info.converged == 1.0);
+    for (size_t k = 0; k < 3 * 40 * 30; k++)
+        assert_true(fabsf(rgb[k] - 0.7f) < 1e-6f);
+    free(rgb);
+}
+
+/* --target-error stops the run once the estimate reaches it, far short of --spp; the estimate
+ * is a relative RMSE, so a few per cent takes some tens of samples here. */
+static void test_target_error_stops_the_run(void **state)
+{
+    (void)state;
+    for (int adaptive = 0; adaptive < 2; adaptive++) {
+        struct counter counter = {0};
+        struct ao_frame_info info;
+        struct ao_render_config config = {.width = 64, .height = 48, .threads = 2, .seed = 9,
+                                          .target_spp = 1u << 20, .target_error = 0.03};
+        struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 0, .adaptive = adaptive};
+        free(render_scene(SCENE, config, settings, &info, &counter));
+        assert_true(info.done);
+        assert_true(info.error <= 0.03);
+        assert_true(info.spp < 4096);
+    }
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -185,6 +286,10 @@ int main(void)
         cmocka_unit_test(test_image_is_finite_and_background_where_missed),
         cmocka_unit_test(test_restart_resets_and_settings_apply),
         cmocka_unit_test(test_stop_ends_an_unfinished_render),
+        cmocka_unit_test(test_adaptive_auto_image_does_not_depend_on_threads),
+        cmocka_unit_test(test_auto_passes_start_at_one_and_double),
+        cmocka_unit_test(test_adaptive_stops_an_open_plane_after_the_minimum),
+        cmocka_unit_test(test_target_error_stops_the_run),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

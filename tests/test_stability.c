@@ -381,7 +381,7 @@ static void test_long_accumulation_resolves_exactly(void **state)
     struct ao_vec3 c = ao_vec3_make(0.1f, 0.7f, 1.0f / 3.0f);
     float single[3] = {0.0f, 0.0f, 0.0f};
     for (int k = 0; k < PASSES; k++) {
-        ao_accum_add(&a, 0, c, 1);
+        ao_accum_add(&a, 0, c, 1, false);
         single[0] += c.x;
         single[1] += c.y;
         single[2] += c.z;
