@@ -56,7 +56,7 @@ void ao_tracer_thread_init(void);
 void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet *rays, struct ao_hit *hits);
 
 /* Occlusion rays traced together, in structure-of-arrays layout, rays 0..count-1: Embree's stream
- * sorts a batch into packets of one direction octant, faster the longer the batch (README). */
+ * sorts a batch into packets of one direction octant, faster the longer the batch (docs/performance.md). */
 enum { AO_BATCH_RAYS = 1024 };
 struct ao_batch {
     _Alignas(64) float org_x[AO_BATCH_RAYS];

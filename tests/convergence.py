@@ -13,7 +13,7 @@ with --reference) and DIR/L-S.pfm (the final image), and writes into --out:
                           random-number method) and the 1 % target
   convergence-N.md        the table: fitted slope, RMSE at equal time, time and spp to 1 % RMSE, mean
                           signed error of the final images with its z-score
-Definitions are in the table's notes and in docs/README.md.
+Definitions are in the table's notes and in docs/accuracy.md.
 """
 import argparse
 import csv

@@ -2,7 +2,7 @@
 # Convergence study: for each scene, every sampling method over several seeds, each run given about
 # the same time budget on one thread, with aoview's per-pass --stats against a reference; then
 # tests/convergence.py writes the CSV, the log-log charts (PNG and SVG) and the table into --out.
-# See docs/README.md ("Accuracy and speed") for what the outputs mean and how docs/ was made.
+# See docs/accuracy.md for what the outputs mean and how docs/ was made.
 #
 #   tests/convergence.sh [--aoview BIN] [--exact BIN] [--budget S] [--seeds N] [--size WxH]
 #                        [--ref-spp N] [--work DIR] [--out DIR] [--method LABEL[=ARGS]]... SCENE...

@@ -26,7 +26,7 @@ done
 # exact image. Pixels are independent (their own random streams), so the mean of the per-pixel
 # errors of two seeds has standard error sqrt(sum of per-pixel variances / 2) / pixels, each
 # variance estimated from the two seeds as (a - b)^2 / 2; the exact image's sub-pixel residual
-# (below 1e-5 on the image mean at this grid, docs/README.md) is far below it. Bound: 4 of those.
+# (below 1e-5 on the image mean at this grid, docs/accuracy.md) is far below it. Bound: 4 of those.
 "$exact" -q --size 64x48 --spp 4096 -o sphere-exact.pfm "$scenes/sphere-on-plane.scene" || fail "sphere: aoview-exact failed"
 for sampling in uniform hemisphere cosine; do
   for seed in 1 2; do

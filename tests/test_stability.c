@@ -1,6 +1,6 @@
 /* Stability where the methods could fail: self-intersection at extreme scales and contact occlusion,
  * degenerate meshes, grazing eye rays and silhouettes under AA, long accumulation, and the cost of
- * uniform-sphere sampling. Each test prints its measured figure (README.md, "Stability");
+ * uniform-sphere sampling. Each test prints its measured figure (docs/stability.md);
  * bounds are derived next to each check; seeds are fixed; random (not Sobol) numbers throughout,
  * so that samples are independent and the standard errors below hold. */
 #include <stdarg.h>
