@@ -49,6 +49,44 @@ sys.exit(0 if abs(mean) <= 4 * se else 1)
 PY
 done
 
+# Adaptive sampling stops pixels on their own error estimate, which could bias them (a tile whose
+# samples happened to agree stops early). Two seeds of an adaptive run to --target-error 0.01:
+# the mean error over the image against the exact image within 4 standard errors, estimated per
+# pixel from the two seeds as above (each pixel's two estimates are independent whatever spp each
+# seed stopped at). And the estimate itself: the run's last --stats row's estimated relative error
+# within a factor 1.25 of the true one (the RMSE against the exact image over its mean).
+for sampler in random sobol; do
+  for seed in 1 2; do
+    "$bin" --headless -q --size 64x48 --spp 4096 --spppp auto --adaptive on --target-error 0.01 \
+      --sampler "$sampler" --seed "$seed" --reference sphere-exact.pfm --stats "adaptive-$sampler-$seed.csv" \
+      -o "adaptive-$sampler-$seed.pfm" "$scenes/sphere-on-plane.scene" || fail "sphere: adaptive $sampler failed"
+  done
+  python3 - "$sampler" sphere-exact.pfm "adaptive-$sampler-1.pfm" "adaptive-$sampler-2.pfm" \
+    "adaptive-$sampler-1.csv" "adaptive-$sampler-2.csv" <<'PY' || fail "sphere: adaptive $sampler is biased or misjudges its error"
+import csv, math, struct, sys
+def read(path):
+    parts = open(path, 'rb').read().split(b'\n', 3)
+    w, h = map(int, parts[1].split())
+    v = struct.unpack('<%df' % (3 * w * h), parts[3])
+    return [sum(v[k:k + 3]) / 3 for k in range(0, len(v), 3)]
+ref, a, b = (read(p) for p in sys.argv[2:4 + 1])
+n = len(ref)
+mean = sum((x + y) / 2 - r for x, y, r in zip(a, b, ref)) / n
+se = math.sqrt(sum((x - y) ** 2 / 2 for x, y in zip(a, b)) / 2) / n
+ok = abs(mean) <= 4 * se
+image_mean = sum(ref) / n
+for path in sys.argv[5:]:
+    last = list(csv.DictReader(open(path)))[-1]
+    true = float(last['rmse']) / image_mean
+    ratio = float(last['error']) / true
+    print('%s: %s stops at mean %s spp, estimate %.4f, true %.4f (x%.2f)' % (sys.argv[1], path, last['mean_spp'],
+          float(last['error']), true, ratio))
+    ok = ok and 1 / 1.25 <= ratio <= 1.25 and float(last['error']) <= 0.01
+print('%s: mean error %+.2e, standard error %.2e (%+.2f)' % (sys.argv[1], mean, se, mean / se))
+sys.exit(0 if ok else 1)
+PY
+done
+
 # Refusals: exit 1, one line naming the scene, no output.
 for scene in spheres bunny; do
   "$exact" -o refused.pfm "$scenes/$scene.scene" 2>err.txt
