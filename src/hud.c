@@ -67,9 +67,10 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, char *o
         item(out, size, &used, separator, "%d spp/pass", s->spppp);
     else
         item(out, size, &used, separator, "auto %u spp/pass", (unsigned)f->spppp);
-    if (s->adaptive)
-        item(out, size, &used, separator, "adaptive, mean %.0f spp, %.0f %% converged", f->mean_spp,
-             100.0 * f->converged);
+    if (s->adaptive) {
+        item(out, size, &used, separator, "adaptive: %.0f %% converged", 100.0 * f->converged);
+        item(out, size, &used, separator, "mean %.0f spp", f->mean_spp);
+    }
     if (!isnan(f->rmse))
         item(out, size, &used, separator, "RMSE %.4g", f->rmse);
     if (s->paused)

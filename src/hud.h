@@ -21,7 +21,7 @@ struct ao_hud_status {
 
 /* Writes the status facts joined by separator into out (always terminated, truncated to size):
  * scene, sampling mode, "AA on|off", "spp X of Y", "error E %" once estimated, "Ns", "M Mrays/s",
- * "pass P", "N spp/pass" (or "auto N spp/pass"), "adaptive, mean M spp, C % converged" when
+ * "pass P", "N spp/pass" (or "auto N spp/pass"), "adaptive: C % converged", "mean M spp" when
  * adaptive, then "RMSE E" when the frame has one and "paused" when paused. Pure. */
 void ao_hud_format(const struct ao_hud_status *status, const char *separator, char *out, size_t size);
 

@@ -352,6 +352,12 @@ static void publish(struct ao_render *r, struct ao_frame_info *info)
     size_t count = 3 * (size_t)f->width * (size_t)f->height;
     ao_accum_resolve(&r->accum, f->rgb);
     info->rmse = r->config.reference ? rmse(f->rgb, r->config.reference, count) : NAN;
+    double mean = 0.0;
+    for (int t = 0; t < f->tiles_x * f->tiles_y; t++)
+        mean += r->tiles[t].mean;
+    mean /= (double)f->width * (double)f->height;
+    for (int t = 0; t < f->tiles_x * f->tiles_y; t++)
+        f->tile_error[t] = mean > 0.0 ? (float)(sqrt(r->tiles[t].variance / tile_pixels(r, t)) / mean) : 0.0f;
     f->info = *info;
     unsigned previous = atomic_exchange(&r->middle, (unsigned)r->back | FRESH);
     r->back = (int)(previous & ~(unsigned)FRESH);
@@ -447,7 +453,11 @@ static bool allocate(struct ao_render *r)
         r->frames[k].width = r->config.width;
         r->frames[k].height = r->config.height;
         r->frames[k].rgb = calloc(floats, sizeof(float));
-        if (!r->frames[k].rgb) {
+        r->frames[k].tile = TILE;
+        r->frames[k].tiles_x = r->tiles_x;
+        r->frames[k].tiles_y = r->tiles_y;
+        r->frames[k].tile_error = calloc((size_t)r->tiles_x * (size_t)r->tiles_y, sizeof(float));
+        if (!r->frames[k].rgb || !r->frames[k].tile_error) {
             fprintf(stderr, "aoview: out of memory for %dx%d frames\n", r->config.width, r->config.height);
             return false;
         }
@@ -552,8 +562,10 @@ void ao_render_destroy(struct ao_render *render)
     pthread_cond_destroy(&render->wake);
     pthread_mutex_destroy(&render->pass_lock);
     pthread_mutex_destroy(&render->lock);
-    for (int k = 0; k < 3; k++)
+    for (int k = 0; k < 3; k++) {
         free(render->frames[k].rgb);
+        free(render->frames[k].tile_error);
+    }
     free(render->tiles);
     free(render->work);
     free(render->workers);

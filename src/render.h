@@ -42,11 +42,15 @@ struct ao_frame_info {
                                 or adaptive sampling found nothing left to sample */
 };
 
-/* A published frame: the running average, 3 linear floats per pixel, top row first. */
+/* A published frame: the running average, 3 linear floats per pixel, top row first, and the
+ * estimated error of each tile of tile x tile pixels (the unit adaptive sampling decides on), as
+ * an RMSE relative to the image mean, tiles_x per row, top row first; 0 until estimated. */
 struct ao_frame {
     struct ao_frame_info info;
     int width, height;
     float *rgb;
+    int tile, tiles_x, tiles_y;
+    float *tile_error;
 };
 
 /* How to render; scene, tracer and reference must outlive the renderer. */

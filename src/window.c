@@ -17,6 +17,7 @@
 #include "chartview.h"
 #include "display.h"
 #include "glapi.h"
+#include "heatmap.h"
 #include "hud.h"
 #include "image.h"
 
@@ -33,6 +34,7 @@ static const char HELP[] =
     "R  restart accumulation\n"
     "+ -  double/halve samples per pass (leaves auto)\n"
     "G  adaptive sampling on/off\n"
+    "E  estimated error map on/off\n"
     "S  save aoview-N.png and aoview-N.pfm\n"
     "left drag  orbit\n"
     "right drag  pan\n"
@@ -61,12 +63,15 @@ struct viewer {
     const struct ao_frame *shown;    /* on screen; valid until the next ao_render_take_frame */
     double shown_at;                 /* glfwGetTime() when it was taken */
     bool show_hud, show_help, save;
+    bool show_error;                 /* the estimated error map instead of the image */
+    float *heat;                     /* its colours, allocated on first use */
     int drag;                        /* mouse button held over the window, or -1 */
     double cursor_x, cursor_y;
     double orbit_x, orbit_y, pan_x, pan_y, wheel;   /* mouse input not yet applied */
     struct ao_chart chart;           /* RMSE against time of the frames taken (with --reference) */
     struct look drawn;               /* as last drawn */
     bool dirty;                      /* redraw even if the look is the same: new frame, expose */
+    bool reupload;                   /* upload the frame on screen again: the view changed */
 };
 
 void ao_window_notify(void)
@@ -114,6 +119,7 @@ static void on_char(GLFWwindow *window, unsigned int codepoint)
     case '+': case '=': s.spppp = scale_spppp(v, s.spppp, 2); break;
     case '-': s.spppp = scale_spppp(v, s.spppp, 0); break;
     case 'g': s.adaptive = !s.adaptive; break;
+    case 'e': v->show_error = !v->show_error; v->reupload = true; return;
     case 'r': ao_render_restart(v->render); return;
     case 's': v->save = true; return;
     case '?': v->show_help = !v->show_help; return;
@@ -271,6 +277,9 @@ static void draw(struct viewer *v, const struct look *look, const struct ao_hud_
         char text[sizeof look->status];
         ao_hud_format(s, "\n", text, sizeof text);
         ao_hud_draw(v->hud, text, (int)(8 * scale), (int)(8 * scale), scale, look->width, look->height);
+        if (v->show_error)
+            ao_heatmap_draw_bar(v->hud, "estimated error", look->width - (int)(8 * scale), (int)(8 * scale), scale,
+                                look->width, look->height);
         draw_chart(v, look, content_scale);
     }
 }
@@ -382,17 +391,37 @@ static enum ao_window_result open_window(struct viewer *v)
     return AO_WINDOW_OK;
 }
 
+/* Uploads the frame on screen as the view shows it: the image, or its error map; false when the
+ * upload failed. */
+static bool upload(struct viewer *v)
+{
+    const struct ao_frame *f = v->shown;
+    v->dirty = true;
+    if (!v->show_error)
+        return ao_display_upload(v->display, f->rgb, f->width, f->height);
+    if (!v->heat && !(v->heat = malloc(3 * sizeof *v->heat * (size_t)f->width * (size_t)f->height))) {
+        fprintf(stderr, "aoview: out of memory for the error map\n");
+        return false;
+    }
+    ao_heatmap_tiles(f, v->heat);
+    return ao_display_upload(v->display, v->heat, f->width, f->height);
+}
+
 /* Takes the newest frame, if one is new, into the texture; false when the upload failed. */
 static bool take_frame(struct viewer *v)
 {
     const struct ao_frame *f = ao_render_take_frame(v->render);
-    if (!f)
-        return true;
+    if (!f) {
+        if (!v->shown || !v->reupload)
+            return true;
+        v->reupload = false;
+        return upload(v);
+    }
     v->shown = f;
     v->shown_at = glfwGetTime();
+    v->reupload = false;
     ao_chart_add(&v->chart, &f->info);
-    v->dirty = true;
-    return ao_display_upload(v->display, f->rgb, f->width, f->height);
+    return upload(v);
 }
 
 /* Shows the window at the first frame's size (fitted to the screen) once the renderer has one. */
@@ -456,6 +485,7 @@ enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_wi
         result = loop(&v);
     ao_hud_destroy(v.hud);
     ao_display_destroy(v.display);
+    free(v.heat);
     set_glfw_running(false);
     glfwTerminate();
     XSetIOErrorHandler(xlib_handler);

@@ -1,7 +1,8 @@
 #!/bin/bash
 # window suite: the real viewer in a real X window under Xvfb, driven by xdotool.
-#   test_window.sh keys    presses C, U, A, S, +, R, Esc in turn and checks the title, the
-#                          screenshot files and a clean exit within a second of Esc
+#   test_window.sh keys    presses C, U, A, S, +, R, G, E, Esc in turn and checks the title, the
+#                          screenshot files (E: the error map) and a clean exit within a second
+#                          of Esc
 #   test_window.sh stress  200 random keys, drags and resizes in a few seconds, then a screenshot
 #                          (no NaN in its PFM) and a clean exit
 #   test_window.sh chart   with --reference: a run in each sampling mode (H, then U, then C) leaves
@@ -87,6 +88,34 @@ assert not bad, '%d non-finite values' % len(bad)
 EOF
 }
 
+# The number of distinct colours in PNG $1 (8-bit RGB, any filter), read with zlib alone.
+png_colours() {
+    python3 - "$1" <<'EOF'
+import struct, sys, zlib
+data = open(sys.argv[1], 'rb').read()
+pos, idat, w, h = 8, b'', 0, 0
+while pos < len(data):
+    n, kind = struct.unpack('>I4s', data[pos:pos + 8])
+    if kind == b'IHDR':
+        w, h = struct.unpack('>II', data[pos + 8:pos + 16])
+    elif kind == b'IDAT':
+        idat += data[pos + 8:pos + 8 + n]
+    pos += 12 + n
+raw, stride, prev, colours = zlib.decompress(idat), 3 * w, bytearray(3 * w), set()
+for y in range(h):
+    kind, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+    for x in range(stride):
+        a, b, c = line[x - 3] if x >= 3 else 0, prev[x], prev[x - 3] if x >= 3 else 0
+        p = a + b - c
+        pred = [0, a, b, (a + b) // 2,
+                a if abs(p - a) <= abs(p - b) and abs(p - a) <= abs(p - c) else b if abs(p - b) <= abs(p - c) else c][kind]
+        line[x] = (line[x] + pred) & 255
+    colours.update(bytes(line[i:i + 3]) for i in range(0, stride, 3))
+    prev = line
+print(len(colours))
+EOF
+}
+
 # Counts, in the window's bottom right quarter on the screen, the pixels in each sampling mode's
 # chart colour (chartview.c's MODE_COLOUR, within 8 in each channel): prints the counts for
 # uniform, hemisphere and cosine, "0 0 0" without a chart.
@@ -128,7 +157,7 @@ if [ "$mode" = chart ]; then
         "$AO_SOURCE_ROOT/assets/scenes/spheres.scene" || { echo "FAIL: no reference"; exit 1; }
     args=(--reference ref.pfm)
 fi
-"$AO_BINARY" --size ${W}x$H --spp 1000000 --threads 2 --sampling hemisphere "${args[@]}" \
+"$AO_BINARY" --size ${W}x$H --spp 1000000 --spppp 1 --threads 2 --sampling hemisphere "${args[@]}" \
     "$AO_SOURCE_ROOT/assets/scenes/spheres.scene" >stdout 2>stderr &
 pid=$!
 wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window appeared"
@@ -167,6 +196,23 @@ if [ "$mode" = keys ]; then
         sleep 0.05
     done
     [ "$(pass)" -lt "$before" ] || fail "R did not restart (pass stayed at or above $before)"
+
+    # G: adaptive sampling, told in the title. E: the estimated error map, one colour per 16x16
+    # tile (10 x 8 of them here), saved by S as displayed; E again: the image, in many shades.
+    press g
+    wait_title " — adaptive: [0-9]+ % converged — mean [0-9]+ spp"
+    press e
+    sleep 0.5
+    press s
+    check_screenshot 2
+    colours=$(png_colours "$work/aoview-2.png")
+    [ "$colours" -le 80 ] || fail "E did not show the error map ($colours colours)"
+    press e
+    sleep 0.5
+    press s
+    check_screenshot 3
+    colours=$(png_colours "$work/aoview-3.png")
+    [ "$colours" -gt 80 ] || fail "E again did not show the image ($colours colours)"
 elif [ "$mode" = chart ]; then
     # The legend shows every mode's colour from the start; each run's curve adds to its mode's
     # count. Each run lasts 1.5 s: scores of frames, a line across most of the plot.
