@@ -14,7 +14,8 @@
 # per pass, so only then does the anti-aliasing converge as fast as the AO), cached in the work
 # directory under the aoview binary's checksum, so that it is remade whenever the renderer changes.
 # --method adds a method to compare (ARGS: extra aoview arguments separated by spaces, default
-# --sampling LABEL); without any, the methods are uniform, hemisphere and cosine. Timed runs use
+# --sampling LABEL, after --sampler random --adaptive off, which ARGS may override); without any,
+# the methods are uniform, hemisphere and cosine. Timed runs use
 # --threads 1, so that their seconds are comparable between methods and the study leaves the
 # machine's other cores alone.
 set -euo pipefail
@@ -79,7 +80,7 @@ for scene in "${scenes[@]}"; do
       if [ ! -f "$cached" ]; then
         echo "convergence.sh: $name: reference run, seed $seed, $ref_spp spp (cached as $cached)" >&2
         "$aoview" --headless -q --threads 2 --size "$size" --sampling cosine --spp "$ref_spp" \
-          --spppp 1 --seed "$seed" -o "$cached" "$scene"
+          --spppp 1 --sampler random --adaptive off --seed "$seed" -o "$cached" "$scene"
       fi
       pair+=("$cached")
     done
@@ -94,7 +95,9 @@ for scene in "${scenes[@]}"; do
   labels=()
   for method in "${methods[@]}"; do
     label=${method%%=*}
+    # Random numbers and every pixel alike, unless the method says otherwise.
     if [ "$method" = "$label" ]; then args=(--sampling "$label"); else read -r -a args <<<"${method#*=}"; fi
+    args=(--sampler random --adaptive off "${args[@]}")
     labels+=("$label")
     "$aoview" --headless -q --threads 1 --size "$size" --spp 64 "${args[@]}" --stats "$runs/calibrate.csv" \
       -o "$runs/calibrate.pfm" "$scene"
