@@ -65,13 +65,13 @@ static const char usage[] =
     "                        default aoview.png with --headless\n"
     "  --spp N               total AO samples per pixel (default 256)\n"
     "  --spppp N|auto        AO samples per pixel per pass; auto: from 1, doubling up\n"
-    "                        to about 2^20 samples a pass (default 1)\n"
-    "  --adaptive on|off     samples go where the estimated error is (default off)\n"
+    "                        to about 2^21 samples a pass, 8 per eye ray (default auto)\n"
+    "  --adaptive on|off     samples go where the estimated error is (default on)\n"
     "  --target-error E      stop once the estimated RMSE is at most E times the\n"
     "                        image mean, e.g. 0.01 (default: run to --spp)\n"
     "  --sampling M          uniform | hemisphere | cosine (default cosine)\n"
     "  --sampler S           random | sobol (Owen-scrambled) numbers for jitter and\n"
-    "                        directions (default random)\n"
+    "                        directions (default sobol)\n"
     "  --below-surface P     reflect | trace directions that point below the geometric\n"
     "                        surface (default reflect)\n"
     "  --aa, --no-aa         jittered eye rays on / off (default on)\n"
@@ -307,8 +307,8 @@ static bool parse_option(int argc, char **argv, int *i, struct ao_options *opts,
 bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, size_t msg_size)
 {
     *opts = (struct ao_options){
-        .spp = 256, .spppp = 1, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
-        .sequence = AO_SEQUENCE_RANDOM, .below = AO_BELOW_REFLECT,
+        .spp = 256, .spppp = 0, .adaptive = true, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
+        .sequence = AO_SEQUENCE_SOBOL, .below = AO_BELOW_REFLECT,
         .ao_distance = NAN,
     };
     for (int i = 1; i < argc; i++) {

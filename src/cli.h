@@ -16,11 +16,11 @@ struct ao_options {
     bool headless;
     const char *output;       /* NULL: aoview.png when headless */
     uint32_t spp;             /* default 256 */
-    uint32_t spppp;           /* default 1; 0: auto */
-    bool adaptive;            /* --adaptive: default off */
+    uint32_t spppp;           /* 0: auto, the default */
+    bool adaptive;            /* --adaptive: default on */
     double target_error;      /* --target-error: 0 (none) by default */
     enum ao_sampling sampling;/* default cosine */
-    enum ao_sequence sequence;/* --sampler: default random */
+    enum ao_sequence sequence;/* --sampler: default sobol */
     enum ao_below below;      /* --below-surface: default reflect */
     bool aa;                  /* default on */
     int width, height;        /* 0: the scene's image size, else 640x480 */

@@ -45,7 +45,9 @@ static void test_defaults(void **state)
     assert_false(o.headless);
     assert_null(o.output);
     assert_int_equal(o.spp, 256);
-    assert_int_equal(o.spppp, 1);
+    assert_int_equal(o.spppp, 0);     /* auto */
+    assert_true(o.adaptive);
+    assert_int_equal(o.sequence, AO_SEQUENCE_SOBOL);
     assert_int_equal(o.sampling, AO_SAMPLING_COSINE);
     assert_true(o.aa);
     assert_int_equal(o.width, 0);

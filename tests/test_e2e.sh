@@ -42,7 +42,7 @@ done
 "$bin" --headless -q --size 32x24 --spp 10 --spppp 4 --stats stats.csv --reference bunny.pfm.ref \
   "$root/assets/scenes/bunny.scene" -o x.pfm 2>/dev/null && fail "a missing --reference was accepted"
 "$bin" --headless -q --size 32x24 --spp 64 --spppp 64 "$root/assets/scenes/bunny.scene" -o ref.pfm
-"$bin" --headless -q --size 32x24 --spp 10 --spppp 4 --stats stats.csv --reference ref.pfm \
+"$bin" --headless -q --size 32x24 --spp 10 --spppp 4 --adaptive off --stats stats.csv --reference ref.pfm \
   "$root/assets/scenes/bunny.scene" -o x.pfm || fail "stats run failed"
 python3 - <<'PY' || fail "stats.csv is malformed"
 import csv

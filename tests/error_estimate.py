@@ -1,0 +1,121 @@
+#!/usr/bin/env python3
+"""The error estimate against the truth: for each scene, aoview runs with --stats against a
+reference, and every row's estimated relative RMSE (the `error` column, from the even and odd
+passes, no reference) is set beside the true one (rmse / the reference's mean). Writes
+error-estimate.csv, error-estimate.png (gnuplot) and error-estimate.md into --out.
+
+  tests/error_estimate.py [--aoview BIN] [--exact BIN] [--size WxH] [--spp N] [--work DIR]
+                          [--out DIR] SCENE...
+
+Reference: aoview-exact's image where the scene has a closed form, else one aoview run of
+16384 Sobol samples per pixel (seed 1001, no adaptive sampling), cached in --work under the
+binary's checksum. Its own error (about 0.03 % on the bunny at 160x120) is far below the
+errors compared here."""
+import argparse, csv, hashlib, math, os, struct, subprocess, sys
+
+CONFIGS = [('defaults', []), ('adaptive off', ['--adaptive', 'off']),
+           ('random, spppp 1, adaptive off', ['--sampler', 'random', '--spppp', '1', '--adaptive', 'off'])]
+
+
+def mean_of(path):
+    parts = open(path, 'rb').read().split(b'\n', 3)
+    w, h = map(int, parts[1].split())
+    values = struct.unpack('<%df' % (3 * w * h), parts[3][:12 * w * h])
+    return sum(values) / len(values)
+
+
+def reference(args, scene, name, checksum):
+    path = os.path.join(args.work, 'reference-%s-%s-%s.pfm' % (name, args.size, checksum))
+    if os.path.exists(path):
+        return path, 'cached'
+    exact = subprocess.run([args.exact, '-q', '--size', args.size, '--spp', '4096', '-o', path, scene],
+                           stderr=subprocess.PIPE, text=True)
+    if exact.returncode == 0:
+        return path, 'exact'
+    if 'no closed form' not in exact.stderr:
+        sys.exit(exact.stderr.strip())
+    print('error_estimate.py: %s: 16384-spp reference' % name, file=sys.stderr)
+    subprocess.run([args.aoview, '--headless', '-q', '--threads', '2', '--size', args.size, '--spp', '16384',
+                    '--sampler', 'sobol', '--spppp', 'auto', '--adaptive', 'off', '--seed', '1001', '-o', path,
+                    scene], check=True)
+    return path, '16384 spp'
+
+
+def main():
+    p = argparse.ArgumentParser()
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    p.add_argument('--aoview', default=os.path.join(root, 'build', 'aoview'))
+    p.add_argument('--exact')
+    p.add_argument('--size', default='160x120')
+    p.add_argument('--spp', default='1024')
+    p.add_argument('--work')
+    p.add_argument('--out', default=os.path.join(root, 'docs'))
+    p.add_argument('scenes', nargs='+')
+    args = p.parse_args()
+    args.exact = args.exact or os.path.join(os.path.dirname(args.aoview), 'aoview-exact')
+    args.work = args.work or os.path.join(os.path.dirname(args.aoview), 'error-estimate')
+    os.makedirs(args.work, exist_ok=True)
+    os.makedirs(args.out, exist_ok=True)
+    checksum = hashlib.sha256(open(args.aoview, 'rb').read()).hexdigest()[:12]
+    rows, table = [], []
+    for scene in args.scenes:
+        name = os.path.splitext(os.path.basename(scene))[0]
+        ref, kind = reference(args, scene, name, checksum)
+        mean = mean_of(ref)
+        for label, extra in CONFIGS:
+            stats = os.path.join(args.work, 'stats.csv')
+            subprocess.run([args.aoview, '--headless', '-q', '--threads', '2', '--size', args.size, '--spp',
+                            args.spp, '--seed', '1', '--reference', ref, '--stats', stats, '-o',
+                            os.path.join(args.work, 'run.pfm'), scene] + extra, check=True)
+            ratios = []
+            for r in csv.DictReader(open(stats)):
+                true, est = float(r['rmse']) / mean, float(r['error'])
+                rows.append([name, label, r['pass'], r['mean_spp'], '%.6g' % est, '%.6g' % true])
+                if float(r['mean_spp']) >= 10 and true > 0:
+                    ratios.append(est / true)
+            last = rows[-1]
+            worst = max(ratios, key=lambda x: abs(math.log(x))) if ratios else float('nan')
+            table.append((name, kind, label, len(ratios), min(ratios, default=float('nan')),
+                          max(ratios, default=float('nan')), worst, last[3], float(last[4]), float(last[5])))
+            print('%s, %s: %d rows from 10 spp, estimate/true %.3f to %.3f' % (name, label, len(ratios),
+                  table[-1][4], table[-1][5]), file=sys.stderr)
+    with open(os.path.join(args.out, 'error-estimate.csv'), 'w', newline='') as f:
+        w = csv.writer(f)
+        w.writerow(['scene', 'config', 'pass', 'mean_spp', 'estimate', 'true'])
+        w.writerows(rows)
+    chart(args, rows)
+    with open(os.path.join(args.out, 'error-estimate.md'), 'w') as f:
+        f.write('| scene | reference | settings | rows from 10 spp | estimate / true, min | max | at the end: mean spp, estimate, true |\n')
+        f.write('|---|---|---|---|---|---|---|\n')
+        for name, kind, label, n, lo, hi, worst, spp, est, true in table:
+            f.write('| %s | %s | %s | %d | %.3f | %.3f | %s, %.4f, %.4f |\n' % (name, kind, label, n, lo, hi, spp, est, true))
+
+
+def chart(args, rows):
+    """Estimate against truth, one panel, log-log, a point per row from 10 spp, the diagonal and
+    the factor-1.25 band."""
+    data = os.path.join(args.work, 'points.dat')
+    names = sorted({r[0] for r in rows})
+    with open(data, 'w') as f:
+        for name in names:
+            f.write('# %s\n' % name)
+            for r in rows:
+                if r[0] == name and float(r[3]) >= 10 and float(r[5]) > 0:
+                    f.write('%s %s\n' % (r[5], r[4]))
+            f.write('\n\n')
+    plot = ', '.join("'%s' index %d using 1:2 with points pt 7 ps 0.6 title '%s'" % (data, k, n)
+                     for k, n in enumerate(names))
+    script = """set terminal pngcairo size 720,540 font ',10'
+set output '%s'
+set logscale xy
+set xlabel 'true RMSE / image mean'
+set ylabel 'estimated (even and odd passes, no reference)'
+set key top left
+set grid
+plot x title 'estimate = true' lc 'black', 1.25*x dt 2 lc 'grey' title 'x 1.25', x/1.25 dt 2 lc 'grey' notitle, %s
+""" % (os.path.join(args.out, 'error-estimate.png'), plot)
+    subprocess.run(['gnuplot'], input=script, text=True, check=True)
+
+
+if __name__ == '__main__':
+    main()
