@@ -153,6 +153,7 @@ static const struct {
 } formats[] = {
     {".obj", ao_load_obj},
     {".ply", ao_load_ply},
+    {".stl", ao_load_stl},
 };
 
 /* The loader for path's extension, or NULL. */
@@ -179,7 +180,7 @@ bool ao_mesh_load(struct ao_mesh *mesh, const char *path)
     char *text;
     size_t size;
     if (!load) {
-        ao_load_report(path, 0, "unknown mesh format; expected a .obj or .ply file");
+        ao_load_report(path, 0, "unknown mesh format; expected .obj, .ply or .stl");
         return false;
     }
     if (!ao_file_read(path, &text, &size))

@@ -1,4 +1,4 @@
-/* Tests of the OBJ and PLY loaders: every supported form, the computed normals, degenerate
+/* Tests of the mesh loaders (OBJ, PLY, STL): every supported form, the computed normals, degenerate
  * triangles, and that each bad input fails with one "path:line: message" line and an empty mesh.
  * Fixtures live in tests/data/mesh; binary PLY files are generated into a temporary directory. */
 #include <stdarg.h>
@@ -600,6 +600,65 @@ static void test_ply_binary_truncated(void **state)
     }
 }
 
+/* ------------------------------------------------------------------ STL */
+
+/* The unit cube of cube.stl: 36 corners welded into its 8 corners (-0 and 0 as one), with the
+ * angle-weighted normals of a cube corner, (+-1, +-1, +-1) / sqrt(3) pointing outward. */
+static void assert_stl_cube(const struct ao_mesh *mesh)
+{
+    assert_mesh_valid(mesh);
+    assert_int_equal(mesh->vertex_count, 8);
+    assert_int_equal(mesh->triangle_count, 12);
+    const float k = 0.57735027f;
+    for (int i = 0; i < 8; i++) {
+        float x = (float)(i & 1), y = (float)(i >> 1 & 1), z = (float)(i >> 2);
+        size_t v = vertex_at(mesh, x, y, z);
+        assert_vec3_near(mesh->normals[v], (2 * x - 1) * k, (2 * y - 1) * k, (2 * z - 1) * k);
+    }
+}
+
+static void test_stl_ascii(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("cube.stl"));
+    assert_stl_cube(&mesh);
+    ao_mesh_finish(&mesh);
+}
+
+/* The same cube as binary STL, its 80-byte header starting with "solid" as many exporters'
+ * do: the size (84 + 50 n) decides. */
+static void test_stl_binary(void **state)
+{
+    (void)state;
+    struct ao_mesh ascii;
+    load_ok(&ascii, fixture("cube.stl"));
+    struct bytes b = {.size = 0};
+    char header[81];
+    snprintf(header, sizeof header, "%-80s", "solid cube, but binary");
+    put_text(&b, header);
+    put_int(&b, ascii.triangle_count, 4);
+    for (size_t t = 0; t < ascii.triangle_count; t++) {
+        for (int k = 0; k < 3; k++)
+            put_f32(&b, 0.0f);
+        for (int k = 0; k < 3; k++) {
+            struct ao_vec3 p = ascii.positions[ascii.indices[3 * t + k]];
+            put_f32(&b, p.x);
+            put_f32(&b, p.y);
+            put_f32(&b, p.z);
+        }
+        put_int(&b, 0, 2);
+    }
+    struct ao_mesh mesh;
+    load_ok(&mesh, temp_file("cube_binary.stl", b.data, b.size));
+    assert_stl_cube(&mesh);
+    ao_mesh_finish(&mesh);
+    /* One byte more or less: not binary, and not ASCII either (a NUL byte). */
+    expect_failure(temp_file("cube_long.stl", b.data, b.size - 1), ": ",
+                   "binary STL header declares 12 triangles (684 bytes) but the file has 683");
+    ao_mesh_finish(&ascii);
+}
+
 /* ------------------------------------------------------------------ bad input */
 
 /* Each bad fixture, where its one error line must point, and what it must say. */
@@ -655,6 +714,12 @@ static const struct {
     {"bad_ply_number.ply", ":11: ", "bad number 'abc'"},
     {"bad_ply_float_range.ply", ":11: ", "not a finite float"},
     {"bad_ply_claims.ply", ":12: ", "'vertex' declares 4000000000 rows, found 3"},
+    {"bad_stl_outside.stl", ":3: ", "'vertex' outside 'outer loop'"},
+    {"bad_stl_two.stl", ":6: ", "loop with 2 vertices; at least 3 needed"},
+    {"bad_stl_keyword.stl", ":6: ", "unknown STL keyword 'vertx'"},
+    {"bad_stl_unended.stl", ":6: ", "file ends inside a facet"},
+    {"bad_stl_number.stl", ":4: ", "bad number 'nan'"},
+    {"bad_stl_size.stl", ": ", "declares 2 triangles (184 bytes) but the file has 134 bytes"},
 };
 
 static void test_bad_inputs(void **state)
@@ -674,7 +739,7 @@ static void test_file_errors(void **state)
     assert_int_equal(mkdir(dir, 0700), 0);
     expect_failure(fixture("missing.obj"), ": ", "cannot open: No such file");
     expect_failure(dir, ": ", "is a directory");
-    expect_failure(fixture("tri.stl"), ": ", "unknown mesh format");
+    expect_failure(fixture("tri.3ds"), ": ", "unknown mesh format");
     expect_failure(data_dir, ": ", "unknown mesh format");
     expect_failure("dir.obj/file", ": ", "unknown mesh format");
 }
@@ -846,6 +911,8 @@ int main(void)
         cmocka_unit_test(test_ply_binary),
         cmocka_unit_test(test_ply_binary_errors),
         cmocka_unit_test(test_ply_binary_truncated),
+        cmocka_unit_test(test_stl_ascii),
+        cmocka_unit_test(test_stl_binary),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_unreadable_file),
