@@ -144,7 +144,7 @@ static void test_bad_sizes(void **state)
 static void test_bad_strings(void **state)
 {
     (void)state;
-    REJECT("--output: expected a file name ending in .png or .pfm", "'a.jpg'", "-o", "a.jpg");
+    REJECT("--output: expected a file name ending in .png, .pfm or .exr", "'a.jpg'", "-o", "a.jpg");
     REJECT("--output", "'png'", "--output=png");
     REJECT("--output", "''", "--output=");
     REJECT("--sampling: expected uniform, hemisphere or cosine", "'Cosine'", "--sampling",
