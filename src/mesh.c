@@ -154,6 +154,8 @@ static const struct {
     {".obj", ao_load_obj},
     {".ply", ao_load_ply},
     {".stl", ao_load_stl},
+    {".gltf", ao_load_gltf},
+    {".glb", ao_load_gltf},
 };
 
 /* The loader for path's extension, or NULL. */
@@ -180,7 +182,7 @@ bool ao_mesh_load(struct ao_mesh *mesh, const char *path)
     char *text;
     size_t size;
     if (!load) {
-        ao_load_report(path, 0, "unknown mesh format; expected .obj, .ply or .stl");
+        ao_load_report(path, 0, "unknown mesh format; expected .obj, .ply, .stl, .gltf or .glb");
         return false;
     }
     if (!ao_file_read(path, &text, &size))
