@@ -1,4 +1,4 @@
-/* Tests of the mesh loaders (OBJ, PLY, STL): every supported form, the computed normals, degenerate
+/* Tests of the mesh loaders (OBJ, PLY, STL, glTF): every supported form, the computed normals, degenerate
  * triangles, and that each bad input fails with one "path:line: message" line and an empty mesh.
  * Fixtures live in tests/data/mesh; binary PLY files are generated into a temporary directory. */
 #include <stdarg.h>
@@ -659,6 +659,31 @@ static void test_stl_binary(void **state)
     ao_mesh_finish(&ascii);
 }
 
+/* ------------------------------------------------------------------ glTF */
+
+/* nodes.gltf: scene 1 of two; a matrix node (x + 10) over a TRS node (translation y + 1, 90
+ * degrees about z, scale 2) holding a triangle without normals; a node mirroring x (scale -1,
+ * then z + 5) holding the triangle with NORMAL +z and a point primitive (skipped); a node outside
+ * the scene. The buffer is an external file whose name is percent-encoded. */
+static void test_gltf_nodes(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("nodes.gltf"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 6);
+    assert_int_equal(mesh.triangle_count, 2);
+    /* (0,0,0) (1,0,0) (0,1,0) scaled by 2, turned (x, y) -> (-y, x), moved by (10, 1, 0). */
+    size_t a = vertex_at(&mesh, 10, 1, 0), b = vertex_at(&mesh, 10, 3, 0), c = vertex_at(&mesh, 8, 1, 0);
+    assert_triangle(&mesh, 0, (uint32_t)a, (uint32_t)b, (uint32_t)c);
+    /* Mirrored: the winding turns round so that the file's normal +z still agrees with it. */
+    size_t d = vertex_at(&mesh, 0, 0, 5), e = vertex_at(&mesh, -1, 0, 5), f = vertex_at(&mesh, 0, 1, 5);
+    assert_triangle(&mesh, 1, (uint32_t)d, (uint32_t)f, (uint32_t)e);
+    for (size_t i = 0; i < 6; i++)
+        assert_vec3_near(mesh.normals[i], 0, 0, 1);
+    ao_mesh_finish(&mesh);
+}
+
 /* ------------------------------------------------------------------ bad input */
 
 /* Each bad fixture, where its one error line must point, and what it must say. */
@@ -720,6 +745,16 @@ static const struct {
     {"bad_stl_unended.stl", ":6: ", "file ends inside a facet"},
     {"bad_stl_number.stl", ":4: ", "bad number 'nan'"},
     {"bad_stl_size.stl", ": ", "declares 2 triangles (184 bytes) but the file has 134 bytes"},
+    {"bad_gltf_json.gltf", ":3: ", "JSON: unexpected character"},
+    {"bad_gltf_asset.gltf", ": ", "no asset.version"},
+    {"bad_gltf_version.gltf", ": ", "glTF version '1.0'; only 2.x is supported"},
+    {"bad_gltf_extension.gltf", ": ", "requires extension 'KHR_draco_mesh_compression'"},
+    {"bad_gltf_sparse.gltf", ": ", "accessor 0 (POSITION): sparse accessors are not supported"},
+    {"bad_gltf_position_type.gltf", ": ", "componentType 5123; only float (5126)"},
+    {"bad_gltf_index_count.gltf", ": ", "2 indices, not a whole number of triangles"},
+    {"bad_gltf_mesh_index.gltf", ": ", "node 1: 'mesh' 7 is out of range (2 defined)"},
+    {"bad_gltf_uri.gltf", ": ", "uri 'http://example.com/x.bin' is not a relative file name"},
+    {"bad_gltf_base64.gltf", ": ", "buffer 0: bad base64 data"},
 };
 
 static void test_bad_inputs(void **state)
@@ -913,6 +948,7 @@ int main(void)
         cmocka_unit_test(test_ply_binary_truncated),
         cmocka_unit_test(test_stl_ascii),
         cmocka_unit_test(test_stl_binary),
+        cmocka_unit_test(test_gltf_nodes),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_unreadable_file),

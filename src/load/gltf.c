@@ -539,16 +539,22 @@ static bool add_primitive(struct gltf *g, json_object *primitive, const double m
         return gltf_error(g, "more than %u vertices in all", AO_LOAD_NO_INDEX - 1);
     uint32_t base = (uint32_t)g->positions.count;
 
-    /* Vertices: p' = M (p, 1); n' = cofactor(M3x3) n, which is M's inverse transpose times det. */
+    /* Vertices: p' = M (p, 1); n' along M's inverse transpose times n, which is the cofactor
+     * matrix of M's 3x3 part divided by its determinant (only the sign of that matters). */
     struct ao_vec3 *p = ao_load_append(&g->positions, positions.count);
     struct ao_vec3 *n = ao_load_append(&g->normals, positions.count);
     bool *lacking = ao_load_append(&g->lacking, positions.count);
     if (!p || !n || !lacking)
         return ao_load_out_of_memory(g->path);
-    double c[9] = {m[5] * m[10] - m[6] * m[9], m[6] * m[8] - m[4] * m[10], m[4] * m[9] - m[5] * m[8],
-                   m[2] * m[9] - m[1] * m[10], m[0] * m[10] - m[2] * m[8], m[1] * m[8] - m[0] * m[9],
-                   m[1] * m[6] - m[2] * m[5], m[2] * m[4] - m[0] * m[6], m[0] * m[5] - m[1] * m[4]};
-    double det = m[0] * c[0] + m[4] * c[1] + m[8] * c[2];
+    double cof[3][3], det = 0.0;   /* cofactors C(r, c) of the 3x3 part, M(r, c) = m[4c + r] */
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+            cof[r][c] = m[4 * c1 + r1] * m[4 * c2 + r2] - m[4 * c2 + r1] * m[4 * c1 + r2];
+        }
+    for (int c = 0; c < 3; c++)
+        det += m[4 * c] * cof[0][c];
+    double sign = det < 0.0 ? -1.0 : 1.0;
     for (size_t i = 0; i < positions.count; i++) {
         double x = float_at(&positions, i, 0), y = float_at(&positions, i, 1), z = float_at(&positions, i, 2);
         p[i] = ao_vec3_make((float)(m[0] * x + m[4] * y + m[8] * z + m[12]),
@@ -562,8 +568,10 @@ static bool add_primitive(struct gltf *g, json_object *primitive, const double m
             double a = float_at(&normals, i, 0), b = float_at(&normals, i, 1), d = float_at(&normals, i, 2);
             if (!isfinite(a) || !isfinite(b) || !isfinite(d))
                 return gltf_error(g, "%s: normal %zu is not finite", where, i);
-            n[i] = ao_load_unit(c[0] * a + c[3] * b + c[6] * d, c[1] * a + c[4] * b + c[7] * d,
-                                c[2] * a + c[5] * b + c[8] * d);
+            double t[3];
+            for (int r = 0; r < 3; r++)
+                t[r] = sign * (cof[r][0] * a + cof[r][1] * b + cof[r][2] * d);
+            n[i] = ao_load_unit(t[0], t[1], t[2]);
         }
     }
     g->lacking_count += has_normals ? 0 : positions.count;
