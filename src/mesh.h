@@ -22,9 +22,9 @@ struct ao_mesh {
 /* True when path's extension names a mesh format ao_mesh_load reads. */
 bool ao_mesh_is_mesh_path(const char *path);
 
-/* Loads an .obj or .ply file (chosen by extension) into mesh; computes vertex normals when the
- * file has none. On failure prints one "path:line: message" line to stderr, leaves mesh empty
- * and returns false. Any thread. */
+/* Loads an .obj, .ply, .stl, .gltf or .glb file (chosen by extension, any case) into mesh;
+ * computes vertex normals where the file has none. On failure prints one "path:line: message"
+ * (or "path: message") line to stderr, leaves mesh empty and returns false. Any thread. */
 bool ao_mesh_load(struct ao_mesh *mesh, const char *path);
 
 /* Recomputes mesh->normals from the triangles (angle-weighted face normals). */

@@ -179,6 +179,21 @@ static void test_bad_structure(void **state)
     REJECT("--spp", "'--headless'", "--spp", "--headless");
 }
 
+/* EXR output, and the linear format the window's S key saves. */
+static void test_exr_and_save_format(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE_NONE(&o));
+    assert_false(o.save_exr);
+    assert_true(PARSE(&o, "-o", "out.EXR", "--save-format", "exr", "--reference", "r.exr"));
+    assert_string_equal(o.output, "out.EXR");
+    assert_true(o.save_exr);
+    assert_true(PARSE(&o, "--save-format=pfm"));
+    assert_false(o.save_exr);
+    REJECT("--save-format: expected pfm or exr", "'png'", "--save-format", "png");
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -202,6 +217,7 @@ int main(void)
         cmocka_unit_test(test_bad_strings),
         cmocka_unit_test(test_bad_distances),
         cmocka_unit_test(test_bad_structure),
+        cmocka_unit_test(test_exr_and_save_format),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
