@@ -33,7 +33,8 @@ static void on_error(exr_const_context_t ctxt, exr_result_t code, const char *me
     struct stream *s = user;
     if (s->message[0])
         return;
-    snprintf(s->message, sizeof s->message, "%s", message ? message : exr_get_default_error_message(code));
+    snprintf(s->message, sizeof s->message, "%s",
+             message ? message : exr_get_default_error_message(code));
     for (char *c = s->message; *c; c++)
         if (*c == '\n' || *c == '\r')
             *c = ' ';
@@ -81,7 +82,8 @@ static void point_channels(exr_encode_pipeline_t *encode, const float *rgb, int 
     for (int c = 0; c < encode->channel_count; c++) {
         exr_coding_channel_info_t *channel = &encode->channels[c];
         int offset = channel->channel_name[0] == 'R' ? 0 : channel->channel_name[0] == 'G' ? 1 : 2;
-        channel->encode_from_ptr = (const uint8_t *)(rgb + (size_t)encode->chunk.start_y * width * 3 + offset);
+        const float *row = rgb + (size_t)encode->chunk.start_y * (size_t)width * 3;
+        channel->encode_from_ptr = (const uint8_t *)(row + offset);
         channel->user_pixel_stride = 3 * sizeof(float);
         channel->user_line_stride = width * 3 * (int32_t)sizeof(float);
         channel->user_bytes_per_element = sizeof(float);
@@ -181,7 +183,8 @@ static const char *check_channels(exr_const_context_t ctxt)
             return "subsampled R, G or B channels are not supported";
         found |= 1 << c;
     }
-    return found == 7 ? NULL : "no R, G and B channels (greyscale, YC and layered images are not supported)";
+    return found == 7 ? NULL
+                      : "no R, G and B channels (greyscale, YC and layered images are not supported)";
 }
 
 /* Decodes one chunk's R, G and B into rgb (the data window's top-left at rgb[0]), as floats; the

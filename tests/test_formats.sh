@@ -41,8 +41,11 @@ python3 "$convert" "$obj" binary.stl && python3 "$convert" "$obj" ascii.stl --as
   python3 "$convert" "$obj" bunny.glb || fail "mesh_convert.py failed"
 cp "$obj" bunny.obj
 render bunny.obj -o obj.pfm || fail "the OBJ did not render"
-printf 'camera eye 0.5 1 2.5 target 0 0.42 0 up 0 1 0 fov 35\nmesh %s scale 0.1\nquad corner -50 0 -50 edge1 0 0 100 edge2 100 0 0\n' \
-  bunny.obj > obj.scene
+{
+  echo 'camera eye 0.5 1 2.5 target 0 0.42 0 up 0 1 0 fov 35'
+  echo 'mesh bunny.obj scale 0.1'
+  echo 'quad corner -50 0 -50 edge1 0 0 100 edge2 100 0 0'
+} > obj.scene
 render obj.scene -o obj-scene.pfm || fail "the OBJ scene did not render"
 for mesh in binary.stl ascii.stl external.gltf embedded.gltf bunny.glb; do
   if ! render "$mesh" -o "$mesh.pfm"; then
@@ -60,13 +63,19 @@ for mesh in binary.stl ascii.stl external.gltf embedded.gltf bunny.glb; do
   fi
 done
 
+# More than 65536 vertices: 32-bit indices in the glTF buffer.
+python3 "$convert" --grid 260 grid.obj && python3 "$convert" grid.obj grid.glb || fail "no grid"
+render grid.obj -o grid-obj.pfm && render grid.glb -o grid-glb.pfm || fail "the grid did not render"
+got=$(compare grid-obj.pfm grid-glb.pfm) || fail "the grid as GLB differs from the OBJ by $got"
+
 # EXR out, its header, and back in as a reference.
 spheres=$root/assets/scenes/spheres.scene
 render "$spheres" -o out.exr --sampling hemisphere || fail "-o out.exr failed"
 if command -v exrheader >/dev/null; then
   header=$(exrheader out.exr)
   for line in 'aoview.spp (type string): "16"' 'aoview.sampling (type string): "hemisphere"' \
-              'aoview.seed (type string): "3"' 'R, 32-bit floating-point' 'B, 32-bit floating-point'; do
+              'aoview.seed (type string): "3"' 'R, 32-bit floating-point' \
+              'B, 32-bit floating-point'; do
     grep -qF "$line" <<<"$header" || fail "out.exr's header lacks '$line'"
   done
 else
@@ -74,7 +83,8 @@ else
 fi
 render "$spheres" --sampling hemisphere --stats stats.csv --reference out.exr -o again.pfm ||
   fail "--reference out.exr failed"
-[ "$(tail -n 1 stats.csv | cut -d, -f7)" = 0 ] || fail "the same render differs from its EXR: $(tail -n 1 stats.csv)"
+[ "$(tail -n 1 stats.csv | cut -d, -f7)" = 0 ] ||
+  fail "the same render differs from its EXR: $(tail -n 1 stats.csv)"
 render "$spheres" -o missing/out.exr 2>err.txt && fail "-o into a missing directory succeeded"
 [ "$(wc -l < err.txt)" = 1 ] || fail "a failed EXR write printed: $(cat err.txt)"
 [ -z "$(ls missing 2>/dev/null)" ] || fail "a failed EXR write left a file"

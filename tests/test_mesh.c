@@ -1,5 +1,5 @@
-/* Tests of the mesh loaders (OBJ, PLY, STL, glTF): every supported form, the computed normals, degenerate
- * triangles, and that each bad input fails with one "path:line: message" line and an empty mesh.
+/* Tests of the mesh loaders (OBJ, PLY, STL, glTF): every supported form, the computed normals,
+ * degenerate triangles, and that each bad input fails with one "path:line: message" line and an empty mesh.
  * Fixtures live in tests/data/mesh; binary PLY files are generated into a temporary directory. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -674,13 +674,39 @@ static void test_gltf_nodes(void **state)
     assert_int_equal(mesh.vertex_count, 6);
     assert_int_equal(mesh.triangle_count, 2);
     /* (0,0,0) (1,0,0) (0,1,0) scaled by 2, turned (x, y) -> (-y, x), moved by (10, 1, 0). */
-    size_t a = vertex_at(&mesh, 10, 1, 0), b = vertex_at(&mesh, 10, 3, 0), c = vertex_at(&mesh, 8, 1, 0);
+    size_t a = vertex_at(&mesh, 10, 1, 0), b = vertex_at(&mesh, 10, 3, 0);
+    size_t c = vertex_at(&mesh, 8, 1, 0);
     assert_triangle(&mesh, 0, (uint32_t)a, (uint32_t)b, (uint32_t)c);
     /* Mirrored: the winding turns round so that the file's normal +z still agrees with it. */
-    size_t d = vertex_at(&mesh, 0, 0, 5), e = vertex_at(&mesh, -1, 0, 5), f = vertex_at(&mesh, 0, 1, 5);
+    size_t d = vertex_at(&mesh, 0, 0, 5), e = vertex_at(&mesh, -1, 0, 5);
+    size_t f = vertex_at(&mesh, 0, 1, 5);
     assert_triangle(&mesh, 1, (uint32_t)d, (uint32_t)f, (uint32_t)e);
     for (size_t i = 0; i < 6; i++)
         assert_vec3_near(mesh.normals[i], 0, 0, 1);
+    ao_mesh_finish(&mesh);
+}
+
+/* No scene: every root node; a non-indexed primitive with an embedded buffer (a triangle). */
+static void test_gltf_no_scene(void **state)
+{
+    (void)state;
+    static const char text[] =
+        "{\"asset\": {\"version\": \"2.0\"},\n"
+        " \"nodes\": [{\"mesh\": 0, \"translation\": [0, 0, 1]}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3,\n"
+        "                \"type\": \"VEC3\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}],\n"
+        " \"buffers\": [{\"byteLength\": 36, \"uri\": \"data:application/gltf-buffer;base64,"
+        "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}]}\n";
+    struct ao_mesh mesh;
+    load_ok(&mesh, temp_file("triangle.gltf", text, sizeof text - 1));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.triangle_count, 1);
+    assert_triangle(&mesh, 0, 0, 1, 2);
+    assert_vec3_near(mesh.positions[1], 1, 0, 1);
+    assert_vec3_near(mesh.positions[2], 0, 1, 1);
+    assert_vec3_near(mesh.normals[0], 0, 0, 1);
     ao_mesh_finish(&mesh);
 }
 
@@ -949,6 +975,7 @@ int main(void)
         cmocka_unit_test(test_stl_ascii),
         cmocka_unit_test(test_stl_binary),
         cmocka_unit_test(test_gltf_nodes),
+        cmocka_unit_test(test_gltf_no_scene),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_unreadable_file),

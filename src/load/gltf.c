@@ -64,6 +64,8 @@ struct gltf {
     size_t *parent;               /* per node: its parent, or SIZE_MAX */
     double (*world)[16];          /* per node: its world matrix, column major */
     uint64_t triangles, vertices; /* totals of the instances found so far */
+    uint64_t unique_triangles, unique_vertices;  /* the same counting each mesh once */
+    bool *mesh_counted;           /* per mesh: in the unique totals already */
     struct ao_load_array positions, normals, lacking, indices; /* ao_vec3, ao_vec3, bool, uint32 */
     size_t lacking_count;
 };
@@ -304,7 +306,8 @@ static bool load_buffer(struct gltf *g, json_object *json, size_t i)
     if (!integer(g, json, "byteLength", true, 0, MAX_INTEGER, where, &length))
         return false;
     json_object *uri_json = member(json, "uri");
-    const char *uri = json_object_is_type(uri_json, json_type_string) ? json_object_get_string(uri_json) : NULL;
+    const char *uri = json_object_is_type(uri_json, json_type_string)
+                          ? json_object_get_string(uri_json) : NULL;
     size_t size = 0;
     if (uri_json && !uri)
         return gltf_error(g, "%s: 'uri' is not a string", where);
@@ -363,14 +366,16 @@ static bool accessor(struct gltf *g, size_t i, const char *type, bool want_float
         !integer(g, a, "byteOffset", false, 0, MAX_INTEGER, where, &offset) ||
         !index_member(g, a, "bufferView", length_of(g->views), where, &view_index))
         return false;
-    if (want_float ? component != FLOAT
-                   : component != UNSIGNED_BYTE && component != UNSIGNED_SHORT && component != UNSIGNED_INT)
+    bool is_index = component == UNSIGNED_BYTE || component == UNSIGNED_SHORT ||
+                    component == UNSIGNED_INT;
+    if (want_float ? component != FLOAT : !is_index)
         return gltf_error(g, "%s: componentType %llu; %s", where, (unsigned long long)component,
                           want_float ? "only float (5126) is supported"
                                      : "indices must be unsigned byte, short or int");
     if (count == 0)
         return gltf_error(g, "%s: count is 0", where);
-    size_t element = component == FLOAT ? 12 : component == UNSIGNED_INT ? 4 : component == UNSIGNED_SHORT ? 2 : 1;
+    size_t element = component == FLOAT ? 12 : component == UNSIGNED_INT ? 4
+                   : component == UNSIGNED_SHORT ? 2 : 1;
 
     /* The bufferView, inside its buffer. */
     char view_where[64];
@@ -514,7 +519,8 @@ static bool add_primitive(struct gltf *g, json_object *primitive, const double m
     json_object *attributes = member(primitive, "attributes");
     size_t count = length_of(g->accessors), position_index, normal_index = 0, index_index = 0;
     struct elements positions, normals = {0}, indices = {0};
-    bool has_normals = member(attributes, "NORMAL") != NULL, indexed = member(primitive, "indices") != NULL;
+    bool has_normals = member(attributes, "NORMAL") != NULL;
+    bool indexed = member(primitive, "indices") != NULL;
     if (!member(attributes, "POSITION"))
         return gltf_error(g, "%s: no POSITION attribute", where);
     if (!index_member(g, attributes, "POSITION", count, where, &position_index) ||
@@ -525,7 +531,8 @@ static bool add_primitive(struct gltf *g, json_object *primitive, const double m
                      !accessor(g, index_index, "SCALAR", false, "indices", &indices))))
         return false;
     if (has_normals && normals.count != positions.count)
-        return gltf_error(g, "%s: %zu normals for %zu positions", where, normals.count, positions.count);
+        return gltf_error(g, "%s: %zu normals for %zu positions", where, normals.count,
+                          positions.count);
     size_t corners = indexed ? indices.count : positions.count;
     if (corners % 3)
         return gltf_error(g, "%s: %zu %s, not a whole number of triangles", where, corners,
@@ -556,7 +563,8 @@ static bool add_primitive(struct gltf *g, json_object *primitive, const double m
         det += m[4 * c] * cof[0][c];
     double sign = det < 0.0 ? -1.0 : 1.0;
     for (size_t i = 0; i < positions.count; i++) {
-        double x = float_at(&positions, i, 0), y = float_at(&positions, i, 1), z = float_at(&positions, i, 2);
+        double x = float_at(&positions, i, 0), y = float_at(&positions, i, 1);
+        double z = float_at(&positions, i, 2);
         p[i] = ao_vec3_make((float)(m[0] * x + m[4] * y + m[8] * z + m[12]),
                             (float)(m[1] * x + m[5] * y + m[9] * z + m[13]),
                             (float)(m[2] * x + m[6] * y + m[10] * z + m[14]));
@@ -565,7 +573,8 @@ static bool add_primitive(struct gltf *g, json_object *primitive, const double m
         lacking[i] = !has_normals;
         n[i] = ao_vec3_make(0.0f, 0.0f, 0.0f);
         if (has_normals) {
-            double a = float_at(&normals, i, 0), b = float_at(&normals, i, 1), d = float_at(&normals, i, 2);
+            double a = float_at(&normals, i, 0), b = float_at(&normals, i, 1);
+            double d = float_at(&normals, i, 2);
             if (!isfinite(a) || !isfinite(b) || !isfinite(d))
                 return gltf_error(g, "%s: normal %zu is not finite", where, i);
             double t[3];
@@ -614,6 +623,7 @@ static bool add_node_mesh(struct gltf *g, size_t node, bool count_only)
     if (!array_member(g, json_object_array_get_idx(g->meshes, mesh), "primitives", where,
                       &primitives, &primitive_count))
         return false;
+    uint64_t triangles = g->triangles, vertices = g->vertices;
     for (size_t k = 0; k < primitive_count; k++) {
         json_object *primitive = json_object_array_get_idx(primitives, k);
         uint64_t mode;
@@ -622,6 +632,11 @@ static bool add_node_mesh(struct gltf *g, size_t node, bool count_only)
             return false;
         if (mode == 4 && !add_primitive(g, primitive, g->world[node], where, count_only))
             return false;
+    }
+    if (count_only && !g->mesh_counted[mesh]) {
+        g->mesh_counted[mesh] = true;
+        g->unique_triangles += g->triangles - triangles;
+        g->unique_vertices += g->vertices - vertices;
     }
     return true;
 }
@@ -746,10 +761,10 @@ static bool check_asset(struct gltf *g)
 static bool read_scene(struct gltf *g)
 {
     json_object *buffers;
-    size_t node_count, count;
+    size_t node_count, mesh_count, count;
     if (!check_asset(g) || !array_member(g, g->root, "accessors", "file", &g->accessors, &count) ||
         !array_member(g, g->root, "bufferViews", "file", &g->views, &count) ||
-        !array_member(g, g->root, "meshes", "file", &g->meshes, &count) ||
+        !array_member(g, g->root, "meshes", "file", &g->meshes, &mesh_count) ||
         !array_member(g, g->root, "nodes", "file", &g->nodes, &node_count) ||
         !array_member(g, g->root, "buffers", "file", &buffers, &g->buffer_count))
         return false;
@@ -757,7 +772,9 @@ static bool read_scene(struct gltf *g)
     g->parent = malloc((node_count ? node_count : 1) * sizeof *g->parent);
     g->world = malloc((node_count ? node_count : 1) * sizeof *g->world);
     bool *flags = calloc(node_count ? 2 * node_count : 1, sizeof *flags);
-    bool ok = (g->buffers && g->parent && g->world && flags) || ao_load_out_of_memory(g->path);
+    g->mesh_counted = calloc(mesh_count ? mesh_count : 1, sizeof *g->mesh_counted);
+    bool ok = (g->buffers && g->parent && g->world && flags && g->mesh_counted) ||
+              ao_load_out_of_memory(g->path);
     for (size_t i = 0; ok && i < g->buffer_count; i++)
         ok = load_buffer(g, json_object_array_get_idx(buffers, i), i);
     bool *is_root = flags, *placed = flags + node_count;
@@ -765,26 +782,10 @@ static bool read_scene(struct gltf *g)
          place_nodes(g, node_count, is_root, placed);
 
     /* First count (validating every accessor), then refuse what instancing blows up, then fill. */
-    uint64_t unique_triangles = 0, unique_vertices = 0;
-    size_t mesh_count = length_of(g->meshes), accessor_count = length_of(g->accessors);
     for (size_t i = 0; ok && i < node_count; i++)
         ok = !placed[i] || add_node_mesh(g, i, true);
-    for (size_t k = 0; ok && k < mesh_count; k++) {
-        json_object *primitives = member(json_object_array_get_idx(g->meshes, k), "primitives");
-        for (size_t j = 0; j < length_of(primitives); j++) {
-            json_object *primitive = json_object_array_get_idx(primitives, j);
-            json_object *position = member(member(primitive, "attributes"), "POSITION");
-            uint64_t index, n;
-            if (whole_number(position, MAX_INTEGER, &index) && index < accessor_count &&
-                whole_number(member(json_object_array_get_idx(g->accessors, index), "count"),
-                             UINT32_MAX, &n)) {
-                unique_vertices += n;
-                unique_triangles += n / 3;
-            }
-        }
-    }
-    if (ok && ((g->triangles > MAX_INSTANCED && g->triangles > unique_triangles) ||
-               (g->vertices > MAX_INSTANCED && g->vertices > unique_vertices)))
+    if (ok && ((g->triangles > MAX_INSTANCED && g->triangles > g->unique_triangles) ||
+               (g->vertices > MAX_INSTANCED && g->vertices > g->unique_vertices)))
         ok = gltf_error(g, "the scene's nodes instance its meshes into %llu triangles and %llu "
                         "vertices (more than %u)", (unsigned long long)g->triangles,
                         (unsigned long long)g->vertices, MAX_INSTANCED);
@@ -820,13 +821,15 @@ bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size
             free(mesh->normals);
             mesh->normals = NULL;
         }
-        ok = ao_load_finish(mesh, path, all_lacking || !g.lacking_count ? NULL : (const bool *)g.lacking.data);
+        const bool *lacking = all_lacking || !g.lacking_count ? NULL : (const bool *)g.lacking.data;
+        ok = ao_load_finish(mesh, path, lacking);
     }
     for (size_t i = 0; i < g.buffer_count && g.buffers; i++)
         free(g.buffers[i].owned);
     free(g.buffers);
     free(g.parent);
     free(g.world);
+    free(g.mesh_counted);
     json_object_put(g.root);
     ao_load_free(&g.positions);
     ao_load_free(&g.normals);
