@@ -98,7 +98,10 @@ doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0} for _ in range(65536)]
 json.dump(doc, open('instances.gltf', 'w'))
 PY
 refuse 1 "instance its meshes into 39321600 triangles and 196608 vertices (more than 33554432)" instances.gltf
-rm -f instances.gltf
+# Two million empty objects in 6 MB of JSON: json-c would take 1.6 GB for them.
+python3 -c "open('objects.gltf', 'w').write('{\"asset\": {\"version\": \"2.0\"}, \"x\": [' + '{},' * 2000000 + '{}]}')"
+refuse 1 "objects.gltf: its JSON would take about 1740 MB to parse (more than 1024 MB)" objects.gltf
+rm -f instances.gltf objects.gltf
 
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000

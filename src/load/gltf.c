@@ -10,7 +10,8 @@
  * a bufferView against its buffer, an accessor's last element against its bufferView, indices
  * against their vertex count. Integers are read only up to 2^53, so that sums of three of them and
  * products of one with a stride (at most 252) stay far below 2^64. Nodes must form trees: a node
- * with two parents, or a cycle, is refused before anything is traversed. Instancing a mesh under
+ * with two parents, or a cycle, is refused before anything is traversed. JSON that would make
+ * json-c allocate more than MAX_JSON_COST is refused before it is parsed. Instancing a mesh under
  * many nodes may not make the loaded mesh larger than MAX_INSTANCED triangles or vertices unless
  * the file's own meshes are that large already, so a small file cannot demand gigabytes. */
 #include <math.h>
@@ -30,6 +31,8 @@
 #define MAX_INSTANCED 33554432u
 /* JSON nesting depth accepted (glTF needs 6 or so; deep nesting is an attack on the parser). */
 #define MAX_DEPTH 64
+/* What json-c may allocate for a file's JSON, estimated before parsing (see json_cost). */
+#define MAX_JSON_COST (1024.0 * 1024 * 1024)
 
 /* GLB container constants: magic "glTF", chunk types "JSON" and "BIN\0". */
 enum { GLB_MAGIC = 0x46546C67, GLB_JSON = 0x4E4F534A, GLB_BIN = 0x004E4942, GLB_HEADER = 12 };
@@ -708,9 +711,25 @@ static bool place_nodes(struct gltf *g, size_t node_count, const bool *is_root, 
 
 /* ------------------------------------------------------------------ the file */
 
+/* An upper estimate of json-c's memory for text: each '{' makes an object with a 16-entry hash
+ * table (measured: 780 bytes), each '[' an array (150 bytes), and every other value, which
+ * follows a ',' or ':', 70 to 110 bytes. A few MB of "{}," would otherwise take gigabytes. */
+static double json_cost(const char *text, size_t size)
+{
+    double cost = 0.0;
+    for (size_t i = 0; i < size; i++)
+        cost += text[i] == '{' ? 800.0 : text[i] == '[' ? 160.0
+              : text[i] == ',' || text[i] == ':' ? 112.0 : 0.0;
+    return cost;
+}
+
 /* Parses the JSON text into g->root; errors name the line. */
 static bool parse_json(struct gltf *g, const char *text, size_t size)
 {
+    double cost = json_cost(text, size);
+    if (cost > MAX_JSON_COST)
+        return gltf_error(g, "its JSON would take about %.0f MB to parse (more than %.0f MB)",
+                          cost / 1048576.0, MAX_JSON_COST / 1048576.0);
     struct json_tokener *tokener = json_tokener_new_ex(MAX_DEPTH);
     if (!tokener)
         return ao_load_out_of_memory(g->path);
