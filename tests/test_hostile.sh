@@ -97,7 +97,7 @@ doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0} for _ in range(65536)]
                     'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
 json.dump(doc, open('instances.gltf', 'w'))
 PY
-refuse 1 "instance its meshes into 39321600 triangles and 196608 vertices (more than 33554432)" instances.gltf
+refuse 1 "instance its meshes into 39321600 triangles and 196608 vertices (more than 33554432, and more than 1836 bytes" instances.gltf
 # Two million empty objects in 6 MB of JSON: json-c would take 1.6 GB for them.
 python3 -c "open('objects.gltf', 'w').write('{\"asset\": {\"version\": \"2.0\"}, \"x\": [' + '{},' * 2000000 + '{}]}')"
 refuse 1 "objects.gltf: its JSON would take about 1740 MB to parse (more than 1024 MB)" objects.gltf

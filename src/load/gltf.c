@@ -12,8 +12,9 @@
  * products of one with a stride (at most 252) stay far below 2^64. Nodes must form trees: a node
  * with two parents, or a cycle, is refused before anything is traversed. JSON that would make
  * json-c allocate more than MAX_JSON_COST is refused before it is parsed. Instancing a mesh under
- * many nodes may not make the loaded mesh larger than MAX_INSTANCED triangles or vertices unless
- * the file's own meshes are that large already, so a small file cannot demand gigabytes. */
+ * many nodes (or one accessor under many primitives) may not make the loaded mesh larger than
+ * MAX_INSTANCED triangles or vertices unless its buffers hold that many, so a small file cannot
+ * demand gigabytes. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -67,8 +68,7 @@ struct gltf {
     size_t *parent;               /* per node: its parent, or SIZE_MAX */
     double (*world)[16];          /* per node: its world matrix, column major */
     uint64_t triangles, vertices; /* totals of the instances found so far */
-    uint64_t unique_triangles, unique_vertices;  /* the same counting each mesh once */
-    bool *mesh_counted;           /* per mesh: in the unique totals already */
+    uint64_t buffer_bytes;        /* the sum of the buffers' lengths */
     struct ao_load_array positions, normals, lacking, indices; /* ao_vec3, ao_vec3, bool, uint32 */
     size_t lacking_count;
 };
@@ -341,6 +341,7 @@ static bool load_buffer(struct gltf *g, json_object *json, size_t i)
         return gltf_error(g, "%s: byteLength %llu but only %zu bytes of data", where,
                           (unsigned long long)length, size);
     b->size = (size_t)length;
+    g->buffer_bytes += length;
     return true;
 }
 
@@ -626,7 +627,6 @@ static bool add_node_mesh(struct gltf *g, size_t node, bool count_only)
     if (!array_member(g, json_object_array_get_idx(g->meshes, mesh), "primitives", where,
                       &primitives, &primitive_count))
         return false;
-    uint64_t triangles = g->triangles, vertices = g->vertices;
     for (size_t k = 0; k < primitive_count; k++) {
         json_object *primitive = json_object_array_get_idx(primitives, k);
         uint64_t mode;
@@ -635,11 +635,6 @@ static bool add_node_mesh(struct gltf *g, size_t node, bool count_only)
             return false;
         if (mode == 4 && !add_primitive(g, primitive, g->world[node], where, count_only))
             return false;
-    }
-    if (count_only && !g->mesh_counted[mesh]) {
-        g->mesh_counted[mesh] = true;
-        g->unique_triangles += g->triangles - triangles;
-        g->unique_vertices += g->vertices - vertices;
     }
     return true;
 }
@@ -780,10 +775,10 @@ static bool check_asset(struct gltf *g)
 static bool read_scene(struct gltf *g)
 {
     json_object *buffers;
-    size_t node_count, mesh_count, count;
+    size_t node_count, count;
     if (!check_asset(g) || !array_member(g, g->root, "accessors", "file", &g->accessors, &count) ||
         !array_member(g, g->root, "bufferViews", "file", &g->views, &count) ||
-        !array_member(g, g->root, "meshes", "file", &g->meshes, &mesh_count) ||
+        !array_member(g, g->root, "meshes", "file", &g->meshes, &count) ||
         !array_member(g, g->root, "nodes", "file", &g->nodes, &node_count) ||
         !array_member(g, g->root, "buffers", "file", &buffers, &g->buffer_count))
         return false;
@@ -791,23 +786,24 @@ static bool read_scene(struct gltf *g)
     g->parent = malloc((node_count ? node_count : 1) * sizeof *g->parent);
     g->world = malloc((node_count ? node_count : 1) * sizeof *g->world);
     bool *flags = calloc(node_count ? 2 * node_count : 1, sizeof *flags);
-    g->mesh_counted = calloc(mesh_count ? mesh_count : 1, sizeof *g->mesh_counted);
-    bool ok = (g->buffers && g->parent && g->world && flags && g->mesh_counted) ||
-              ao_load_out_of_memory(g->path);
+    bool ok = (g->buffers && g->parent && g->world && flags) || ao_load_out_of_memory(g->path);
     for (size_t i = 0; ok && i < g->buffer_count; i++)
         ok = load_buffer(g, json_object_array_get_idx(buffers, i), i);
     bool *is_root = flags, *placed = flags + node_count;
     ok = ok && check_tree(g, node_count) && find_roots(g, node_count, is_root) &&
          place_nodes(g, node_count, is_root, placed);
 
-    /* First count (validating every accessor), then refuse what instancing blows up, then fill. */
+    /* First count (validating every accessor), then refuse what instancing blows up: without
+     * it, a triangle takes at least 3 bytes of buffer (uint8 indices) and a vertex 12, so more
+     * than that (and more than MAX_INSTANCED) comes from reusing data. Then fill. */
     for (size_t i = 0; ok && i < node_count; i++)
         ok = !placed[i] || add_node_mesh(g, i, true);
-    if (ok && ((g->triangles > MAX_INSTANCED && g->triangles > g->unique_triangles) ||
-               (g->vertices > MAX_INSTANCED && g->vertices > g->unique_vertices)))
+    if (ok && ((g->triangles > MAX_INSTANCED && g->triangles > g->buffer_bytes / 3) ||
+               (g->vertices > MAX_INSTANCED && g->vertices > g->buffer_bytes / 12)))
         ok = gltf_error(g, "the scene's nodes instance its meshes into %llu triangles and %llu "
-                        "vertices (more than %u)", (unsigned long long)g->triangles,
-                        (unsigned long long)g->vertices, MAX_INSTANCED);
+                        "vertices (more than %u, and more than %llu bytes of buffers hold)",
+                        (unsigned long long)g->triangles, (unsigned long long)g->vertices,
+                        MAX_INSTANCED, (unsigned long long)g->buffer_bytes);
     g->triangles = g->vertices = 0;
     for (size_t i = 0; ok && i < node_count; i++)
         ok = !placed[i] || add_node_mesh(g, i, false);
@@ -848,7 +844,6 @@ bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size
     free(g.buffers);
     free(g.parent);
     free(g.world);
-    free(g.mesh_counted);
     json_object_put(g.root);
     ao_load_free(&g.positions);
     ao_load_free(&g.normals);
