@@ -69,6 +69,10 @@ struct gltf {
     double (*world)[16];          /* per node: its world matrix, column major */
     uint64_t triangles, vertices; /* totals of the instances found so far */
     uint64_t buffer_bytes;        /* the sum of the buffers' lengths */
+    struct mesh_size {
+        uint64_t triangles, vertices;
+        bool known;
+    } *sizes;                     /* per mesh, once counted: instances need not recount */
     struct ao_load_array positions, normals, lacking, indices; /* ao_vec3, ao_vec3, bool, uint32 */
     size_t lacking_count;
 };
@@ -611,7 +615,9 @@ static bool add_primitive(struct gltf *g, json_object *primitive, const double m
     return true;
 }
 
-/* The triangle primitives of node's mesh, if any, under the node's world matrix. */
+/* The triangle primitives of node's mesh, if any, under the node's world matrix. With count_only,
+ * adds their size to the totals, walking each mesh's primitives once however many nodes use it
+ * (so that a small file cannot make the count take hours). */
 static bool add_node_mesh(struct gltf *g, size_t node, bool count_only)
 {
     json_object *node_json = json_object_array_get_idx(g->nodes, node);
@@ -623,6 +629,12 @@ static bool add_node_mesh(struct gltf *g, size_t node, bool count_only)
         return true;
     if (!index_member(g, node_json, "mesh", length_of(g->meshes), where, &mesh))
         return false;
+    struct mesh_size *size = &g->sizes[mesh], before = {g->triangles, g->vertices, true};
+    if (count_only && size->known) {
+        g->triangles += size->triangles;
+        g->vertices += size->vertices;
+        return true;
+    }
     snprintf(where, sizeof where, "mesh %zu", mesh);
     if (!array_member(g, json_object_array_get_idx(g->meshes, mesh), "primitives", where,
                       &primitives, &primitive_count))
@@ -636,6 +648,9 @@ static bool add_node_mesh(struct gltf *g, size_t node, bool count_only)
         if (mode == 4 && !add_primitive(g, primitive, g->world[node], where, count_only))
             return false;
     }
+    if (count_only)
+        *size = (struct mesh_size){g->triangles - before.triangles, g->vertices - before.vertices,
+                                   true};
     return true;
 }
 
@@ -775,10 +790,10 @@ static bool check_asset(struct gltf *g)
 static bool read_scene(struct gltf *g)
 {
     json_object *buffers;
-    size_t node_count, count;
+    size_t node_count, mesh_count, count;
     if (!check_asset(g) || !array_member(g, g->root, "accessors", "file", &g->accessors, &count) ||
         !array_member(g, g->root, "bufferViews", "file", &g->views, &count) ||
-        !array_member(g, g->root, "meshes", "file", &g->meshes, &count) ||
+        !array_member(g, g->root, "meshes", "file", &g->meshes, &mesh_count) ||
         !array_member(g, g->root, "nodes", "file", &g->nodes, &node_count) ||
         !array_member(g, g->root, "buffers", "file", &buffers, &g->buffer_count))
         return false;
@@ -786,7 +801,9 @@ static bool read_scene(struct gltf *g)
     g->parent = malloc((node_count ? node_count : 1) * sizeof *g->parent);
     g->world = malloc((node_count ? node_count : 1) * sizeof *g->world);
     bool *flags = calloc(node_count ? 2 * node_count : 1, sizeof *flags);
-    bool ok = (g->buffers && g->parent && g->world && flags) || ao_load_out_of_memory(g->path);
+    g->sizes = calloc(mesh_count ? mesh_count : 1, sizeof *g->sizes);
+    bool ok = (g->buffers && g->parent && g->world && flags && g->sizes) ||
+              ao_load_out_of_memory(g->path);
     for (size_t i = 0; ok && i < g->buffer_count; i++)
         ok = load_buffer(g, json_object_array_get_idx(buffers, i), i);
     bool *is_root = flags, *placed = flags + node_count;
@@ -844,6 +861,7 @@ bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size
     free(g.buffers);
     free(g.parent);
     free(g.world);
+    free(g.sizes);
     json_object_put(g.root);
     ao_load_free(&g.positions);
     ao_load_free(&g.normals);
