@@ -16,13 +16,15 @@ enum { MAX_SPP = 1 << 30, MAX_SPPPP = 65536, MAX_THREADS = 256 };
 enum option_id {
     OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
     OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
-    OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR,
+    OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR, OPT_SAVE_FORMAT,
 };
 
 /* Names of the --sampler and --below-surface values, in their enums' order. */
 static const char *const sequences[] = {[AO_SEQUENCE_RANDOM] = "random", [AO_SEQUENCE_SOBOL] = "sobol", NULL};
 static const char *const belows[] = {[AO_BELOW_REFLECT] = "reflect", [AO_BELOW_TRACE] = "trace", NULL};
 static const char *const switches[] = {"off", "on", NULL};
+/* Names of the --save-format values: false, true for opts->save_exr. */
+static const char *const save_formats[] = {"pfm", "exr", NULL};
 
 /* One row of the option table: long name, short name (or 0), whether it takes a value. */
 struct option_spec {
@@ -53,15 +55,16 @@ static const struct option_spec specs[] = {
     {"--below-surface", 0, true, OPT_BELOW},
     {"--adaptive", 0, true, OPT_ADAPTIVE},
     {"--target-error", 0, true, OPT_TARGET_ERROR},
+    {"--save-format", 0, true, OPT_SAVE_FORMAT},
 };
 
 static const char usage[] =
     "usage: aoview [OPTIONS] [SCENE]\n"
-    "Progressive Monte Carlo ambient occlusion. SCENE: a .scene, .obj or .ply file\n"
-    "(default: the built-in bunny scene).\n"
+    "Progressive Monte Carlo ambient occlusion. SCENE: a .scene file or a mesh\n"
+    "(.obj, .ply, .stl, .gltf, .glb); default: the built-in bunny scene.\n"
     "\n"
     "  --headless            render without a window, write -o, exit\n"
-    "  -o, --output FILE     .png (displayed image) or .pfm (linear float);\n"
+    "  -o, --output FILE     .png (displayed image), .pfm or .exr (linear float);\n"
     "                        default aoview.png with --headless\n"
     "  --spp N               total AO samples per pixel (default 256)\n"
     "  --spppp N|auto        AO samples per pixel per pass; auto: from 1, doubling up\n"
@@ -80,7 +83,10 @@ static const char usage[] =
     "  --seed N              random seed (default 1)\n"
     "  --ao-distance D       occlusion range (default: the scene's, else infinite)\n"
     "  --stats FILE          CSV row per finished pass (default none)\n"
-    "  --reference FILE.pfm  add per-pass RMSE against this image (default none)\n"
+    "  --reference FILE      add per-pass RMSE against this .pfm or .exr image\n"
+    "                        (default none)\n"
+    "  --save-format F       pfm | exr: the linear file the window's S key saves\n"
+    "                        beside the PNG (default pfm)\n"
     "  -q, --quiet           print nothing but errors\n"
     "  -h, --help            show this help\n"
     "  --version             show the version\n"
@@ -172,12 +178,13 @@ static bool has_suffix(const char *s, const char *suffix)
 static bool parse_path(const char *name, const char *value, bool image, const char **out,
                        char *msg, size_t msg_size)
 {
-    if (image ? has_suffix(value, ".png") || has_suffix(value, ".pfm") : *value != '\0') {
+    if (image ? has_suffix(value, ".png") || has_suffix(value, ".pfm") || has_suffix(value, ".exr")
+              : *value != '\0') {
         *out = value;
         return true;
     }
     snprintf(msg, msg_size, "%s: expected a file name%s, got '%s'", name,
-             image ? " ending in .png or .pfm" : "", value);
+             image ? " ending in .png, .pfm or .exr" : "", value);
     return false;
 }
 
@@ -260,6 +267,11 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
         opts->adaptive = choice;
         return true;
     case OPT_TARGET_ERROR: return parse_fraction(name, value, &opts->target_error, msg, msg_size);
+    case OPT_SAVE_FORMAT:
+        if (!parse_choice(name, value, save_formats, &choice, msg, msg_size))
+            return false;
+        opts->save_exr = choice == 1;
+        return true;
     }
     return false;
 }

@@ -29,6 +29,7 @@ struct ao_options {
     float ao_distance;        /* NAN: the scene's, else infinite */
     const char *stats_path;
     const char *reference_path;
+    bool save_exr;            /* --save-format exr: S saves EXR beside the PNG, not PFM */
     bool quiet, help, version;
 };
 

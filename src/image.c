@@ -14,8 +14,12 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <strings.h>
+
 #include <stb_image.h>
 #include <stb_image_write.h>
+
+#include "exr.h"
 
 static_assert(sizeof(float) == 4 && sizeof(uint32_t) == 4, "PFM needs 32-bit IEEE floats");
 
@@ -23,6 +27,9 @@ static_assert(sizeof(float) == 4 && sizeof(uint32_t) == 4, "PFM needs 32-bit IEE
 struct raster {
     const void *pixels;
     int width, height;
+    const char *path;                    /* EXR: for the library's messages */
+    const struct ao_image_note *notes;   /* EXR: header attributes */
+    size_t note_count;
 };
 
 /* Why a read failed: a fixed reason and the errno behind it (0 for format errors). */
@@ -128,7 +135,7 @@ static bool emit_png(FILE *f, const struct raster *r)
 bool ao_image_write_png(const char *path, const uint8_t *rgb, int width, int height)
 {
     assert(width > 0 && height > 0 && width <= AO_IMAGE_MAX_SIDE && height <= AO_IMAGE_MAX_SIDE);
-    struct raster r = {rgb, width, height};
+    struct raster r = {rgb, width, height, path, NULL, 0};
     return write_atomically(path, emit_png, &r);
 }
 
@@ -182,8 +189,29 @@ static bool emit_pfm(FILE *f, const struct raster *r)
 bool ao_image_write_pfm(const char *path, const float *rgb, int width, int height)
 {
     assert(width > 0 && height > 0 && width <= AO_IMAGE_MAX_SIDE && height <= AO_IMAGE_MAX_SIDE);
-    struct raster r = {rgb, width, height};
+    struct raster r = {rgb, width, height, path, NULL, 0};
     return write_atomically(path, emit_pfm, &r);
+}
+
+static bool emit_exr(FILE *f, const struct raster *r)
+{
+    return ao_exr_emit(f, r->path, r->pixels, r->width, r->height, r->notes, r->note_count);
+}
+
+bool ao_image_has_extension(const char *path, const char *ext)
+{
+    size_t n = strlen(path), e = strlen(ext);
+    return n >= e && strcasecmp(path + n - e, ext) == 0;
+}
+
+bool ao_image_write_linear(const char *path, const float *rgb, int width, int height,
+                           const struct ao_image_note *notes, size_t note_count)
+{
+    assert(width > 0 && height > 0 && width <= AO_IMAGE_MAX_SIDE && height <= AO_IMAGE_MAX_SIDE);
+    if (!ao_image_has_extension(path, ".exr"))
+        return ao_image_write_pfm(path, rgb, width, height);
+    struct raster r = {rgb, width, height, path, notes, note_count};
+    return write_atomically(path, emit_exr, &r);
 }
 
 /* Reads one whitespace-delimited header token into buf and consumes the one whitespace
@@ -317,6 +345,12 @@ bool ao_image_read_pfm(const char *path, float **rgb, int *width, int *height)
     *width = w;
     *height = h;
     return true;
+}
+
+bool ao_image_read_linear(const char *path, float **rgb, int *width, int *height)
+{
+    return ao_image_has_extension(path, ".exr") ? ao_exr_read(path, rgb, width, height)
+                                                : ao_image_read_pfm(path, rgb, width, height);
 }
 
 bool ao_image_read_png(const char *path, uint8_t **rgb, int *width, int *height)

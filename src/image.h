@@ -1,5 +1,5 @@
-/* Image files: PNG (8-bit sRGB) and PFM (linear float RGB) writing, reading for tests and
- * references, and the sRGB transfer curve shared with the display shader. */
+/* Image files: PNG (8-bit sRGB), PFM and OpenEXR (linear float RGB) writing, reading for tests
+ * and references, and the sRGB transfer curve shared with the display shader. */
 #ifndef AO_IMAGE_H
 #define AO_IMAGE_H
 
@@ -27,6 +27,24 @@ bool ao_image_write_pfm(const char *path, const float *rgb, int width, int heigh
 /* Reads a colour PFM (either endianness) into a malloc'd top-to-bottom RGB float buffer the
  * caller frees; on failure prints one line naming path and returns false. */
 bool ao_image_read_pfm(const char *path, float **rgb, int *width, int *height);
+
+/* A string attribute of a linear image's header (EXR keeps them; PFM has no place for them). */
+struct ao_image_note {
+    const char *key, *value;
+};
+
+/* Writes a linear image chosen by path's extension: .exr (32-bit float RGB, the notes as header
+ * attributes) or else PFM; via a temporary file renamed into place; on failure prints one line
+ * naming path and returns false. */
+bool ao_image_write_linear(const char *path, const float *rgb, int width, int height,
+                           const struct ao_image_note *notes, size_t note_count);
+
+/* Reads a linear image chosen by path's extension, .exr (see exr.h) or else PFM, into a malloc'd
+ * top-to-bottom RGB float buffer the caller frees; on failure prints one line and returns false. */
+bool ao_image_read_linear(const char *path, float **rgb, int *width, int *height);
+
+/* True when path ends in ext, ignoring case. */
+bool ao_image_has_extension(const char *path, const char *ext);
 
 /* Reads a PNG into a malloc'd top-to-bottom RGB8 buffer the caller frees; false on failure. */
 bool ao_image_read_png(const char *path, uint8_t **rgb, int *width, int *height);

@@ -8,13 +8,13 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
 #include <unistd.h>
 
 #include "cli.h"
 #include "config.h"
 #include "headless.h"
 #include "image.h"
+#include "notes.h"
 #include "render.h"
 #include "scene.h"
 #include "tracer.h"
@@ -62,19 +62,17 @@ static void on_pass(const struct ao_frame_info *info, void *user)
     ao_window_notify();
 }
 
-/* True when path ends in ext, ignoring case. */
-static bool ends_with(const char *path, const char *ext)
+/* Writes the final frame as PFM or EXR (linear; EXR with the settings in its header) or PNG
+ * (through the display code). */
+static bool write_output(const char *path, const struct ao_frame *frame, const char *scene,
+                         uint64_t seed)
 {
-    size_t n = strlen(path), e = strlen(ext);
-    return n >= e && strcasecmp(path + n - e, ext) == 0;
-}
-
-/* Writes the final frame as PFM (linear) or PNG (through the display code). */
-static bool write_output(const char *path, const struct ao_frame *frame)
-{
-    if (ends_with(path, ".pfm"))
-        return ao_image_write_pfm(path, frame->rgb, frame->width, frame->height);
-    return ao_headless_write_png(path, frame->rgb, frame->width, frame->height);
+    if (ao_image_has_extension(path, ".png"))
+        return ao_headless_write_png(path, frame->rgb, frame->width, frame->height);
+    struct ao_notes notes;
+    ao_notes_make(&notes, &frame->info, scene, seed);
+    return ao_image_write_linear(path, frame->rgb, frame->width, frame->height, notes.notes,
+                                 notes.count);
 }
 
 /* SIGINT/SIGTERM during a headless render: the first stops the renderer at the next tile so that
@@ -130,7 +128,7 @@ static bool start_watcher(struct interrupt *in, struct ao_render *render)
 
 /* Waits for the target spp (or an interruption) and writes the output; SPEC.md's headless path. */
 static int run_headless(struct ao_render *render, const struct ao_options *opts, struct interrupt *in,
-                        struct reporter *reporter)
+                        struct reporter *reporter, const char *scene)
 {
     const char *output = opts->output ? opts->output : "aoview.png";
     bool finished = ao_render_wait(render);
@@ -143,7 +141,7 @@ static int run_headless(struct ao_render *render, const struct ao_options *opts,
                 frame->info.spp);
         on_pass(&frame->info, reporter);
     }
-    if (!frame || !write_output(output, frame))
+    if (!frame || !write_output(output, frame, scene, opts->seed))
         return EXIT_RUNTIME;
     if (!opts->quiet)
         fprintf(stderr, "aoview: wrote %s (%u spp, %.2f s, %.1f Mrays/s)\n", output, frame->info.spp,
@@ -156,7 +154,7 @@ static float *load_reference(const char *path, int width, int height)
 {
     float *rgb = NULL;
     int w, h;
-    if (!ao_image_read_pfm(path, &rgb, &w, &h))
+    if (!ao_image_read_linear(path, &rgb, &w, &h))
         return NULL;
     if (w != width || h != height) {
         fprintf(stderr, "--reference: %s is %dx%d but the image is %dx%d\n", path, w, h, width, height);
@@ -233,7 +231,8 @@ static int run(struct app *app, const struct ao_options *opts)
 
     /* Window, or headless output (also where no window can be opened). */
     if (window) {
-        struct ao_window_info info = {.scene_name = app->scene.name, .quiet = opts->quiet};
+        struct ao_window_info info = {.scene_name = app->scene.name, .quiet = opts->quiet,
+                                      .seed = opts->seed, .save_exr = opts->save_exr};
         enum ao_window_result result = ao_window_run(app->render, &info);
         if (result != AO_WINDOW_NO_DISPLAY)
             return result == AO_WINDOW_OK ? 0 : EXIT_RUNTIME;
@@ -242,7 +241,7 @@ static int run(struct app *app, const struct ao_options *opts)
         app->reporter.progress = !opts->quiet && isatty(STDERR_FILENO);
     }
     atomic_store(&app->interrupt.graceful, true);
-    return run_headless(app->render, opts, &app->interrupt, &app->reporter);
+    return run_headless(app->render, opts, &app->interrupt, &app->reporter, app->scene.name);
 }
 
 int main(int argc, char **argv)

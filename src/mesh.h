@@ -1,4 +1,5 @@
-/* Triangle meshes from OBJ and PLY files: indexed triangles with one normal per vertex. */
+/* Triangle meshes from OBJ, PLY, STL and glTF files: indexed triangles with one normal per vertex.
+ * The loaders live in src/load/, one file per format. */
 #ifndef AO_MESH_H
 #define AO_MESH_H
 
@@ -18,9 +19,12 @@ struct ao_mesh {
     size_t degenerate_count;    /* zero-area triangles skipped while loading */
 };
 
-/* Loads an .obj or .ply file (chosen by extension) into mesh; computes vertex normals when the
- * file has none. On failure prints one "path:line: message" line to stderr, leaves mesh empty
- * and returns false. Any thread. */
+/* True when path's extension names a mesh format ao_mesh_load reads. */
+bool ao_mesh_is_mesh_path(const char *path);
+
+/* Loads an .obj, .ply, .stl, .gltf or .glb file (chosen by extension, any case) into mesh;
+ * computes vertex normals where the file has none. On failure prints one "path:line: message"
+ * (or "path: message") line to stderr, leaves mesh empty and returns false. Any thread. */
 bool ao_mesh_load(struct ao_mesh *mesh, const char *path);
 
 /* Recomputes mesh->normals from the triangles (angle-weighted face normals). */

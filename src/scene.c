@@ -497,22 +497,10 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path)
     return ok;
 }
 
-/* True when path ends in ext, ignoring case. */
-static bool has_extension(const char *path, const char *ext)
-{
-    size_t n = strlen(path), e = strlen(ext);
-    if (n < e)
-        return false;
-    for (size_t i = 0; i < e; i++)
-        if ((path[n - e + i] | 0x20) != ext[i])
-            return false;
-    return true;
-}
-
 bool ao_scene_load(struct ao_scene *scene, const char *path)
 {
     memset(scene, 0, sizeof *scene);
-    if (has_extension(path, ".obj") || has_extension(path, ".ply"))
+    if (ao_mesh_is_mesh_path(path))
         return load_bare_mesh(scene, path);
     char *text;
     size_t got;

@@ -20,6 +20,7 @@
 #include "heatmap.h"
 #include "hud.h"
 #include "image.h"
+#include "notes.h"
 
 /* glfwPostEmptyEvent is legal from any thread, but only between glfwInit and glfwTerminate. */
 static pthread_mutex_t wake_lock = PTHREAD_MUTEX_INITIALIZER;
@@ -35,7 +36,7 @@ static const char HELP[] =
     "+ -  double/halve samples per pass (leaves auto)\n"
     "G  adaptive sampling on/off\n"
     "E  estimated error map on/off\n"
-    "S  save aoview-N.png and aoview-N.pfm\n"
+    "S  save aoview-N.png and aoview-N.pfm (or .exr)\n"
     "left drag  orbit\n"
     "right drag  pan\n"
     "wheel  zoom\n"
@@ -209,20 +210,23 @@ static void apply_mouse(struct viewer *v)
 /* ---- output ---- */
 
 /* Saves the frame on screen as aoview-N.png (through the display shader at 1:1, without the
- * overlay) and aoview-N.pfm (linear) in the working directory, N the first free number. */
+ * overlay) and aoview-N.pfm or .exr (linear) in the working directory, N the first free number. */
 static void save(struct viewer *v)
 {
-    char png[32], pfm[32];
+    char png[32], linear[32];
     for (int n = 1;; n++) {
         snprintf(png, sizeof png, "aoview-%d.png", n);
-        snprintf(pfm, sizeof pfm, "aoview-%d.pfm", n);
-        if (access(png, F_OK) != 0 && access(pfm, F_OK) != 0)
+        snprintf(linear, sizeof linear, "aoview-%d.%s", n, v->info->save_exr ? "exr" : "pfm");
+        if (access(png, F_OK) != 0 && access(linear, F_OK) != 0)
             break;
     }
     const struct ao_frame *f = v->shown;
-    if (ao_display_write_png(v->display, png) && ao_image_write_pfm(pfm, f->rgb, f->width, f->height) &&
+    struct ao_notes notes;
+    ao_notes_make(&notes, &f->info, v->info->scene_name, v->info->seed);
+    if (ao_display_write_png(v->display, png) &&
+        ao_image_write_linear(linear, f->rgb, f->width, f->height, notes.notes, notes.count) &&
         !v->info->quiet) {
-        printf("aoview: saved %s and %s (%u spp)\n", png, pfm, f->info.spp);
+        printf("aoview: saved %s and %s (%u spp)\n", png, linear, f->info.spp);
         fflush(stdout);
     }
 }

@@ -4,6 +4,7 @@
 #define AO_WINDOW_H
 
 #include <stdbool.h>
+#include <stdint.h>
 
 #include "render.h"
 
@@ -11,6 +12,8 @@
 struct ao_window_info {
     const char *scene_name;
     bool quiet;              /* no screenshot names on stdout */
+    uint64_t seed;           /* for the saved EXR's header */
+    bool save_exr;           /* S saves aoview-N.exr beside the PNG instead of aoview-N.pfm */
 };
 
 /* How ao_window_run ended. */

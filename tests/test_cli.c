@@ -146,7 +146,7 @@ static void test_bad_sizes(void **state)
 static void test_bad_strings(void **state)
 {
     (void)state;
-    REJECT("--output: expected a file name ending in .png or .pfm", "'a.jpg'", "-o", "a.jpg");
+    REJECT("--output: expected a file name ending in .png, .pfm or .exr", "'a.jpg'", "-o", "a.jpg");
     REJECT("--output", "'png'", "--output=png");
     REJECT("--output", "''", "--output=");
     REJECT("--sampling: expected uniform, hemisphere or cosine", "'Cosine'", "--sampling",
@@ -200,6 +200,21 @@ static void test_adaptive_options(void **state)
     REJECT("--spppp", "Auto", "--spppp", "Auto");
 }
 
+/* EXR output, and the linear format the window's S key saves. */
+static void test_exr_and_save_format(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE_NONE(&o));
+    assert_false(o.save_exr);
+    assert_true(PARSE(&o, "-o", "out.EXR", "--save-format", "exr", "--reference", "r.exr"));
+    assert_string_equal(o.output, "out.EXR");
+    assert_true(o.save_exr);
+    assert_true(PARSE(&o, "--save-format=pfm"));
+    assert_false(o.save_exr);
+    REJECT("--save-format: expected pfm or exr", "'png'", "--save-format", "png");
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -224,6 +239,7 @@ int main(void)
         cmocka_unit_test(test_bad_distances),
         cmocka_unit_test(test_bad_structure),
         cmocka_unit_test(test_adaptive_options),
+        cmocka_unit_test(test_exr_and_save_format),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -62,6 +62,56 @@ refuse 1 "index_huge.obj:4: face corner" "$data/index_huge.obj"
 refuse 1 "texture coordinate index out of range" "$data/texcoord_wrap.obj"
 refuse 1 "vertex index 4294967295 is not an integer in [0, 3)" "$data/index_wrap.ply"
 
+# ---- STL, glTF, GLB and EXR: counts that lie, ranges past their buffers, overflowing offsets and
+# chunk lengths, node graphs that are not trees, nesting beyond the JSON parser's depth
+refuse 1 "declares 4000000000 triangles (200000000084 bytes) but the file has 134 bytes" "$data/stl_claims.stl"
+refuse 1 "3000000000 elements from byte 0 need 36000000000 bytes of bufferView 0, which has 36" "$data/gltf_count_lies.gltf"
+refuse 1 "need 9007199254740036 bytes of bufferView 0" "$data/gltf_accessor_offset.gltf"
+refuse 1 "bufferView 0: 'byteOffset' is not a whole number" "$data/gltf_offset_overflow.gltf"
+refuse 1 "bufferView 0: bytes [0, 4294967296) run past buffer 0 (36 bytes)" "$data/gltf_view_range.gltf"
+refuse 1 "buffer 0: byteLength 1000000000000 but only 36 bytes of data" "$data/gltf_buffer_lies.gltf"
+refuse 1 "index 1065353216 at 0 is out of range (3 vertices)" "$data/gltf_index_range.gltf"
+refuse 1 "node 0 is its own ancestor (a cycle in the node graph)" "$data/gltf_node_cycle.gltf"
+refuse 1 "node 0 is its own ancestor" "$data/gltf_node_self.gltf"
+refuse 1 "node 0 is its own ancestor" "$data/gltf_cycle_no_scene.gltf"
+refuse 1 "node 2 is a child of nodes 0 and 1" "$data/gltf_two_parents.gltf"
+refuse 1 "gltf_deep.gltf:1: JSON: nesting too deep" "$data/gltf_deep.gltf"
+refuse 1 "GLB chunk at byte 428 claims 4294967288 bytes, only 8 remain" "$data/glb_chunk_overflow.glb"
+refuse 1 "GLB chunk at byte 12 claims 4294967295 bytes, only 408 remain" "$data/glb_json_overflow.glb"
+refuse 1 "GLB header says 4294967295 bytes, the file has 428" "$data/glb_length_lies.glb"
+refuse 1 "exr_size_lies.exr: not a readable OpenEXR file" --reference "$data/exr_size_lies.exr" "$root/assets/scenes/spheres.scene"
+refuse 1 "exr_window_overflow.exr: not a readable OpenEXR file" --reference "$data/exr_window_overflow.exr" "$root/assets/scenes/spheres.scene"
+refuse 1 "exr_chunk_lies.exr: cannot decode the pixels (Corrupt chunk offset table" --size 8x6 \
+  --reference "$data/exr_chunk_lies.exr" "$root/assets/scenes/spheres.scene"
+# One mesh of 600 triangles under 65536 nodes: 39 million triangles from a 1 MB file.
+python3 - <<'PY'
+import base64, json, struct
+data = struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0) + bytes([0, 1, 2] * 600)
+doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0} for _ in range(65536)],
+       'meshes': [{'primitives': [{'attributes': {'POSITION': 0}, 'indices': 1}]}],
+       'accessors': [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3'},
+                     {'bufferView': 0, 'byteOffset': 36, 'componentType': 5121, 'count': 1800,
+                      'type': 'SCALAR'}],
+       'bufferViews': [{'buffer': 0, 'byteLength': len(data)}],
+       'buffers': [{'byteLength': len(data),
+                    'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
+json.dump(doc, open('instances.gltf', 'w'))
+PY
+refuse 1 "instance its meshes into 39321600 triangles and 196608 vertices (more than 33554432, and more than 1836 bytes" instances.gltf
+# One triangle as 10000 primitives of one mesh under 65536 nodes: counted once per mesh, so the
+# refusal takes a fraction of a second, not the hours of validating 655 million primitives.
+python3 - <<'PY'
+import json
+doc = json.load(open('instances.gltf'))
+doc['meshes'] = [{'primitives': [{'attributes': {'POSITION': 0}}] * 10000}]
+json.dump(doc, open('primitives.gltf', 'w'))
+PY
+refuse 1 "instance its meshes into 655360000 triangles and 1966080000 vertices" primitives.gltf
+# Two million empty objects in 6 MB of JSON: json-c would take 1.6 GB for them.
+python3 -c "open('objects.gltf', 'w').write('{\"asset\": {\"version\": \"2.0\"}, \"x\": [' + '{},' * 2000000 + '{}]}')"
+refuse 1 "objects.gltf: its JSON would take about 1740 MB to parse (more than 1024 MB)" objects.gltf
+rm -f instances.gltf primitives.gltf objects.gltf
+
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000
 python3 - "$big" <<'PY'

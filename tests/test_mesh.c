@@ -1,5 +1,5 @@
-/* Tests of the OBJ and PLY loaders: every supported form, the computed normals, degenerate
- * triangles, and that each bad input fails with one "path:line: message" line and an empty mesh.
+/* Tests of the mesh loaders (OBJ, PLY, STL, glTF): every supported form, the computed normals,
+ * degenerate triangles, and that each bad input fails with one "path:line: message" line and an empty mesh.
  * Fixtures live in tests/data/mesh; binary PLY files are generated into a temporary directory. */
 #include <stdarg.h>
 #include <stddef.h>
@@ -600,6 +600,116 @@ static void test_ply_binary_truncated(void **state)
     }
 }
 
+/* ------------------------------------------------------------------ STL */
+
+/* The unit cube of cube.stl: 36 corners welded into its 8 corners (-0 and 0 as one), with the
+ * angle-weighted normals of a cube corner, (+-1, +-1, +-1) / sqrt(3) pointing outward. */
+static void assert_stl_cube(const struct ao_mesh *mesh)
+{
+    assert_mesh_valid(mesh);
+    assert_int_equal(mesh->vertex_count, 8);
+    assert_int_equal(mesh->triangle_count, 12);
+    const float k = 0.57735027f;
+    for (int i = 0; i < 8; i++) {
+        float x = (float)(i & 1), y = (float)(i >> 1 & 1), z = (float)(i >> 2);
+        size_t v = vertex_at(mesh, x, y, z);
+        assert_vec3_near(mesh->normals[v], (2 * x - 1) * k, (2 * y - 1) * k, (2 * z - 1) * k);
+    }
+}
+
+static void test_stl_ascii(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("cube.stl"));
+    assert_stl_cube(&mesh);
+    ao_mesh_finish(&mesh);
+}
+
+/* The same cube as binary STL, its 80-byte header starting with "solid" as many exporters'
+ * do: the size (84 + 50 n) decides. */
+static void test_stl_binary(void **state)
+{
+    (void)state;
+    struct ao_mesh ascii;
+    load_ok(&ascii, fixture("cube.stl"));
+    struct bytes b = {.size = 0};
+    char header[81];
+    snprintf(header, sizeof header, "%-80s", "solid cube, but binary");
+    put_text(&b, header);
+    put_int(&b, ascii.triangle_count, 4);
+    for (size_t t = 0; t < ascii.triangle_count; t++) {
+        for (int k = 0; k < 3; k++)
+            put_f32(&b, 0.0f);
+        for (int k = 0; k < 3; k++) {
+            struct ao_vec3 p = ascii.positions[ascii.indices[3 * t + k]];
+            put_f32(&b, p.x);
+            put_f32(&b, p.y);
+            put_f32(&b, p.z);
+        }
+        put_int(&b, 0, 2);
+    }
+    struct ao_mesh mesh;
+    load_ok(&mesh, temp_file("cube_binary.stl", b.data, b.size));
+    assert_stl_cube(&mesh);
+    ao_mesh_finish(&mesh);
+    /* One byte more or less: not binary, and not ASCII either (a NUL byte). */
+    expect_failure(temp_file("cube_long.stl", b.data, b.size - 1), ": ",
+                   "binary STL header declares 12 triangles (684 bytes) but the file has 683");
+    ao_mesh_finish(&ascii);
+}
+
+/* ------------------------------------------------------------------ glTF */
+
+/* nodes.gltf: scene 1 of two; a matrix node (x + 10) over a TRS node (translation y + 1, 90
+ * degrees about z, scale 2) holding a triangle without normals; a node mirroring x (scale -1,
+ * then z + 5) holding the triangle with NORMAL +z and a point primitive (skipped); a node outside
+ * the scene. The buffer is an external file whose name is percent-encoded. */
+static void test_gltf_nodes(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, fixture("nodes.gltf"));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.vertex_count, 6);
+    assert_int_equal(mesh.triangle_count, 2);
+    /* (0,0,0) (1,0,0) (0,1,0) scaled by 2, turned (x, y) -> (-y, x), moved by (10, 1, 0). */
+    size_t a = vertex_at(&mesh, 10, 1, 0), b = vertex_at(&mesh, 10, 3, 0);
+    size_t c = vertex_at(&mesh, 8, 1, 0);
+    assert_triangle(&mesh, 0, (uint32_t)a, (uint32_t)b, (uint32_t)c);
+    /* Mirrored: the winding turns round so that the file's normal +z still agrees with it. */
+    size_t d = vertex_at(&mesh, 0, 0, 5), e = vertex_at(&mesh, -1, 0, 5);
+    size_t f = vertex_at(&mesh, 0, 1, 5);
+    assert_triangle(&mesh, 1, (uint32_t)d, (uint32_t)f, (uint32_t)e);
+    for (size_t i = 0; i < 6; i++)
+        assert_vec3_near(mesh.normals[i], 0, 0, 1);
+    ao_mesh_finish(&mesh);
+}
+
+/* No scene: every root node; a non-indexed primitive with an embedded buffer (a triangle). */
+static void test_gltf_no_scene(void **state)
+{
+    (void)state;
+    static const char text[] =
+        "{\"asset\": {\"version\": \"2.0\"},\n"
+        " \"nodes\": [{\"mesh\": 0, \"translation\": [0, 0, 1]}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3,\n"
+        "                \"type\": \"VEC3\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}],\n"
+        " \"buffers\": [{\"byteLength\": 36, \"uri\": \"data:application/gltf-buffer;base64,"
+        "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}]}\n";
+    struct ao_mesh mesh;
+    load_ok(&mesh, temp_file("triangle.gltf", text, sizeof text - 1));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.triangle_count, 1);
+    assert_triangle(&mesh, 0, 0, 1, 2);
+    assert_vec3_near(mesh.positions[1], 1, 0, 1);
+    assert_vec3_near(mesh.positions[2], 0, 1, 1);
+    assert_vec3_near(mesh.normals[0], 0, 0, 1);
+    ao_mesh_finish(&mesh);
+}
+
 /* ------------------------------------------------------------------ bad input */
 
 /* Each bad fixture, where its one error line must point, and what it must say. */
@@ -655,6 +765,22 @@ static const struct {
     {"bad_ply_number.ply", ":11: ", "bad number 'abc'"},
     {"bad_ply_float_range.ply", ":11: ", "not a finite float"},
     {"bad_ply_claims.ply", ":12: ", "'vertex' declares 4000000000 rows, found 3"},
+    {"bad_stl_outside.stl", ":3: ", "'vertex' outside 'outer loop'"},
+    {"bad_stl_two.stl", ":6: ", "loop with 2 vertices; at least 3 needed"},
+    {"bad_stl_keyword.stl", ":6: ", "unknown STL keyword 'vertx'"},
+    {"bad_stl_unended.stl", ":6: ", "file ends inside a facet"},
+    {"bad_stl_number.stl", ":4: ", "bad number 'nan'"},
+    {"bad_stl_size.stl", ": ", "declares 2 triangles (184 bytes) but the file has 134 bytes"},
+    {"bad_gltf_json.gltf", ":3: ", "JSON: unexpected character"},
+    {"bad_gltf_asset.gltf", ": ", "no asset.version"},
+    {"bad_gltf_version.gltf", ": ", "glTF version '1.0'; only 2.x is supported"},
+    {"bad_gltf_extension.gltf", ": ", "requires extension 'KHR_draco_mesh_compression'"},
+    {"bad_gltf_sparse.gltf", ": ", "accessor 0 (POSITION): sparse accessors are not supported"},
+    {"bad_gltf_position_type.gltf", ": ", "componentType 5123; only float (5126)"},
+    {"bad_gltf_index_count.gltf", ": ", "2 indices, not a whole number of triangles"},
+    {"bad_gltf_mesh_index.gltf", ": ", "node 1: 'mesh' 7 is out of range (2 defined)"},
+    {"bad_gltf_uri.gltf", ": ", "uri 'http://example.com/x.bin' is not a relative file name"},
+    {"bad_gltf_base64.gltf", ": ", "buffer 0: bad base64 data"},
 };
 
 static void test_bad_inputs(void **state)
@@ -674,7 +800,7 @@ static void test_file_errors(void **state)
     assert_int_equal(mkdir(dir, 0700), 0);
     expect_failure(fixture("missing.obj"), ": ", "cannot open: No such file");
     expect_failure(dir, ": ", "is a directory");
-    expect_failure(fixture("tri.stl"), ": ", "unknown mesh format");
+    expect_failure(fixture("tri.3ds"), ": ", "unknown mesh format");
     expect_failure(data_dir, ": ", "unknown mesh format");
     expect_failure("dir.obj/file", ": ", "unknown mesh format");
 }
@@ -846,6 +972,10 @@ int main(void)
         cmocka_unit_test(test_ply_binary),
         cmocka_unit_test(test_ply_binary_errors),
         cmocka_unit_test(test_ply_binary_truncated),
+        cmocka_unit_test(test_stl_ascii),
+        cmocka_unit_test(test_stl_binary),
+        cmocka_unit_test(test_gltf_nodes),
+        cmocka_unit_test(test_gltf_no_scene),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_unreadable_file),

@@ -1,6 +1,7 @@
 /* libFuzzer target for one mesh loader: the input is written to a scratch file whose extension
- * (AO_FUZZ_EXT, ".obj" or ".ply") picks the loader, since ao_mesh_load reads a path. A mesh that
- * loads must be consistent: indices in range, finite positions, unit or zero normals. */
+ * (AO_FUZZ_EXT: ".obj", ".ply", ".stl", ".gltf" or ".glb") picks the loader, since ao_mesh_load
+ * reads a path. A mesh that loads must be consistent: indices in range, finite positions, unit
+ * or zero normals. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -9,7 +10,7 @@
 #include "mesh.h"
 
 #ifndef AO_FUZZ_EXT
-#error "define AO_FUZZ_EXT as \".obj\" or \".ply\""
+#error "define AO_FUZZ_EXT as a mesh extension such as \".obj\""
 #endif
 
 /* Aborts with a message when a loaded mesh breaks what mesh.h promises. */

@@ -1,0 +1,326 @@
+/* OpenEXR through OpenEXRCore, the C API of OpenEXR 3; see exr.h. The only file that includes
+ * openexr.h. The library reports through a callback: its first message is kept and printed as the
+ * one line of a failed read. Reads go through memory (the file is read whole by ao_file_read,
+ * which refuses FIFOs and devices), so the library sees the true size and can check the offsets a
+ * header claims against it. */
+#include "exr.h"
+
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/types.h>
+
+#include <openexr.h>
+
+#include "file.h"
+
+/* What the library's callbacks see through user_data. */
+struct stream {
+    FILE *file;                /* writing */
+    const char *data;          /* reading: the whole file */
+    size_t size;
+    char message[256];         /* the library's first error message */
+};
+
+/* Keeps the library's first message, on one line, instead of its default print to stderr. */
+static void on_error(exr_const_context_t ctxt, exr_result_t code, const char *message)
+{
+    void *user = NULL;
+    if (exr_get_user_data(ctxt, &user) != EXR_ERR_SUCCESS || !user)
+        return;
+    struct stream *s = user;
+    if (s->message[0])
+        return;
+    snprintf(s->message, sizeof s->message, "%s",
+             message ? message : exr_get_default_error_message(code));
+    for (char *c = s->message; *c; c++)
+        if (*c == '\n' || *c == '\r')
+            *c = ' ';
+}
+
+/* Writes at an offset of the FILE, as the library's pwrite-like callback. */
+static int64_t write_at(exr_const_context_t ctxt, void *user, const void *buffer, uint64_t size,
+                        uint64_t offset, exr_stream_error_func_ptr_t error)
+{
+    (void)ctxt;
+    (void)error;
+    struct stream *s = user;
+    if (offset > INT64_MAX || fseeko(s->file, (off_t)offset, SEEK_SET) != 0 ||
+        fwrite(buffer, 1, size, s->file) != size)
+        return -1;
+    return (int64_t)size;
+}
+
+/* Reads from the in-memory file, as the library's pread-like callback. */
+static int64_t read_at(exr_const_context_t ctxt, void *user, void *buffer, uint64_t size,
+                       uint64_t offset, exr_stream_error_func_ptr_t error)
+{
+    (void)ctxt;
+    (void)error;
+    const struct stream *s = user;
+    if (offset >= s->size)
+        return 0;
+    uint64_t n = size < s->size - offset ? size : s->size - offset;
+    memcpy(buffer, s->data + offset, n);
+    return (int64_t)n;
+}
+
+/* The in-memory file's size, so the library can check offsets against it. */
+static int64_t size_of(exr_const_context_t ctxt, void *user)
+{
+    (void)ctxt;
+    return (int64_t)((const struct stream *)user)->size;
+}
+
+/* ------------------------------------------------------------------ writing */
+
+/* Points the pipeline's channels (B, G, R in the file's order) at the chunk's rows of rgb. */
+static void point_channels(exr_encode_pipeline_t *encode, const float *rgb, int width)
+{
+    for (int c = 0; c < encode->channel_count; c++) {
+        exr_coding_channel_info_t *channel = &encode->channels[c];
+        int offset = channel->channel_name[0] == 'R' ? 0 : channel->channel_name[0] == 'G' ? 1 : 2;
+        const float *row = rgb + (size_t)encode->chunk.start_y * (size_t)width * 3;
+        channel->encode_from_ptr = (const uint8_t *)(row + offset);
+        channel->user_pixel_stride = 3 * sizeof(float);
+        channel->user_line_stride = width * 3 * (int32_t)sizeof(float);
+        channel->user_bytes_per_element = sizeof(float);
+        channel->user_data_type = EXR_PIXEL_FLOAT;
+    }
+}
+
+/* The header: one scanline part, channels R, G, B as 32-bit floats, ZIP, the notes. */
+static exr_result_t write_header(exr_context_t ctxt, int width, int height,
+                                 const struct ao_image_note *notes, size_t note_count)
+{
+    int part;
+    exr_result_t r = exr_add_part(ctxt, "aoview", EXR_STORAGE_SCANLINE, &part);
+    if (r == EXR_ERR_SUCCESS)
+        r = exr_initialize_required_attr_simple(ctxt, part, width, height, EXR_COMPRESSION_ZIP);
+    for (const char *const *name = (const char *const[]){"R", "G", "B", NULL};
+         r == EXR_ERR_SUCCESS && *name; name++)
+        r = exr_add_channel(ctxt, part, *name, EXR_PIXEL_FLOAT, EXR_PERCEPTUALLY_LINEAR, 1, 1);
+    for (size_t i = 0; r == EXR_ERR_SUCCESS && i < note_count; i++)
+        r = exr_attr_set_string(ctxt, part, notes[i].key, notes[i].value);
+    return r == EXR_ERR_SUCCESS ? exr_write_header(ctxt) : r;
+}
+
+/* Every chunk of scanlines, through one encoding pipeline. */
+static exr_result_t write_chunks(exr_context_t ctxt, const float *rgb, int width, int height)
+{
+    int32_t lines;
+    exr_result_t r = exr_get_scanlines_per_chunk(ctxt, 0, &lines);
+    exr_encode_pipeline_t encode = EXR_ENCODE_PIPELINE_INITIALIZER;
+    bool started = false;
+    for (int y = 0; r == EXR_ERR_SUCCESS && y < height; y += lines) {
+        exr_chunk_info_t chunk;
+        r = exr_write_scanline_chunk_info(ctxt, 0, y, &chunk);
+        if (r == EXR_ERR_SUCCESS)
+            r = started ? exr_encoding_update(ctxt, 0, &chunk, &encode)
+                        : exr_encoding_initialize(ctxt, 0, &chunk, &encode);
+        started |= r == EXR_ERR_SUCCESS;
+        if (r == EXR_ERR_SUCCESS) {
+            point_channels(&encode, rgb, width);
+            r = exr_encoding_choose_default_routines(ctxt, 0, &encode);
+        }
+        if (r == EXR_ERR_SUCCESS)
+            r = exr_encoding_run(ctxt, 0, &encode);
+    }
+    if (started)
+        exr_encoding_destroy(ctxt, &encode);
+    return r;
+}
+
+bool ao_exr_emit(FILE *f, const char *path, const float *rgb, int width, int height,
+                 const struct ao_image_note *notes, size_t note_count)
+{
+    struct stream s = {.file = f};
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = on_error;
+    init.user_data = &s;
+    init.write_fn = write_at;
+    exr_context_t ctxt = NULL;
+    errno = 0;
+    exr_result_t r = exr_start_write(&ctxt, path, EXR_WRITE_FILE_DIRECTLY, &init);
+    if (r == EXR_ERR_SUCCESS)
+        r = write_header(ctxt, width, height, notes, note_count);
+    if (r == EXR_ERR_SUCCESS)
+        r = write_chunks(ctxt, rgb, width, height);
+    /* exr_finish writes the chunk offset table, so its result counts too. */
+    exr_result_t finished = ctxt ? exr_finish(&ctxt) : EXR_ERR_SUCCESS;
+    if (r == EXR_ERR_SUCCESS)
+        r = finished;
+    if (r != EXR_ERR_SUCCESS && errno == 0)
+        errno = r == EXR_ERR_OUT_OF_MEMORY ? ENOMEM : EIO;
+    return r == EXR_ERR_SUCCESS;
+}
+
+/* ------------------------------------------------------------------ reading */
+
+/* Which of R, G, B (0, 1, 2) a channel name is, or -1 for any other channel (A, Z, layers). */
+static int rgb_index(const char *name)
+{
+    return strcmp(name, "R") == 0 ? 0 : strcmp(name, "G") == 0 ? 1 : strcmp(name, "B") == 0 ? 2 : -1;
+}
+
+/* Checks that the part holds R, G and B, unsubsampled, as half or float; NULL or the reason. */
+static const char *check_channels(exr_const_context_t ctxt)
+{
+    const exr_attr_chlist_t *channels;
+    if (exr_get_channels(ctxt, 0, &channels) != EXR_ERR_SUCCESS)
+        return "no channel list";
+    int found = 0;
+    for (int i = 0; i < channels->num_channels; i++) {
+        const exr_attr_chlist_entry_t *e = &channels->entries[i];
+        int c = rgb_index(e->name.str);
+        if (c < 0)
+            continue;
+        if (e->pixel_type != EXR_PIXEL_HALF && e->pixel_type != EXR_PIXEL_FLOAT)
+            return "R, G and B must be half or float channels";
+        if (e->x_sampling != 1 || e->y_sampling != 1)
+            return "subsampled R, G or B channels are not supported";
+        found |= 1 << c;
+    }
+    return found == 7 ? NULL
+                      : "no R, G and B channels (greyscale, YC and layered images are not supported)";
+}
+
+/* Decodes one chunk's R, G and B into rgb (the data window's top-left at rgb[0]), as floats; the
+ * chunk's top-left pixel is (x, y) (a tile's chunk info gives tile numbers, not pixels). */
+static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_t *chunk,
+                                 int64_t x, int64_t y, exr_decode_pipeline_t *decode,
+                                 bool *started, float *rgb, exr_attr_box2i_t window)
+{
+    int width = window.max.x - window.min.x + 1;
+    exr_result_t r = *started ? exr_decoding_update(ctxt, 0, chunk, decode)
+                              : exr_decoding_initialize(ctxt, 0, chunk, decode);
+    if (r != EXR_ERR_SUCCESS)
+        return r;
+    *started = true;
+    size_t first = (size_t)(y - window.min.y) * (size_t)width + (size_t)(x - window.min.x);
+    for (int c = 0; c < decode->channel_count; c++) {
+        exr_coding_channel_info_t *channel = &decode->channels[c];
+        int index = rgb_index(channel->channel_name);
+        channel->decode_to_ptr = index < 0 ? NULL : (uint8_t *)(rgb + 3 * first + index);
+        channel->user_pixel_stride = 3 * sizeof(float);
+        channel->user_line_stride = width * 3 * (int32_t)sizeof(float);
+        channel->user_bytes_per_element = sizeof(float);
+        channel->user_data_type = EXR_PIXEL_FLOAT;
+    }
+    r = exr_decoding_choose_default_routines(ctxt, 0, decode);
+    return r == EXR_ERR_SUCCESS ? exr_decoding_run(ctxt, 0, decode) : r;
+}
+
+/* Every chunk of the part: scanline blocks, or the tiles of level 0. */
+static exr_result_t read_chunks(exr_const_context_t ctxt, exr_storage_t storage, float *rgb,
+                                exr_attr_box2i_t window)
+{
+    exr_decode_pipeline_t decode = EXR_DECODE_PIPELINE_INITIALIZER;
+    bool started = false;
+    exr_chunk_info_t chunk;
+    exr_result_t r = EXR_ERR_SUCCESS;
+    if (storage == EXR_STORAGE_SCANLINE) {
+        int32_t lines;
+        r = exr_get_scanlines_per_chunk(ctxt, 0, &lines);
+        for (int64_t y = window.min.y; r == EXR_ERR_SUCCESS && y <= window.max.y; y += lines) {
+            r = exr_read_scanline_chunk_info(ctxt, 0, (int)y, &chunk);
+            if (r == EXR_ERR_SUCCESS)
+                r = decode_chunk(ctxt, &chunk, window.min.x, chunk.start_y, &decode, &started,
+                                 rgb, window);
+        }
+    } else {
+        int32_t tile_width = 1, tile_height = 1;
+        r = exr_get_tile_sizes(ctxt, 0, 0, 0, &tile_width, &tile_height);
+        if (r == EXR_ERR_SUCCESS && (tile_width < 1 || tile_height < 1))
+            r = EXR_ERR_INVALID_ATTR;
+        int64_t columns = ((int64_t)window.max.x - window.min.x + tile_width) / tile_width;
+        int64_t rows = ((int64_t)window.max.y - window.min.y + tile_height) / tile_height;
+        for (int ty = 0; r == EXR_ERR_SUCCESS && ty < rows; ty++) {
+            for (int tx = 0; r == EXR_ERR_SUCCESS && tx < columns; tx++) {
+                r = exr_read_tile_chunk_info(ctxt, 0, tx, ty, 0, 0, &chunk);
+                if (r == EXR_ERR_SUCCESS)
+                    r = decode_chunk(ctxt, &chunk, window.min.x + (int64_t)tx * tile_width,
+                                     window.min.y + (int64_t)ty * tile_height, &decode, &started,
+                                     rgb, window);
+            }
+        }
+    }
+    if (started)
+        exr_decoding_destroy(ctxt, &decode);
+    return r;
+}
+
+/* Opens the in-memory file and reads its first part into a new buffer; NULL with the reason. */
+static float *decode_file(struct stream *s, const char *path, int *width, int *height,
+                          const char **why)
+{
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = on_error;
+    init.user_data = s;
+    init.read_fn = read_at;
+    init.size_fn = size_of;
+    init.max_image_width = init.max_image_height = AO_IMAGE_MAX_SIDE;
+    init.max_tile_width = init.max_tile_height = AO_IMAGE_MAX_SIDE;
+    init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
+    exr_context_t ctxt = NULL;
+    exr_storage_t storage;
+    exr_attr_box2i_t window;
+    float *rgb = NULL;
+    *why = NULL;
+    if (exr_start_read(&ctxt, path, &init) != EXR_ERR_SUCCESS)
+        *why = "not a readable OpenEXR file";
+    else if (exr_get_storage(ctxt, 0, &storage) != EXR_ERR_SUCCESS ||
+             (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED))
+        *why = "deep images are not supported";
+    else if (exr_get_data_window(ctxt, 0, &window) != EXR_ERR_SUCCESS)
+        *why = "no data window";
+    else if ((int64_t)window.max.x - window.min.x + 1 < 1 ||
+             (int64_t)window.max.x - window.min.x + 1 > AO_IMAGE_MAX_SIDE ||
+             (int64_t)window.max.y - window.min.y + 1 < 1 ||
+             (int64_t)window.max.y - window.min.y + 1 > AO_IMAGE_MAX_SIDE ||
+             ((int64_t)window.max.x - window.min.x + 1) * ((int64_t)window.max.y - window.min.y + 1) >
+                 AO_IMAGE_MAX_PIXELS)
+        *why = "bad or too large data window";
+    else if ((*why = check_channels(ctxt)) == NULL) {
+        *width = window.max.x - window.min.x + 1;
+        *height = window.max.y - window.min.y + 1;
+        size_t count = (size_t)*width * (size_t)*height * 3;
+        if (!(rgb = calloc(count, sizeof *rgb)))
+            *why = "out of memory";
+        else if (read_chunks(ctxt, storage, rgb, window) != EXR_ERR_SUCCESS)
+            *why = "cannot decode the pixels";
+        for (size_t i = 0; !*why && i < count; i++)
+            if (!isfinite(rgb[i]))
+                *why = "non-finite pixel value";
+    }
+    if (ctxt)
+        exr_finish(&ctxt);
+    if (*why) {
+        free(rgb);
+        return NULL;
+    }
+    return rgb;
+}
+
+bool ao_exr_read(const char *path, float **rgb, int *width, int *height)
+{
+    struct stream s = {.message = ""};
+    char *data;
+    if (!ao_file_read(path, &data, &s.size))
+        return false;
+    s.data = data;
+    const char *why;
+    float *pixels = decode_file(&s, path, width, height, &why);
+    free(data);
+    if (!pixels) {
+        if (s.message[0])
+            fprintf(stderr, "%s: %s (%s)\n", path, why, s.message);
+        else
+            fprintf(stderr, "%s: %s\n", path, why);
+        return false;
+    }
+    *rgb = pixels;
+    return true;
+}

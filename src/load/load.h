@@ -1,0 +1,88 @@
+/* What the mesh loaders share: the loader signature, growth arrays, line tokens, error lines and
+ * the common end of a load. Only src/mesh.c and src/load/ include this; the rest of the program
+ * sees mesh.h alone. */
+#ifndef AO_LOAD_H
+#define AO_LOAD_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "mesh.h"
+
+/* An absent OBJ normal in a face corner; also one past the largest usable vertex index. */
+#define AO_LOAD_NO_INDEX UINT32_MAX
+/* The most vertices a face may have: its fan then takes at most 1.5 MB, where a 100 MB line of
+ * corners would take gigabytes (and polygons that large are no real model's). */
+#define AO_LOAD_MAX_FACE_VERTICES 65536
+
+/* A growable array of fixed-size elements; doubling keeps appends amortized O(1). */
+struct ao_load_array {
+    unsigned char *data;
+    size_t count, capacity, size;
+};
+
+/* A token: the characters [begin, end) of the file text. */
+struct ao_load_span {
+    const char *begin, *end;
+};
+
+/* The unread rest of one line of text. */
+struct ao_load_tokens {
+    const char *p, *end;
+};
+
+/* A format's loader: parses a whole file (size bytes, followed by a NUL) into the empty mesh,
+ * ending with ao_load_finish; on failure prints one line and returns false (the caller empties
+ * the mesh). */
+typedef bool ao_load_format(struct ao_mesh *mesh, const char *path, const char *text, size_t size);
+
+/* The loaders, one file each under src/load/. */
+ao_load_format ao_load_obj, ao_load_ply, ao_load_stl, ao_load_gltf;
+
+/* Appends n elements to a and returns the first, or NULL when memory or size_t runs out. */
+void *ao_load_append(struct ao_load_array *a, size_t n);
+
+/* Hands the array's storage to the caller (who frees it) and empties the array. */
+void *ao_load_take(struct ao_load_array *a);
+
+/* Frees the array's storage. */
+void ao_load_free(struct ao_load_array *a);
+
+/* Prints the load's one error line: "path:line: message", or "path: message" when line is 0. */
+void ao_load_report(const char *path, size_t line, const char *format, ...);
+
+/* Reports an allocation failure; returns false for the caller to pass on. */
+bool ao_load_out_of_memory(const char *path);
+
+/* Whitespace inside a line ('\r' too, so CRLF files need no special case). */
+bool ao_load_is_blank(char c);
+
+/* Moves to the next whitespace-separated token of the line; false at its end. */
+bool ao_load_next_token(struct ao_load_tokens *t, struct ao_load_span *s);
+
+/* True when the token is exactly word. */
+bool ao_load_span_is(struct ao_load_span s, const char *word);
+
+/* Token length for "%.*s" in messages, capped so one bad token cannot flood the line. */
+int ao_load_span_length(struct ao_load_span s);
+
+/* Parses a whole token as a number (strtod syntax); false when anything is left over. */
+bool ao_load_parse_number(struct ao_load_span s, double *out);
+
+/* Parses a whole token as a finite single-precision number. */
+bool ao_load_parse_float(struct ao_load_span s, float *out);
+
+/* Appends the fan triangulation (v0, vi, vi+1) of the polygon face (elements of any size, at
+ * least 3) to triangles. */
+bool ao_load_fan(struct ao_load_array *triangles, const struct ao_load_array *face);
+
+/* The unit vector along (x, y, z) in single precision, or zero when its length is zero. */
+struct ao_vec3 ao_load_unit(double x, double y, double z);
+
+/* Common end of every loader: drops degenerate triangles, refuses a mesh without triangles and
+ * computes the normals the file did not give (all when mesh->normals is NULL, else those
+ * flagged in lacking, which may be NULL). */
+bool ao_load_finish(struct ao_mesh *mesh, const char *path, const bool *lacking);
+
+#endif

@@ -1,0 +1,63 @@
+/* Benchmark: mesh load time (ao_mesh_load: read, parse, index, normals) of each file named on the
+ * command line, runs interleaved round by round so that a busy machine slows every format alike;
+ * prints the median of the rounds per file and its ratio to the first file. Asserts nothing.
+ * Run: build/tests/bench_load [--rounds N] FIRST.obj OTHER... (docs/formats.md makes the files). */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "mesh.h"
+
+enum { MAX_FILES = 16, MAX_ROUNDS = 99 };
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int by_value(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+
+int main(int argc, char **argv)
+{
+    int first = 1, rounds = 5;
+    if (argc > 2 && strcmp(argv[1], "--rounds") == 0) {
+        rounds = atoi(argv[2]);
+        first = 3;
+    }
+    int files = argc - first;
+    if (files < 1 || files > MAX_FILES || rounds < 1 || rounds > MAX_ROUNDS) {
+        fprintf(stderr, "usage: bench_load [--rounds 1..%d] MESH... (at most %d)\n", MAX_ROUNDS,
+                MAX_FILES);
+        return 2;
+    }
+    static double seconds[MAX_FILES][MAX_ROUNDS];
+    size_t triangles[MAX_FILES] = {0};
+    for (int r = 0; r < rounds; r++) {
+        for (int f = 0; f < files; f++) {
+            struct ao_mesh mesh;
+            double start = now();
+            if (!ao_mesh_load(&mesh, argv[first + f]))
+                return 1;
+            seconds[f][r] = now() - start;
+            triangles[f] = mesh.triangle_count;
+            ao_mesh_finish(&mesh);
+        }
+    }
+    double base = 0.0;
+    printf("%-40s %12s %10s %8s\n", "file", "triangles", "median s", "ratio");
+    for (int f = 0; f < files; f++) {
+        qsort(seconds[f], (size_t)rounds, sizeof seconds[f][0], by_value);
+        double median = seconds[f][rounds / 2];
+        if (f == 0)
+            base = median;
+        printf("%-40s %12zu %10.3f %8.2f\n", argv[first + f], triangles[f], median, median / base);
+    }
+    return 0;
+}
