@@ -9,8 +9,6 @@
  * the uniform sphere) add nothing and are not traced. */
 #include "ao.h"
 
-#include <float.h>
-
 #include "simd.h"
 
 /* Keys of a pixel's eye-ray stream (indexed by pass) and AO stream (indexed by sample), in the
@@ -45,26 +43,82 @@ static void draw_pairs(const struct ao_context *ctx, uint64_t key, uint64_t firs
             draw_pair(ctx, key, first + (uint64_t)k, &u1[k], &u2[k]);
 }
 
-float ao_surface_offset(struct ao_vec3 origin, float t, struct ao_vec3 position)
+/* gamma(n) of the standard model of rounding: n successive roundings, each off by a relative 2^-24
+ * at most, are off by at most n 2^-24 / (1 - n 2^-24) together (Higham; pbrt-v4's gamma). */
+static inline float gamma_n(int n)
 {
-    /* org + t dir carries a rounding error of a few ulps of max(|org|, t, |p|) per component, and
-     * Embree's t adds a few more; 2^-18 of their sum is 32 ulps of the largest, scale-free. */
-    float scale = ao_vec3_max_abs(origin) + t + ao_vec3_max_abs(position);
-    float offset = scale * 0x1.0p-18f;
-    return offset > FLT_MIN ? offset : FLT_MIN; /* FLT_MIN for NaN too, as fmaxf would give */
+    return (float)n * 0x1p-24f / (1.0f - (float)n * 0x1p-24f);
+}
+
+/* Component-wise |a|. */
+static inline struct ao_vec3 vec3_abs(struct ao_vec3 a)
+{
+    return ao_vec3_make(fabsf(a.x), fabsf(a.y), fabsf(a.z));
+}
+
+struct ao_vec3 ao_triangle_point(const struct ao_vec3 p[3], float u, float v, struct ao_vec3 *error)
+{
+    /* p0 + (u e1 + v e2), with e1 = p1 - p0 and e2 = p2 - p0 rounded once each: the products and
+     * their sum add two more roundings, so the sum is off by at most gamma3 (|u e1| + |v e2|)
+     * <= gamma3 (|e1| + |e2|) (u, v in [0, 1]), and the final addition by gamma1 |p| more. Written
+     * so, the point needs no barycentric weights that sum to 1, and a coordinate in which the
+     * three vertices agree (an axis-aligned plane) comes out exact. The tracer, testing this
+     * triangle against a ray that leaves from near the point, translates the vertices to the ray's
+     * origin, rounding each coordinate by up to 2^-24 |v_i - o| <= 2^-24 (|e1| + |e2|), and its
+     * cross and dot products add a few such terms: gamma5 (|e1| + |e2|) more. */
+    struct ao_vec3 e1 = ao_vec3_sub(p[1], p[0]), e2 = ao_vec3_sub(p[2], p[0]);
+    struct ao_vec3 point = ao_vec3_add(p[0], ao_vec3_add(ao_vec3_scale(e1, u), ao_vec3_scale(e2, v)));
+    *error = ao_vec3_add(ao_vec3_scale(vec3_abs(point), gamma_n(2)),
+                         ao_vec3_scale(ao_vec3_add(vec3_abs(e1), vec3_abs(e2)), gamma_n(8)));
+    return point;
+}
+
+struct ao_vec3 ao_sphere_point(struct ao_vec3 center, float radius, struct ao_vec3 q, struct ao_vec3 *n,
+                               struct ao_vec3 *error)
+{
+    /* c + r n with n = normalize(q - c): n's components are off by gamma4 of themselves (a dot
+     * product, a square root, a division, a product), r n by gamma5, and the addition by gamma1 |p|.
+     * The tracer's test from a nearby origin o rounds o - c (2^-24 r |n| per axis) and compares
+     * |o - c|^2 with r^2 (gamma3 r^2, r gamma2 radially): gamma5 r |n| more. */
+    *n = ao_vec3_normalize(ao_vec3_sub(q, center));
+    struct ao_vec3 point = ao_vec3_add(center, ao_vec3_scale(*n, radius));
+    *error = ao_vec3_add(ao_vec3_scale(vec3_abs(point), gamma_n(2)), ao_vec3_scale(vec3_abs(*n), radius * gamma_n(10)));
+    return point;
+}
+
+struct ao_vec3 ao_surface_lift(struct ao_vec3 position, struct ao_vec3 ng, struct ao_vec3 error)
+{
+    /* The distance along ng that clears the box of half-sizes `error` about the position (pbrt-v4's
+     * OffsetRayOrigin; Wächter and Binder, Ray Tracing Gems ch. 6). Its floor, where every error is
+     * 0 (a plane through 0 in an axis-aligned normal's coordinate), keeps the lifted coordinate a
+     * normal number, which flush-to-zero would otherwise put back on the plane. */
+    float d = fabsf(ng.x) * error.x + fabsf(ng.y) * error.y + fabsf(ng.z) * error.z;
+    d = d > 0x1p-100f ? d : 0x1p-100f; /* the floor for NaN too */
+    struct ao_vec3 o = ao_vec3_add(position, ao_vec3_scale(ng, d));
+    /* The addition rounds to nearest, possibly back towards the surface: one step further away. */
+    float *c = &o.x;
+    const float *n = &ng.x;
+    for (int k = 0; k < 3; k++)
+        c[k] = n[k] > 0.0f ? nextafterf(c[k], INFINITY) : n[k] < 0.0f ? nextafterf(c[k], -INFINITY) : c[k];
+    return o;
 }
 
 void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,
                          const struct ao_hit *hit, struct ao_surface *s)
 {
-    s->position = ao_vec3_add(org, ao_vec3_scale(dir, hit->t));
+    /* The hit point recomputed from the primitive, with its error bound: Embree's org + t dir
+     * carries the error of t, which grows with the distance from the eye. */
+    struct ao_vec3 error;
     if (hit->sphere) {
         const struct ao_sphere *sp = &scene->spheres[hit->prim];
-        s->ng = ao_vec3_normalize(ao_vec3_sub(s->position, sp->center));
+        struct ao_vec3 q = ao_vec3_add(org, ao_vec3_scale(dir, hit->t));
+        s->position = ao_sphere_point(sp->center, sp->radius, q, &s->ng, &error);
         s->ns = s->ng;
         s->albedo = sp->albedo;
     } else {
         const uint32_t *i = &scene->indices[3 * hit->prim];
+        const struct ao_vec3 p[3] = {scene->positions[i[0]], scene->positions[i[1]], scene->positions[i[2]]};
+        s->position = ao_triangle_point(p, hit->u, hit->v, &error);
         s->ng = ao_vec3_normalize(hit->ng);
         float w0 = 1.0f - hit->u - hit->v;
         struct ao_vec3 n = ao_vec3_scale(scene->normals[i[0]], w0);
@@ -81,7 +135,7 @@ void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struc
         s->ng = ao_vec3_scale(s->ng, -1.0f);
         s->ns = ao_vec3_scale(s->ns, -1.0f);
     }
-    s->offset = ao_surface_offset(org, hit->t, s->position);
+    s->origin = ao_surface_lift(s->position, s->ng, error);
 }
 
 /* Occlusion rays waiting for a full batch, each remembering its weight and whose sum the weight
@@ -196,7 +250,7 @@ static void flush(struct queue *q)
 static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t key, uint64_t first_sample,
                           int count, double *sum)
 {
-    struct ao_vec3 origin = ao_vec3_add(s->position, ao_vec3_scale(s->ng, s->offset));
+    struct ao_vec3 origin = s->origin;
     struct ao_batch *r = &q->rays;
     for (int done = 0; done < count;) {
         /* As many as fit among the pending rays and in the batch. */

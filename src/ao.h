@@ -32,18 +32,31 @@ struct ao_context {
     enum ao_below below;
 };
 
-/* A shading point: unit normals turned to face the eye ray, and the ray-origin offset. */
+/* A shading point: unit normals turned to face the eye ray, and where its occlusion rays start. */
 struct ao_surface {
     struct ao_vec3 position, ng, ns, albedo;
-    float offset;            /* distance along ng that clears the position's rounding error */
+    struct ao_vec3 origin;   /* position lifted along ng past its rounding error (ao_surface_lift) */
 };
 
-/* The offset that lifts occlusion rays off a surface at `position` reached by a ray of length t
- * from `origin`: a few ulps of the largest magnitude involved, so it holds at any scene scale. */
-float ao_surface_offset(struct ao_vec3 origin, float t, struct ao_vec3 position);
+/* The point p[0] + u (p[1] - p[0]) + v (p[2] - p[0]) of a triangle (u, v: Embree's barycentrics)
+ * and in *error a bound per axis on its rounding error plus the tracer's when it tests this
+ * triangle against rays leaving from near the point. Any thread. */
+struct ao_vec3 ao_triangle_point(const struct ao_vec3 p[3], float u, float v, struct ao_vec3 *error);
 
-/* Shades the eye ray org + t dir's hit into *s: exact sphere normal, Phong-interpolated mesh
- * normal (the geometric one where the vertex normals cancel), both turned to the eye's side. */
+/* q projected onto the sphere (center, radius), its unit outward normal in *n, and an error bound
+ * as ao_triangle_point's in *error. Any thread. */
+struct ao_vec3 ao_sphere_point(struct ao_vec3 center, float radius, struct ao_vec3 q, struct ao_vec3 *n,
+                               struct ao_vec3 *error);
+
+/* Where occlusion rays leave a surface point `position` that is off by at most error.x, .y, .z
+ * per axis: moved along the unit normal ng (facing where the rays go) just past that box, each
+ * coordinate rounded away from the surface. Scale-free: the lift follows the point's own
+ * precision, not the distance from the eye. Any thread. */
+struct ao_vec3 ao_surface_lift(struct ao_vec3 position, struct ao_vec3 ng, struct ao_vec3 error);
+
+/* Shades the eye ray org + t dir's hit into *s: the point recomputed from the primitive and lifted
+ * past its error bound, exact sphere normal, Phong-interpolated mesh normal (the geometric one
+ * where the vertex normals cancel), both turned to the eye's side. */
 void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,
                          const struct ao_hit *hit, struct ao_surface *s);
 
