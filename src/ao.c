@@ -89,18 +89,19 @@ struct ao_vec3 ao_sphere_point(struct ao_vec3 center, float radius, struct ao_ve
 struct ao_vec3 ao_surface_lift(struct ao_vec3 position, struct ao_vec3 ng, struct ao_vec3 error)
 {
     /* The distance along ng that clears the box of half-sizes `error` about the position (pbrt-v4's
-     * OffsetRayOrigin; Wächter and Binder, Ray Tracing Gems ch. 6). Its floor, where every error is
-     * 0 (a plane through 0 in an axis-aligned normal's coordinate), keeps the lifted coordinate a
-     * normal number, which flush-to-zero would otherwise put back on the plane. */
-    float d = fabsf(ng.x) * error.x + fabsf(ng.y) * error.y + fabsf(ng.z) * error.z;
+     * OffsetRayOrigin; Wächter and Binder, Ray Tracing Gems ch. 6), enlarged so that the lift
+     * survives its own rounding instead of stepping each coordinate one ulp further, as pbrt
+     * does: adding d ng to the position rounds each coordinate by up to 2^-24 of it (gamma1 |p|
+     * more, projected on ng); |ng| is 1 within gamma3; the lift's products by gamma2 of
+     * themselves, and this sum by gamma5: a factor 1 + gamma12 covers them. Its floor, where every
+     * error is 0 (a plane through 0 in an axis-aligned normal's coordinate), keeps the lifted
+     * coordinate a normal number, which flush-to-zero would otherwise put back on the plane. */
+    struct ao_vec3 a = vec3_abs(ng), p = vec3_abs(position);
+    float d = a.x * (error.x + gamma_n(1) * p.x) + a.y * (error.y + gamma_n(1) * p.y) +
+              a.z * (error.z + gamma_n(1) * p.z);
+    d *= 1.0f + gamma_n(12);
     d = d > 0x1p-100f ? d : 0x1p-100f; /* the floor for NaN too */
-    struct ao_vec3 o = ao_vec3_add(position, ao_vec3_scale(ng, d));
-    /* The addition rounds to nearest, possibly back towards the surface: one step further away. */
-    float *c = &o.x;
-    const float *n = &ng.x;
-    for (int k = 0; k < 3; k++)
-        c[k] = n[k] > 0.0f ? nextafterf(c[k], INFINITY) : n[k] < 0.0f ? nextafterf(c[k], -INFINITY) : c[k];
-    return o;
+    return ao_vec3_add(position, ao_vec3_scale(ng, d));
 }
 
 void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,

@@ -49,9 +49,9 @@ struct ao_vec3 ao_sphere_point(struct ao_vec3 center, float radius, struct ao_ve
                                struct ao_vec3 *error);
 
 /* Where occlusion rays leave a surface point `position` that is off by at most error.x, .y, .z
- * per axis: moved along the unit normal ng (facing where the rays go) just past that box, each
- * coordinate rounded away from the surface. Scale-free: the lift follows the point's own
- * precision, not the distance from the eye. Any thread. */
+ * per axis: moved along the unit normal ng (facing where the rays go) just past that box and the
+ * rounding of the move itself. Scale-free: the lift follows the point's own precision, not the
+ * distance from the eye. Any thread. */
 struct ao_vec3 ao_surface_lift(struct ao_vec3 position, struct ao_vec3 ng, struct ao_vec3 error);
 
 /* Shades the eye ray org + t dir's hit into *s: the point recomputed from the primitive and lifted
