@@ -43,100 +43,46 @@ static void draw_pairs(const struct ao_context *ctx, uint64_t key, uint64_t firs
             draw_pair(ctx, key, first + (uint64_t)k, &u1[k], &u2[k]);
 }
 
-/* gamma(n) of the standard model of rounding: n successive roundings, each off by a relative 2^-24
- * at most, are off by at most n 2^-24 / (1 - n 2^-24) together (Higham; pbrt-v4's gamma). */
-static inline float gamma_n(int n)
-{
-    return (float)n * 0x1p-24f / (1.0f - (float)n * 0x1p-24f);
-}
-
-/* Component-wise |a|. */
-static inline struct ao_vec3 vec3_abs(struct ao_vec3 a)
-{
-    return ao_vec3_make(fabsf(a.x), fabsf(a.y), fabsf(a.z));
-}
-
-struct ao_vec3 ao_triangle_point(const struct ao_vec3 p[3], float u, float v, struct ao_vec3 *error)
-{
-    /* p0 + (u e1 + v e2), with e1 = p1 - p0 and e2 = p2 - p0 rounded once each: the products and
-     * their sum add two more roundings, so the sum is off by at most gamma3 (|u e1| + |v e2|)
-     * <= gamma3 (|e1| + |e2|) (u, v in [0, 1]), and the final addition by gamma1 |p| more. Written
-     * so, the point needs no barycentric weights that sum to 1, and a coordinate in which the
-     * three vertices agree (an axis-aligned plane) comes out exact. The tracer, testing this
-     * triangle against a ray that leaves from near the point, translates the vertices to the ray's
-     * origin, rounding each coordinate by up to 2^-24 |v_i - o| <= 2^-24 (|e1| + |e2|), and its
-     * cross and dot products add a few such terms: gamma5 (|e1| + |e2|) more. */
-    struct ao_vec3 e1 = ao_vec3_sub(p[1], p[0]), e2 = ao_vec3_sub(p[2], p[0]);
-    struct ao_vec3 point = ao_vec3_add(p[0], ao_vec3_add(ao_vec3_scale(e1, u), ao_vec3_scale(e2, v)));
-    *error = ao_vec3_add(ao_vec3_scale(vec3_abs(point), gamma_n(2)),
-                         ao_vec3_scale(ao_vec3_add(vec3_abs(e1), vec3_abs(e2)), gamma_n(8)));
-    return point;
-}
-
-struct ao_vec3 ao_sphere_point(struct ao_vec3 center, float radius, struct ao_vec3 q, struct ao_vec3 *n,
-                               struct ao_vec3 *error)
-{
-    /* c + r n with n = normalize(q - c): n's components are off by gamma4 of themselves (a dot
-     * product, a square root, a division, a product), r n by gamma5, and the addition by gamma1 |p|.
-     * The tracer's test from a nearby origin o rounds o - c (2^-24 r |n| per axis) and compares
-     * |o - c|^2 with r^2 (gamma3 r^2, r gamma2 radially): gamma5 r |n| more. */
-    *n = ao_vec3_normalize(ao_vec3_sub(q, center));
-    struct ao_vec3 point = ao_vec3_add(center, ao_vec3_scale(*n, radius));
-    *error = ao_vec3_add(ao_vec3_scale(vec3_abs(point), gamma_n(2)), ao_vec3_scale(vec3_abs(*n), radius * gamma_n(10)));
-    return point;
-}
-
-struct ao_vec3 ao_surface_lift(struct ao_vec3 position, struct ao_vec3 ng, struct ao_vec3 error)
-{
-    /* The distance along ng that clears the box of half-sizes `error` about the position (pbrt-v4's
-     * OffsetRayOrigin; Wächter and Binder, Ray Tracing Gems ch. 6), enlarged so that the lift
-     * survives its own rounding instead of stepping each coordinate one ulp further, as pbrt
-     * does: adding d ng to the position rounds each coordinate by up to 2^-24 of it (gamma1 |p|
-     * more, projected on ng); |ng| is 1 within gamma3; the lift's products by gamma2 of
-     * themselves, and this sum by gamma5: a factor 1 + gamma12 covers them. Its floor, where every
-     * error is 0 (a plane through 0 in an axis-aligned normal's coordinate), keeps the lifted
-     * coordinate a normal number, which flush-to-zero would otherwise put back on the plane. */
-    struct ao_vec3 a = vec3_abs(ng), p = vec3_abs(position);
-    float d = a.x * (error.x + gamma_n(1) * p.x) + a.y * (error.y + gamma_n(1) * p.y) +
-              a.z * (error.z + gamma_n(1) * p.z);
-    d *= 1.0f + gamma_n(12);
-    d = d > 0x1p-100f ? d : 0x1p-100f; /* the floor for NaN too */
-    return ao_vec3_add(position, ao_vec3_scale(ng, d));
-}
-
 void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,
                          const struct ao_hit *hit, struct ao_surface *s)
 {
     /* The hit point recomputed from the primitive, with its error bound: Embree's org + t dir
-     * carries the error of t, which grows with the distance from the eye. */
+     * carries the error of t, which grows with the distance from the eye. (The result is built
+     * in a local and stored once: written field by field through s, gcc spills dir in halves and
+     * reloads it across them, a store-forwarding stall that cost a sixth of this function.) */
+    struct ao_surface r;
     struct ao_vec3 error;
     if (hit->sphere) {
         const struct ao_sphere *sp = &scene->spheres[hit->prim];
         struct ao_vec3 q = ao_vec3_add(org, ao_vec3_scale(dir, hit->t));
-        s->position = ao_sphere_point(sp->center, sp->radius, q, &s->ng, &error);
-        s->ns = s->ng;
-        s->albedo = sp->albedo;
+        r.position = ao_sphere_point(sp->center, sp->radius, q, &r.ng, &error);
+        r.ns = r.ng;
+        r.albedo = sp->albedo;
     } else {
         const uint32_t *i = &scene->indices[3 * hit->prim];
-        const struct ao_vec3 p[3] = {scene->positions[i[0]], scene->positions[i[1]], scene->positions[i[2]]};
-        s->position = ao_triangle_point(p, hit->u, hit->v, &error);
-        s->ng = ao_vec3_normalize(hit->ng);
+        r.position = ao_triangle_point(scene->positions[i[0]], scene->positions[i[1]], scene->positions[i[2]],
+                                       hit->u, hit->v, &error);
+        r.ng = ao_vec3_normalize(hit->ng);
         float w0 = 1.0f - hit->u - hit->v;
         struct ao_vec3 n = ao_vec3_scale(scene->normals[i[0]], w0);
         n = ao_vec3_add(n, ao_vec3_scale(scene->normals[i[1]], hit->u));
         n = ao_vec3_add(n, ao_vec3_scale(scene->normals[i[2]], hit->v));
         float len = ao_vec3_length(n);
-        s->ns = len > 1e-6f && isfinite(len) ? ao_vec3_scale(n, 1.0f / len) : s->ng;
-        s->albedo = scene->albedos[scene->triangle_albedo[hit->prim]];
+        r.ns = len > 1e-6f && isfinite(len) ? ao_vec3_scale(n, 1.0f / len) : r.ng;
+        r.albedo = scene->albedos[scene->triangle_albedo[hit->prim]];
     }
-    if (!(ao_vec3_dot(s->ng, s->ng) > 0.25f)) /* not a unit normal: degenerate triangle, NaN */
-        s->ng = s->ns = ao_vec3_scale(dir, -1.0f);
+    if (!(ao_vec3_dot(r.ng, r.ng) > 0.25f)) /* not a unit normal: degenerate triangle, NaN */
+        r.ng = r.ns = ao_vec3_scale(dir, -1.0f);
     /* Turn the surface to the side the eye ray came from. */
-    if (ao_vec3_dot(s->ng, dir) > 0.0f) {
-        s->ng = ao_vec3_scale(s->ng, -1.0f);
-        s->ns = ao_vec3_scale(s->ns, -1.0f);
+    if (ao_vec3_dot(r.ng, dir) > 0.0f) {
+        r.ng = ao_vec3_scale(r.ng, -1.0f);
+        r.ns = ao_vec3_scale(r.ns, -1.0f);
     }
-    s->origin = ao_surface_lift(s->position, s->ng, error);
+    s->position = r.position;
+    s->ng = r.ng;
+    s->ns = r.ns;
+    s->albedo = r.albedo;
+    s->origin = ao_surface_lift(r.position, r.ng, error);
 }
 
 /* Occlusion rays waiting for a full batch, each remembering its weight and whose sum the weight

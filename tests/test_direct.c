@@ -224,7 +224,7 @@ static void lifted_origin(const struct ao_scene *s, size_t prim, const double x[
         /* Barycentrics from the normal equations of x - p0 = u e1 + v e2. */
         double a = dot(e1, e1), b = dot(e1, e2), c = dot(e2, e2), det = a * c - b * b;
         double u = (c * dot(e1, w) - b * dot(e2, w)) / det, vv = (a * dot(e2, w) - b * dot(e1, w)) / det;
-        p = ao_triangle_point(v, (float)u, (float)vv, &error);
+        p = ao_triangle_point(v[0], v[1], v[2], (float)u, (float)vv, &error);
     }
     struct ao_vec3 lifted = ao_surface_lift(p, normal, error);
     from_vec3(lifted, o);
