@@ -350,6 +350,43 @@ static void test_sphere_on_ground_matches_the_closed_form_anywhere(void **state)
     }
 }
 
+static void test_camera_moves_hold_far_from_the_origin(void **state)
+{
+    (void)state;
+    /* The viewer's moves on a scene at (1e6, 1e6, 1e6), whose camera lives in the scene's local
+     * frame: a full orbit in 64 yaw steps, a pan there and back, a zoom in and out. In world
+     * floats the eye could not be placed closer than 0.0625 (the spacing of floats at 1e6), 1 % of
+     * the eye's distance of 6.3. Here each step rounds at float precision of that distance: the
+     * orbit's inverse and forward trigonometry move the eye by a few ulps of it, about 1e-6 of the
+     * distance per step, so 64 steps stay within 1e-5 of it even if every error adds up; the pan
+     * and the zoom take two steps each. Bound: 1e-5 of the distance. */
+    const double t = 1e6;
+    char text[512];
+    snprintf(text, sizeof text, "camera eye %.17g %.17g %.17g target %.17g %.17g %.17g\n"
+             "sphere center %.17g %.17g %.17g radius 1\n", t, t + 3.0, t + 5.8, t, t + 0.5, t, t, t + 1, t);
+    struct fixture f;
+    setup(&f, text, "far-camera.scene");
+    struct ao_camera c = f.scene.camera;
+    const struct ao_camera start = c;
+    float distance = ao_vec3_length(ao_vec3_sub(c.eye, c.target));
+    for (int k = 0; k < 64; k++)
+        ao_camera_orbit(&c, 6.283185307179586f / 64.0f, 0.0f);
+    float orbit = ao_vec3_length(ao_vec3_sub(c.eye, start.eye));
+    c = start;
+    ao_camera_pan(&c, 0.3f, -0.2f);
+    ao_camera_pan(&c, -0.3f, 0.2f);
+    float pan = fmaxf(ao_vec3_length(ao_vec3_sub(c.eye, start.eye)), ao_vec3_length(ao_vec3_sub(c.target, start.target)));
+    c = start;
+    ao_camera_zoom(&c, 0.5f);
+    ao_camera_zoom(&c, 2.0f);
+    float zoom = ao_vec3_length(ao_vec3_sub(c.eye, start.eye));
+    print_message("camera at 1e6, eye %.2f from the target: full orbit off by %.2g, pan there and back %.2g, "
+                  "zoom in and out %.2g (world floats: 0.0625 per coordinate)\n", (double)distance, (double)orbit,
+                  (double)pan, (double)zoom);
+    assert_true(orbit <= 1e-5f * distance && pan <= 1e-5f * distance && zoom <= 1e-5f * distance);
+    teardown(&f);
+}
+
 /* ------------------------------------------------------------------ degenerate geometry */
 
 /* Zero-area triangles (collinear, repeated index, duplicate vertices), zero-length vertex normals,
@@ -582,6 +619,7 @@ int main(void)
         cmocka_unit_test(test_open_plane_at_any_scale_has_no_acne),
         cmocka_unit_test(test_contact_occlusion_is_kept),
         cmocka_unit_test(test_sphere_on_ground_matches_the_closed_form_anywhere),
+        cmocka_unit_test(test_camera_moves_hold_far_from_the_origin),
         cmocka_unit_test(test_degenerate_geometry_gives_no_nan),
         cmocka_unit_test(test_silhouettes_converge_to_the_box_filter),
         cmocka_unit_test(test_long_accumulation_resolves_exactly),
