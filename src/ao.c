@@ -47,9 +47,10 @@ void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struc
                          const struct ao_hit *hit, struct ao_surface *s)
 {
     /* The hit point recomputed from the primitive, with its error bound: Embree's org + t dir
-     * carries the error of t, which grows with the distance from the eye. (The result is built
-     * in a local and stored once: written field by field through s, gcc spills dir in halves and
-     * reloads it across them, a store-forwarding stall that cost a sixth of this function.) */
+     * carries the error of t, which grows with the distance from the eye. (Built in a local and
+     * written to *s field by field at the end: computed in place through s, gcc spilled dir in
+     * halves and reloaded it across them, and a whole-struct copy stalled the same way on the
+     * stack; those store-forwarding stalls cost about a third of this function.) */
     struct ao_surface r;
     struct ao_vec3 error;
     if (hit->sphere) {
