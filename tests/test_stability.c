@@ -27,12 +27,21 @@ struct fixture {
     struct ao_tracer *tracer;
 };
 
-static void setup(struct fixture *f, const char *text, const char *path)
+static void setup_with(struct fixture *f, const char *text, const char *path, enum ao_backend backend)
 {
     assert_true(ao_scene_parse(&f->scene, text, path));
-    f->tracer = ao_tracer_create(&f->scene);
+    f->tracer = ao_tracer_create_with(&f->scene, backend);
     assert_non_null(f->tracer);
 }
+
+static void setup(struct fixture *f, const char *text, const char *path)
+{
+    setup_with(f, text, path, AO_BACKEND_AUTO);
+}
+
+/* Both back ends, for the tests where rays leave surfaces at their finest: each has its own
+ * intersection arithmetic, and the lift must clear both. */
+static const enum ao_backend BACKENDS[2] = {AO_BACKEND_DIRECT, AO_BACKEND_EMBREE};
 
 static void teardown(struct fixture *f)
 {
@@ -147,8 +156,9 @@ static void test_open_plane_at_any_scale_has_no_acne(void **state)
     const float rho = 0.7f;
     struct ao_vec3 n = ao_vec3_normalize(ao_vec3_cross(U, V));
     enum { W = 32, H = 24, SPP = 256 };
-    for (int j = 0; j < 3; j++)
+    for (int b = 0; b < 6; b++)
         for (int k = 0; k < 3; k++) {
+            int j = b % 3;
             double s = scales[k], t = shifts[j], eye[3], target[3];
             const float *nn = &n.x, *u = &U.x, *v = &V.x;
             for (int a = 0; a < 3; a++) {
@@ -161,7 +171,7 @@ static void test_open_plane_at_any_scale_has_no_acne(void **state)
                      "mesh plane.obj albedo %.9g scale %.17g translate %.17g %.17g %.17g\n",
                      eye[0], eye[1], eye[2], target[0], target[1], target[2], (double)rho, s, t, t, t);
             struct fixture f;
-            setup(&f, text, path);
+            setup_with(&f, text, path, BACKENDS[b / 3]);
             float *rgb = render(&f, W, H, SPP, AO_SAMPLING_COSINE, true);
             int acne = 0, missed = 0;
             float lowest = rho;
@@ -170,8 +180,9 @@ static void test_open_plane_at_any_scale_has_no_acne(void **state)
                 missed += rgb[3 * p] == 0.25f;
                 lowest = fminf(lowest, rgb[3 * p]);
             }
-            print_message("plane at %g, scale %g: %d of %d pixels below rho (lowest %.6f, %d missed), %d samples "
-                          "each\n", t, s, acne, W * H, (double)lowest, missed, SPP);
+            print_message("plane at %g, scale %g, %s: %d of %d pixels below rho (lowest %.6f, %d missed), %d "
+                          "samples each\n", t, s, ao_tracer_backend(f.tracer), acne, W * H, (double)lowest, missed,
+                          SPP);
             assert_int_equal(acne, 0);
             assert_int_equal(missed, 0);
             for (int p = 0; p < 3 * W * H; p++)
@@ -209,8 +220,8 @@ static void test_contact_occlusion_is_kept(void **state)
         double radius, shift;
     } cases[] = {{0.5, 0.0}, {500.0, 1e4}, {1.0, 1e4}, {1.0, 1e6}};
     const double fractions[] = {0.001, 0.003, 0.01, 0.03, 0.1, 0.3, 1.0}, rho = 0.8;
-    for (int c = 0; c < 4; c++) {
-        double r = cases[c].radius, t = cases[c].shift, w = 20 * r;
+    for (int c = 0; c < 8; c++) {
+        double r = cases[c % 4].radius, t = cases[c % 4].shift, w = 20 * r;
         char text[1024];
         snprintf(text, sizeof text,
                  "camera eye %.17g %.17g %.17g target %.17g %.17g %.17g\n"
@@ -218,7 +229,7 @@ static void test_contact_occlusion_is_kept(void **state)
                  "sphere center %.17g %.17g %.17g radius %.17g albedo 0.8\n",
                  t, t + 6 * r, t + 6 * r, t, t, t, t - w, t, t - w, 2 * w, 2 * w, t, t + r, t, r);
         struct fixture f;
-        setup(&f, text, "contact.scene");
+        setup_with(&f, text, "contact.scene", BACKENDS[c / 4]);
         struct ao_context ctx = {.scene = &f.scene, .tracer = f.tracer, .sampling = AO_SAMPLING_COSINE,
                                  .ao_distance = INFINITY, .seed = 17};
         double contact[3], center[3];
@@ -240,9 +251,9 @@ static void test_contact_occlusion_is_kept(void **state)
             double se = rho * sqrt(q * (1.0 - q) / N), gap = x < r ? r - sqrt(r * r - x * x) : r;
             double first_order = delta * r * r * (2.0 * r * r - x * x) / (d2 * d2 * sqrt(d2));
             bool outside = o[0] * o[0] + o[1] * o[1] + o[2] * o[2] > r * r;
-            print_message("contact, r %g at %g: x/r = %.3f AO %.7f, exact %.7f (%+.1f se); lift %.2g r, gap %.2g r%s\n",
-                          r, t, x / r, mean, expected, (mean - expected) / se, delta / r, gap / r,
-                          outside ? "" : ": origin in the sphere");
+            print_message("contact, r %g at %g, %s: x/r = %.3f AO %.7f, exact %.7f (%+.1f se); lift %.2g r, gap %.2g r%s\n",
+                          r, t, ao_tracer_backend(f.tracer), x / r, mean, expected, (mean - expected) / se, delta / r,
+                          gap / r, outside ? "" : ": origin in the sphere");
             assert_true(outside);
             assert_true(mean <= expected + 4.0 * se);
             assert_true(fabs(mean - expected) <= 4.0 * se + 1.25 * rho * first_order);
@@ -298,8 +309,8 @@ static void test_sphere_on_ground_matches_the_closed_form_anywhere(void **state)
      * (independent pixels), within 4 of those. */
     enum { W = 96, H = 72, N = 2048 };
     const double shifts[] = {0.0, 1e4, 1e6}, rho = 0.8, r = 1.0;
-    for (int c = 0; c < 3; c++) {
-        double t = shifts[c];
+    for (int c = 0; c < 6; c++) {
+        double t = shifts[c % 3];
         char text[1024];
         snprintf(text, sizeof text,
                  "camera eye %.17g %.17g %.17g target %.17g %.17g %.17g fov 40\n"
@@ -307,7 +318,7 @@ static void test_sphere_on_ground_matches_the_closed_form_anywhere(void **state)
                  "sphere center %.17g %.17g %.17g radius 1 albedo 0.8\n",
                  t, t + 3.2, t + 6.4, t, t + 0.7, t, t - 2e4, t, t - 2e4, t, t + r, t);
         struct fixture f;
-        setup(&f, text, "sphere-on-ground.scene");
+        setup_with(&f, text, "sphere-on-ground.scene", BACKENDS[c / 3]);
         float *rgb = render_passes(&f, W, H, N, 64, AO_SAMPLING_COSINE, false);
         struct ao_view view;
         assert_true(ao_camera_view(&f.scene.camera, W, H, &view));
@@ -339,9 +350,9 @@ static void test_sphere_on_ground_matches_the_closed_form_anywhere(void **state)
                 sum_variance += rho * rho * q * (1.0 - q) / N;
             }
         double bias = sum_error / pixels, tstat = sum_error / sqrt(sum_variance);
-        print_message("sphere on ground at %g (local origin %g): %d pixels, worst |z| %.2f at (%d, %d): %.5f against "
-                      "%.5f; mean bias %+.7f (t %+.2f)\n", t, f.scene.origin[0], pixels, worst_z, worst_i, worst_j,
-                      worst_value, worst_exact, bias, tstat);
+        print_message("sphere on ground at %g (local origin %g), %s: %d pixels, worst |z| %.2f at (%d, %d): %.5f "
+                      "against %.5f; mean bias %+.7f (t %+.2f)\n", t, f.scene.origin[0], ao_tracer_backend(f.tracer),
+                      pixels, worst_z, worst_i, worst_j, worst_value, worst_exact, bias, tstat);
         assert_true(pixels > W * H / 2);
         assert_true(worst_z <= 5.0);
         assert_true(fabs(tstat) < 4.0);
