@@ -361,6 +361,50 @@ static void test_sphere_on_ground_matches_the_closed_form_anywhere(void **state)
     }
 }
 
+static void test_default_scene_renders_the_same_far_from_the_origin(void **state)
+{
+    (void)state;
+    /* The default scene (the bunny on its ground quad) as shipped and moved by (1e6, 1e6, 1e6):
+     * camera, mesh translation and quad shifted in the scene text, the same seed. Stored about
+     * its own centre, the far scene's local coordinates differ from the near one's only by that
+     * centre's offset, so hit points and occlusion rays differ by float rounding, and a sample can
+     * change only where a ray passes within rounding of an edge or silhouette: the images must
+     * agree but for a few values. Bound: at most 0.1 % of the values differ. (Placed in world
+     * floats, where 1e6 is good to 0.06, 62 % of the values differed, by up to 0.68, at 160x120
+     * and 256 samples.) */
+    const char *root = getenv("AO_SOURCE_ROOT");
+    if (!root) {
+        print_message("AO_SOURCE_ROOT is not set (run it through meson test): no bunny to load\n");
+        skip();
+    }
+    enum { W = 80, H = 60, SPP = 64 };
+    float *rgb[2];
+    for (int k = 0; k < 2; k++) {
+        double t = k ? 1e6 : 0.0;
+        char text[4096];
+        snprintf(text, sizeof text,
+                 "camera eye %.17g %.17g %.17g target %.17g %.17g %.17g up 0 1 0 fov 35\nbackground 1\n"
+                 "mesh %s/assets/bunny.obj albedo 0.8 0.75 0.7 scale 0.1 translate %.17g %.17g %.17g\n"
+                 "quad corner %.17g %.17g %.17g edge1 0 0 100 edge2 100 0 0 albedo 0.8\n",
+                 t + 0.5, t + 1.0, t + 2.5, t, t + 0.42, t, root, t, t + 0.0003, t, t - 50, t, t - 50);
+        struct fixture f;
+        setup(&f, text, "bunny-far.scene");
+        rgb[k] = render_passes(&f, W, H, SPP, 16, AO_SAMPLING_COSINE, true);
+        teardown(&f);
+    }
+    int differ = 0;
+    double largest = 0.0;
+    for (int p = 0; p < 3 * W * H; p++) {
+        differ += rgb[0][p] != rgb[1][p];
+        largest = fmax(largest, fabs((double)rgb[0][p] - rgb[1][p]));
+    }
+    print_message("default scene at 1e6 against the origin: %d of %d values differ (largest %.4f)\n", differ,
+                  3 * W * H, largest);
+    assert_true(differ * 1000 <= 3 * W * H);
+    free(rgb[0]);
+    free(rgb[1]);
+}
+
 static void test_camera_moves_hold_far_from_the_origin(void **state)
 {
     (void)state;
@@ -630,6 +674,7 @@ int main(void)
         cmocka_unit_test(test_open_plane_at_any_scale_has_no_acne),
         cmocka_unit_test(test_contact_occlusion_is_kept),
         cmocka_unit_test(test_sphere_on_ground_matches_the_closed_form_anywhere),
+        cmocka_unit_test(test_default_scene_renders_the_same_far_from_the_origin),
         cmocka_unit_test(test_camera_moves_hold_far_from_the_origin),
         cmocka_unit_test(test_degenerate_geometry_gives_no_nan),
         cmocka_unit_test(test_silhouettes_converge_to_the_box_filter),
