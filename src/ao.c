@@ -9,8 +9,6 @@
  * the uniform sphere) add nothing and are not traced. */
 #include "ao.h"
 
-#include <float.h>
-
 #include "simd.h"
 
 /* Keys of a pixel's eye-ray stream (indexed by eye ray) and AO stream (indexed by sample), in the
@@ -54,43 +52,47 @@ static void draw_pairs(const struct ao_context *ctx, uint64_t key, uint64_t firs
             draw_pair(ctx, key, first + (uint64_t)k, &u1[k], &u2[k]);
 }
 
-float ao_surface_offset(struct ao_vec3 origin, float t, struct ao_vec3 position)
-{
-    /* org + t dir carries a rounding error of a few ulps of max(|org|, t, |p|) per component, and
-     * Embree's t adds a few more; 2^-18 of their sum is 32 ulps of the largest, scale-free. */
-    float scale = ao_vec3_max_abs(origin) + t + ao_vec3_max_abs(position);
-    float offset = scale * 0x1.0p-18f;
-    return offset > FLT_MIN ? offset : FLT_MIN; /* FLT_MIN for NaN too, as fmaxf would give */
-}
-
 void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,
                          const struct ao_hit *hit, struct ao_surface *s)
 {
-    s->position = ao_vec3_add(org, ao_vec3_scale(dir, hit->t));
+    /* The hit point recomputed from the primitive, with its error bound: Embree's org + t dir
+     * carries the error of t, which grows with the distance from the eye. (Built in a local and
+     * written to *s field by field at the end: computed in place through s, gcc spilled dir in
+     * halves and reloaded it across them, and a whole-struct copy stalled the same way on the
+     * stack; those store-forwarding stalls cost about a third of this function.) */
+    struct ao_surface r;
+    struct ao_vec3 error;
     if (hit->sphere) {
         const struct ao_sphere *sp = &scene->spheres[hit->prim];
-        s->ng = ao_vec3_normalize(ao_vec3_sub(s->position, sp->center));
-        s->ns = s->ng;
-        s->albedo = sp->albedo;
+        struct ao_vec3 q = ao_vec3_add(org, ao_vec3_scale(dir, hit->t));
+        r.position = ao_sphere_point(sp->center, sp->radius, q, &r.ng, &error);
+        r.ns = r.ng;
+        r.albedo = sp->albedo;
     } else {
         const uint32_t *i = &scene->indices[3 * hit->prim];
-        s->ng = ao_vec3_normalize(hit->ng);
+        r.position = ao_triangle_point(scene->positions[i[0]], scene->positions[i[1]], scene->positions[i[2]],
+                                       hit->u, hit->v, &error);
+        r.ng = ao_vec3_normalize(hit->ng);
         float w0 = 1.0f - hit->u - hit->v;
         struct ao_vec3 n = ao_vec3_scale(scene->normals[i[0]], w0);
         n = ao_vec3_add(n, ao_vec3_scale(scene->normals[i[1]], hit->u));
         n = ao_vec3_add(n, ao_vec3_scale(scene->normals[i[2]], hit->v));
         float len = ao_vec3_length(n);
-        s->ns = len > 1e-6f && isfinite(len) ? ao_vec3_scale(n, 1.0f / len) : s->ng;
-        s->albedo = scene->albedos[scene->triangle_albedo[hit->prim]];
+        r.ns = len > 1e-6f && isfinite(len) ? ao_vec3_scale(n, 1.0f / len) : r.ng;
+        r.albedo = scene->albedos[scene->triangle_albedo[hit->prim]];
     }
-    if (!(ao_vec3_dot(s->ng, s->ng) > 0.25f)) /* not a unit normal: degenerate triangle, NaN */
-        s->ng = s->ns = ao_vec3_scale(dir, -1.0f);
+    if (!(ao_vec3_dot(r.ng, r.ng) > 0.25f)) /* not a unit normal: degenerate triangle, NaN */
+        r.ng = r.ns = ao_vec3_scale(dir, -1.0f);
     /* Turn the surface to the side the eye ray came from. */
-    if (ao_vec3_dot(s->ng, dir) > 0.0f) {
-        s->ng = ao_vec3_scale(s->ng, -1.0f);
-        s->ns = ao_vec3_scale(s->ns, -1.0f);
+    if (ao_vec3_dot(r.ng, dir) > 0.0f) {
+        r.ng = ao_vec3_scale(r.ng, -1.0f);
+        r.ns = ao_vec3_scale(r.ns, -1.0f);
     }
-    s->offset = ao_surface_offset(org, hit->t, s->position);
+    s->position = r.position;
+    s->ng = r.ng;
+    s->ns = r.ns;
+    s->albedo = r.albedo;
+    s->origin = ao_surface_lift(r.position, r.ng, error);
 }
 
 /* Occlusion rays waiting for a full batch, each remembering its weight and whose sum the weight
@@ -205,7 +207,7 @@ static void flush(struct queue *q)
 static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t key, uint64_t first_sample,
                           int count, double *sum)
 {
-    struct ao_vec3 origin = ao_vec3_add(s->position, ao_vec3_scale(s->ng, s->offset));
+    struct ao_vec3 origin = s->origin;
     struct ao_batch *r = &q->rays;
     for (int done = 0; done < count;) {
         /* As many as fit among the pending rays and in the batch. */

@@ -12,7 +12,7 @@
 
 enum { MAX_TOKENS = 64, MAX_LINE = 4096, MAX_VALUES = 3 };
 
-static const float PI = 3.14159265358979323846f;
+static const double PI = 3.14159265358979323846;
 static const float DEFAULT_ALBEDO = 0.8f;
 
 /* Where the parser is, for "file:line: message" reports. */
@@ -44,8 +44,9 @@ static bool is_number(const char *s)
     return end != s && *end == '\0';
 }
 
-/* Reads 1 to MAX_VALUES numbers after key into v; returns how many, or 0 after reporting. */
-static int numbers(struct cursor *c, const char *key, float *v, int min, int max)
+/* Reads 1 to MAX_VALUES numbers after key into v; returns how many, or 0 after reporting. Every
+ * value must also be finite as a float, which the geometry becomes. */
+static int numbers(struct cursor *c, const char *key, double *v, int min, int max)
 {
     int n = 0;
     while (c->next < c->count && n < max && is_number(c->tokens[c->next])) {
@@ -54,7 +55,7 @@ static int numbers(struct cursor *c, const char *key, float *v, int min, int max
             fail(c, "'%s': value '%s' is not a finite number", key, c->tokens[c->next - 1]);
             return 0;
         }
-        v[n++] = (float)d;
+        v[n++] = d;
     }
     if (n < min) {
         if (c->next < c->count && !is_number(c->tokens[c->next]))
@@ -66,36 +67,93 @@ static int numbers(struct cursor *c, const char *key, float *v, int min, int max
     return n;
 }
 
-static bool vector(struct cursor *c, const char *key, struct ao_vec3 *out)
+/* A point or direction in double precision: scene coordinates until the scene is placed. */
+struct dvec {
+    double x, y, z;
+};
+
+static struct dvec dvec_make(double x, double y, double z)
 {
-    float v[3];
+    struct dvec v = {x, y, z};
+    return v;
+}
+
+static struct dvec dvec_add(struct dvec a, struct dvec b)
+{
+    return dvec_make(a.x + b.x, a.y + b.y, a.z + b.z);
+}
+
+static struct dvec dvec_sub(struct dvec a, struct dvec b)
+{
+    return dvec_make(a.x - b.x, a.y - b.y, a.z - b.z);
+}
+
+static struct dvec dvec_scale(struct dvec a, double s)
+{
+    return dvec_make(a.x * s, a.y * s, a.z * s);
+}
+
+static struct dvec dvec_cross(struct dvec a, struct dvec b)
+{
+    return dvec_make(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+
+static double dvec_dot(struct dvec a, struct dvec b)
+{
+    return a.x * b.x + a.y * b.y + a.z * b.z;
+}
+
+static struct dvec dvec_of(struct ao_vec3 v)
+{
+    return dvec_make(v.x, v.y, v.z);
+}
+
+/* v narrowed to float. */
+static struct ao_vec3 narrow(struct dvec v)
+{
+    return ao_vec3_make((float)v.x, (float)v.y, (float)v.z);
+}
+
+static bool vector(struct cursor *c, const char *key, struct dvec *out)
+{
+    double v[3];
     if (!numbers(c, key, v, 3, 3))
         return false;
-    *out = ao_vec3_make(v[0], v[1], v[2]);
+    *out = dvec_make(v[0], v[1], v[2]);
     return true;
 }
 
-static bool scalar(struct cursor *c, const char *key, float *out)
+static bool scalar(struct cursor *c, const char *key, double *out)
 {
     return numbers(c, key, out, 1, 1) == 1;
 }
 
 /* One number or three: a grey level or an RGB triple. */
-static bool triple(struct cursor *c, const char *key, struct ao_vec3 *out)
+static bool triple(struct cursor *c, const char *key, struct dvec *out)
 {
-    float v[3];
+    double v[3];
     int n = numbers(c, key, v, 1, 3);
     if (n == 2)
         return fail(c, "'%s': expected 1 or 3 numbers, got 2", key);
     if (n == 0)
         return false;
-    *out = n == 1 ? ao_vec3_make(v[0], v[0], v[0]) : ao_vec3_make(v[0], v[1], v[2]);
+    *out = n == 1 ? dvec_make(v[0], v[0], v[0]) : dvec_make(v[0], v[1], v[2]);
+    return true;
+}
+
+/* triple() narrowed to float, for colours. */
+static bool colour(struct cursor *c, const char *key, struct ao_vec3 *out)
+{
+    struct dvec v = {0};
+    if (!triple(c, key, &v))
+        return false;
+    *out = narrow(v);
     return true;
 }
 
 static bool albedo(struct cursor *c, struct ao_vec3 *out)
 {
-    if (!triple(c, "albedo", out))
+    if (!colour(c, "albedo", out))
         return false;
     if (out->x < 0 || out->x > 1 || out->y < 0 || out->y > 1 || out->z < 0 || out->z > 1)
         return fail(c, "'albedo': values must lie in [0, 1]");
@@ -144,6 +202,17 @@ static bool resize(void *array, size_t count, size_t size)
     return true;
 }
 
+/* The scene's coordinates while it is read, in double precision and world space; ao_scene's float
+ * positions, sphere centres and camera are filled from them once the whole scene is known
+ * (place()). */
+struct world {
+    struct dvec *positions;       /* parallel to scene->normals */
+    struct dvec *sphere_centers;  /* parallel to scene->spheres */
+    struct dvec eye, target;      /* the camera's, when has_camera */
+    bool has_camera;
+    int camera_line;
+};
+
 static bool add_albedo(struct ao_scene *s, struct ao_vec3 rho, uint32_t *index)
 {
     if (!resize(&s->albedos, s->albedo_count + 1, sizeof *s->albedos))
@@ -154,18 +223,18 @@ static bool add_albedo(struct ao_scene *s, struct ao_vec3 rho, uint32_t *index)
 }
 
 /* Appends world-space vertices and triangles whose indices count from 0. */
-static bool add_triangles(struct ao_scene *s, const struct ao_vec3 *positions,
+static bool add_triangles(struct ao_scene *s, struct world *w, const struct dvec *positions,
                           const struct ao_vec3 *normals, size_t vertex_count,
                           const uint32_t *indices, size_t triangle_count, uint32_t albedo)
 {
     size_t base = s->vertex_count, first = s->triangle_count;
     if (vertex_count > UINT32_MAX - base || triangle_count > UINT32_MAX - first ||
-        !resize(&s->positions, base + vertex_count, sizeof *s->positions) ||
+        !resize(&w->positions, base + vertex_count, sizeof *w->positions) ||
         !resize(&s->normals, base + vertex_count, sizeof *s->normals) ||
         !resize(&s->indices, first + triangle_count, 3 * sizeof *s->indices) ||
         !resize(&s->triangle_albedo, first + triangle_count, sizeof *s->triangle_albedo))
         return false;
-    memcpy(s->positions + base, positions, vertex_count * sizeof *positions);
+    memcpy(w->positions + base, positions, vertex_count * sizeof *positions);
     memcpy(s->normals + base, normals, vertex_count * sizeof *normals);
     for (size_t t = 0; t < triangle_count; t++) {
         for (int k = 0; k < 3; k++)
@@ -179,29 +248,36 @@ static bool add_triangles(struct ao_scene *s, const struct ao_vec3 *positions,
 
 /* ---- statements ---- */
 
-/* Scale, then rotation about a unit axis, then translation (SPEC.md's order). */
+/* Scale, then rotation about a unit axis, then translation (SPEC.md's order), in double. */
 struct transform {
-    struct ao_vec3 scale, axis, translate;
-    float cos_angle, sin_angle;
+    struct dvec scale, axis, translate;
+    double cos_angle, sin_angle;
 };
 
 /* Rodrigues' rotation of v about t->axis. */
-static struct ao_vec3 rotate(const struct transform *t, struct ao_vec3 v)
+static struct dvec rotate(const struct transform *t, struct dvec v)
 {
-    struct ao_vec3 k = t->axis;
-    struct ao_vec3 r = ao_vec3_scale(v, t->cos_angle);
-    r = ao_vec3_add(r, ao_vec3_scale(ao_vec3_cross(k, v), t->sin_angle));
-    return ao_vec3_add(r, ao_vec3_scale(k, ao_vec3_dot(k, v) * (1.0f - t->cos_angle)));
+    struct dvec k = t->axis;
+    struct dvec r = dvec_scale(v, t->cos_angle);
+    r = dvec_add(r, dvec_scale(dvec_cross(k, v), t->sin_angle));
+    return dvec_add(r, dvec_scale(k, dvec_dot(k, v) * (1.0 - t->cos_angle)));
 }
 
-/* Normals take the inverse transpose of the scale (1/s per axis), then the rotation. */
-static void transform_mesh(struct ao_mesh *m, const struct transform *t)
+/* The mesh's world positions into *out (malloc'd; NULL when memory is short); its normals
+ * transformed in place: the inverse transpose of the scale (1/s per axis), then the rotation. */
+static bool transform_mesh(struct ao_mesh *m, const struct transform *t, struct dvec **out)
 {
-    struct ao_vec3 inv = ao_vec3_make(1.0f / t->scale.x, 1.0f / t->scale.y, 1.0f / t->scale.z);
+    *out = m->vertex_count ? malloc(m->vertex_count * sizeof **out) : NULL;
+    if (m->vertex_count && !*out)
+        return false;
+    struct dvec inv = dvec_make(1.0 / t->scale.x, 1.0 / t->scale.y, 1.0 / t->scale.z);
     for (size_t i = 0; i < m->vertex_count; i++) {
-        m->positions[i] = ao_vec3_add(rotate(t, ao_vec3_mul(m->positions[i], t->scale)), t->translate);
-        m->normals[i] = ao_vec3_normalize(rotate(t, ao_vec3_mul(m->normals[i], inv)));
+        struct dvec p = dvec_of(m->positions[i]), n = dvec_of(m->normals[i]);
+        p = dvec_make(p.x * t->scale.x, p.y * t->scale.y, p.z * t->scale.z);
+        (*out)[i] = dvec_add(rotate(t, p), t->translate);
+        m->normals[i] = ao_vec3_normalize(narrow(rotate(t, dvec_make(n.x * inv.x, n.y * inv.y, n.z * inv.z))));
     }
+    return true;
 }
 
 /* Joins a mesh path to the scene file's directory unless it is absolute. */
@@ -214,42 +290,43 @@ static bool resolve_path(const struct cursor *c, const char *name, char *out, si
     return true;
 }
 
-static bool parse_camera(struct cursor *c, struct ao_scene *s, bool *has_camera)
+/* A camera line; its eye and target stay in world space until place() checks the camera. */
+static bool parse_camera(struct cursor *c, struct ao_scene *s, struct world *w)
 {
     static const char *const keys[] = {"eye", "target", "up", "fov", NULL};
     unsigned seen = 0;
-    s->camera.up = ao_vec3_make(0, 1, 0);
-    s->camera.fov = 40.0f;
+    struct dvec up = dvec_make(0, 1, 0);
+    double fov = 40.0;
     while (c->next < c->count) {
         int k;
         const char *key = next_key(c, keys, &seen, &k);
         if (!key)
             return false;
-        bool ok = k == 0   ? vector(c, key, &s->camera.eye)
-                  : k == 1 ? vector(c, key, &s->camera.target)
-                  : k == 2 ? vector(c, key, &s->camera.up)
-                           : scalar(c, key, &s->camera.fov);
+        bool ok = k == 0   ? vector(c, key, &w->eye)
+                  : k == 1 ? vector(c, key, &w->target)
+                  : k == 2 ? vector(c, key, &up)
+                           : scalar(c, key, &fov);
         if (!ok)
             return false;
     }
-    struct ao_view view;
     if (!require(c, seen, keys, 3u))
         return false;
-    if (!(s->camera.fov > 0.0f && s->camera.fov < 180.0f))
+    if (!(fov > 0.0 && fov < 180.0))
         return fail(c, "'fov' must lie strictly between 0 and 180 degrees");
-    if (!ao_camera_view(&s->camera, 1, 1, &view))
-        return fail(c, "camera: eye equals target or up is parallel to the view direction");
-    *has_camera = true;
+    s->camera.up = narrow(up);
+    s->camera.fov = (float)fov;
+    w->has_camera = true;
+    w->camera_line = c->line;
     return true;
 }
 
 static bool parse_image(struct cursor *c, struct ao_scene *s)
 {
-    float v[2];
+    double v[2];
     if (numbers(c, "image", v, 2, 2) != 2)
         return false;
-    if (v[0] != floorf(v[0]) || v[1] != floorf(v[1]) || v[0] < 1 || v[1] < 1 ||
-        v[0] > AO_IMAGE_MAX_SIDE || v[1] > AO_IMAGE_MAX_SIDE || (double)v[0] * v[1] > AO_IMAGE_MAX_PIXELS)
+    if (v[0] != floor(v[0]) || v[1] != floor(v[1]) || v[0] < 1 || v[1] < 1 ||
+        v[0] > AO_IMAGE_MAX_SIDE || v[1] > AO_IMAGE_MAX_SIDE || v[0] * v[1] > AO_IMAGE_MAX_PIXELS)
         return fail(c, "'image': expected width and height, whole numbers from 1 to %d with at most "
                        "%d pixels", AO_IMAGE_MAX_SIDE, AO_IMAGE_MAX_PIXELS);
     s->width = (int)v[0];
@@ -257,35 +334,41 @@ static bool parse_image(struct cursor *c, struct ao_scene *s)
     return true;
 }
 
-static bool parse_sphere(struct cursor *c, struct ao_scene *s)
+static bool parse_sphere(struct cursor *c, struct ao_scene *s, struct world *w)
 {
     static const char *const keys[] = {"center", "radius", "albedo", NULL};
     unsigned seen = 0;
     struct ao_sphere sp = {.albedo = ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO)};
+    struct dvec center = {0};
+    double radius = 0.0;
     while (c->next < c->count) {
         int k;
         const char *key = next_key(c, keys, &seen, &k);
         if (!key)
             return false;
-        bool ok = k == 0 ? vector(c, key, &sp.center) : k == 1 ? scalar(c, key, &sp.radius) : albedo(c, &sp.albedo);
+        bool ok = k == 0 ? vector(c, key, &center) : k == 1 ? scalar(c, key, &radius) : albedo(c, &sp.albedo);
         if (!ok)
             return false;
     }
     if (!require(c, seen, keys, 3u))
         return false;
+    sp.radius = (float)radius;
     if (!(sp.radius > 0.0f))
         return fail(c, "'radius' must be positive");
-    if (!resize(&s->spheres, s->sphere_count + 1, sizeof *s->spheres))
+    if (!resize(&s->spheres, s->sphere_count + 1, sizeof *s->spheres) ||
+        !resize(&w->sphere_centers, s->sphere_count + 1, sizeof *w->sphere_centers))
         return fail(c, "out of memory");
+    w->sphere_centers[s->sphere_count] = center;
     s->spheres[s->sphere_count++] = sp;
     return true;
 }
 
-static bool parse_quad(struct cursor *c, struct ao_scene *s)
+static bool parse_quad(struct cursor *c, struct ao_scene *s, struct world *w)
 {
     static const char *const keys[] = {"corner", "edge1", "edge2", "albedo", NULL};
     unsigned seen = 0;
-    struct ao_vec3 corner = {0}, e1 = {0}, e2 = {0}, rho = ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO);
+    struct dvec corner = {0}, e1 = {0}, e2 = {0};
+    struct ao_vec3 rho = ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO);
     while (c->next < c->count) {
         int k;
         const char *key = next_key(c, keys, &seen, &k);
@@ -300,21 +383,20 @@ static bool parse_quad(struct cursor *c, struct ao_scene *s)
     }
     if (!require(c, seen, keys, 7u))
         return false;
-    struct ao_vec3 n = ao_vec3_cross(e1, e2);
+    struct ao_vec3 n = narrow(dvec_cross(e1, e2));
     if (!(ao_vec3_length(n) > 0.0f) || !ao_vec3_is_finite(n))
         return fail(c, "quad: edge1 and edge2 span no area");
     n = ao_vec3_normalize(n);
-    struct ao_vec3 p[4] = {corner, ao_vec3_add(corner, e1), ao_vec3_add(ao_vec3_add(corner, e1), e2),
-                           ao_vec3_add(corner, e2)};
+    struct dvec p[4] = {corner, dvec_add(corner, e1), dvec_add(dvec_add(corner, e1), e2), dvec_add(corner, e2)};
     struct ao_vec3 normals[4] = {n, n, n, n};
     static const uint32_t tris[6] = {0, 1, 2, 0, 2, 3};
     uint32_t a;
-    if (!add_albedo(s, rho, &a) || !add_triangles(s, p, normals, 4, tris, 2, a))
+    if (!add_albedo(s, rho, &a) || !add_triangles(s, w, p, normals, 4, tris, 2, a))
         return fail(c, "out of memory");
     return true;
 }
 
-static bool parse_mesh(struct cursor *c, struct ao_scene *s)
+static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
 {
     static const char *const keys[] = {"albedo", "scale", "rotate", "translate", NULL};
     if (c->next >= c->count)
@@ -324,10 +406,10 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s)
         return false;
     unsigned seen = 0;
     struct ao_vec3 rho = ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO);
-    struct transform t = {.scale = ao_vec3_make(1, 1, 1), .axis = ao_vec3_make(0, 1, 0), .cos_angle = 1};
+    struct transform t = {.scale = dvec_make(1, 1, 1), .axis = dvec_make(0, 1, 0), .cos_angle = 1};
     while (c->next < c->count) {
         int k;
-        float r[4];
+        double r[4];
         const char *key = next_key(c, keys, &seen, &k);
         if (!key)
             return false;
@@ -338,25 +420,27 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s)
         if (k == 2) {
             if (numbers(c, key, r, 4, 4) != 4)
                 return false;
-            t.axis = ao_vec3_normalize(ao_vec3_make(r[0], r[1], r[2]));
-            if (!(ao_vec3_length(t.axis) > 0.0f))
+            double length = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
+            if (!(length > 0.0) || !isfinite(length))
                 return fail(c, "'rotate': the axis must not be zero");
-            t.cos_angle = cosf(r[3] * PI / 180.0f);
-            t.sin_angle = sinf(r[3] * PI / 180.0f);
+            t.axis = dvec_scale(dvec_make(r[0], r[1], r[2]), 1.0 / length);
+            t.cos_angle = cos(r[3] * PI / 180.0);
+            t.sin_angle = sin(r[3] * PI / 180.0);
         }
         if (k == 3 && !vector(c, key, &t.translate))
             return false;
     }
-    if (t.scale.x == 0.0f || t.scale.y == 0.0f || t.scale.z == 0.0f)
+    if (t.scale.x == 0.0 || t.scale.y == 0.0 || t.scale.z == 0.0)
         return fail(c, "'scale' must not be zero");
     struct ao_mesh m = {0};
     if (!ao_mesh_load(&m, path))
         return false;
-    transform_mesh(&m, &t);
+    struct dvec *positions = NULL;
     uint32_t a;
-    bool ok = add_albedo(s, rho, &a) &&
-              add_triangles(s, m.positions, m.normals, m.vertex_count, m.indices, m.triangle_count, a);
+    bool ok = transform_mesh(&m, &t, &positions) && add_albedo(s, rho, &a) &&
+              add_triangles(s, w, positions, m.normals, m.vertex_count, m.indices, m.triangle_count, a);
     s->degenerate_count += m.degenerate_count;
+    free(positions);
     ao_mesh_finish(&m);
     return ok || fail(c, "out of memory (or more than 2^32 vertices) adding '%s'", path);
 }
@@ -385,47 +469,82 @@ static bool tokenize(struct cursor *c, char *line)
     return true;
 }
 
-static bool parse_statement(struct cursor *c, struct ao_scene *s, bool *has_camera)
+static bool parse_statement(struct cursor *c, struct ao_scene *s, struct world *w)
 {
     const char *word = c->tokens[0];
     if (strcmp(word, "camera") == 0)
-        return parse_camera(c, s, has_camera);
+        return parse_camera(c, s, w);
     if (strcmp(word, "image") == 0)
         return parse_image(c, s);
     if (strcmp(word, "sphere") == 0)
-        return parse_sphere(c, s);
+        return parse_sphere(c, s, w);
     if (strcmp(word, "quad") == 0)
-        return parse_quad(c, s);
+        return parse_quad(c, s, w);
     if (strcmp(word, "mesh") == 0)
-        return parse_mesh(c, s);
+        return parse_mesh(c, s, w);
     if (strcmp(word, "background") == 0)
-        return triple(c, word, &s->background) && (c->next == c->count || fail(c, "'background': expected 1 or 3 numbers"));
+        return colour(c, word, &s->background) && (c->next == c->count || fail(c, "'background': expected 1 or 3 numbers"));
     if (strcmp(word, "ao-distance") == 0) {
-        if (!scalar(c, word, &s->ao_distance))
+        double d;
+        if (!scalar(c, word, &d))
             return false;
+        s->ao_distance = (float)d;
         return s->ao_distance > 0.0f || fail(c, "'ao-distance' must be positive");
     }
     return fail(c, "unknown keyword '%s'", word);
 }
 
-/* Bounding box of all geometry; false for an empty scene. */
-static bool bounds(const struct ao_scene *s, struct ao_vec3 *lo, struct ao_vec3 *hi)
+/* World-space bounding box of all geometry; false for an empty scene. */
+static bool bounds(const struct ao_scene *s, const struct world *w, struct dvec *lo, struct dvec *hi)
 {
-    *lo = ao_vec3_make(INFINITY, INFINITY, INFINITY);
-    *hi = ao_vec3_make(-INFINITY, -INFINITY, -INFINITY);
-    for (size_t i = 0; i < s->vertex_count; i++) {
-        struct ao_vec3 p = s->positions[i];
-        *lo = ao_vec3_make(fminf(lo->x, p.x), fminf(lo->y, p.y), fminf(lo->z, p.z));
-        *hi = ao_vec3_make(fmaxf(hi->x, p.x), fmaxf(hi->y, p.y), fmaxf(hi->z, p.z));
-    }
-    for (size_t i = 0; i < s->sphere_count; i++) {
-        struct ao_sphere sp = s->spheres[i];
-        struct ao_vec3 r = ao_vec3_make(sp.radius, sp.radius, sp.radius);
-        struct ao_vec3 a = ao_vec3_sub(sp.center, r), b = ao_vec3_add(sp.center, r);
-        *lo = ao_vec3_make(fminf(lo->x, a.x), fminf(lo->y, a.y), fminf(lo->z, a.z));
-        *hi = ao_vec3_make(fmaxf(hi->x, b.x), fmaxf(hi->y, b.y), fmaxf(hi->z, b.z));
+    *lo = dvec_make(INFINITY, INFINITY, INFINITY);
+    *hi = dvec_make(-INFINITY, -INFINITY, -INFINITY);
+    for (size_t i = 0; i < s->vertex_count + s->sphere_count; i++) {
+        bool vertex = i < s->vertex_count;
+        struct dvec p = vertex ? w->positions[i] : w->sphere_centers[i - s->vertex_count];
+        double r = vertex ? 0.0 : s->spheres[i - s->vertex_count].radius;
+        *lo = dvec_make(fmin(lo->x, p.x - r), fmin(lo->y, p.y - r), fmin(lo->z, p.z - r));
+        *hi = dvec_make(fmax(hi->x, p.x + r), fmax(hi->y, p.y + r), fmax(hi->z, p.z + r));
     }
     return s->vertex_count + s->sphere_count > 0;
+}
+
+/* Moves the scene from world space into its local frame and narrows it to float: every position,
+ * sphere centre and the camera become world - origin, with the origin at the bounding box's centre,
+ * so that float precision follows the scene's size rather than its distance from (0, 0, 0). Where
+ * the box holds (0, 0, 0) its coordinates are at most its size already (one bit worse than from
+ * the centre) and the origin stays there, leaving such scenes exactly as written. A scene without
+ * a camera line gets one framed on its box. False after reporting (the camera's line) or on
+ * short memory. */
+static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
+{
+    struct dvec lo, hi, origin = {0};
+    bool any = bounds(s, w, &lo, &hi);
+    if (any && !(lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0 && lo.z <= 0.0 && hi.z >= 0.0))
+        origin = dvec_scale(dvec_add(lo, hi), 0.5);
+    s->origin[0] = origin.x, s->origin[1] = origin.y, s->origin[2] = origin.z;
+    if (s->vertex_count && !(s->positions = malloc(s->vertex_count * sizeof *s->positions))) {
+        c->line = 0;
+        return fail(c, "out of memory");
+    }
+    for (size_t i = 0; i < s->vertex_count; i++)
+        s->positions[i] = narrow(dvec_sub(w->positions[i], origin));
+    for (size_t i = 0; i < s->sphere_count; i++)
+        s->spheres[i].center = narrow(dvec_sub(w->sphere_centers[i], origin));
+    if (w->has_camera) {
+        s->camera.eye = narrow(dvec_sub(w->eye, origin));
+        s->camera.target = narrow(dvec_sub(w->target, origin));
+        struct ao_view view;
+        c->line = w->camera_line;
+        if (!ao_camera_view(&s->camera, 1, 1, &view))
+            return fail(c, "camera: eye equals target or up is parallel to the view direction");
+        return true;
+    }
+    c->line = 0;
+    if (!any)
+        return fail(c, "no camera and nothing to frame: add a 'camera' line or some geometry");
+    ao_camera_frame_box(&s->camera, narrow(dvec_sub(lo, origin)), narrow(dvec_sub(hi, origin)));
+    return true;
 }
 
 static void begin(struct ao_scene *s, const char *path)
@@ -440,7 +559,8 @@ bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
 {
     begin(scene, path);
     struct cursor c = {.path = path};
-    bool has_camera = false, ok = true;
+    struct world w = {0};
+    bool ok = true;
     char line[MAX_LINE + 2];
     for (const char *p = text; ok && *p;) {
         size_t len = strcspn(p, "\n");
@@ -452,16 +572,11 @@ bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
         memcpy(line, p, len);
         line[len] = '\0';
         p += len + (p[len] == '\n');
-        ok = tokenize(&c, line) && (c.count == 0 || parse_statement(&c, scene, &has_camera));
+        ok = tokenize(&c, line) && (c.count == 0 || parse_statement(&c, scene, &w));
     }
-    struct ao_vec3 lo, hi;
-    if (ok && !has_camera) {
-        c.line = 0;
-        if (bounds(scene, &lo, &hi))
-            ao_camera_frame_box(&scene->camera, lo, hi);
-        else
-            ok = fail(&c, "no camera and nothing to frame: add a 'camera' line or some geometry");
-    }
+    ok = ok && place(scene, &w, &c);
+    free(w.positions);
+    free(w.sphere_centers);
     if (!ok)
         ao_scene_finish(scene);
     return ok;
@@ -474,26 +589,37 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path)
     struct ao_mesh m = {0};
     if (!ao_mesh_load(&m, path))
         return false;
+    struct world w = {0};
+    struct cursor c = {.path = path};
+    struct transform identity = {.scale = dvec_make(1, 1, 1), .axis = dvec_make(0, 1, 0), .cos_angle = 1};
+    struct dvec *positions = NULL, lo, hi;
     uint32_t a;
-    bool ok = add_albedo(s, ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO), &a) &&
-              add_triangles(s, m.positions, m.normals, m.vertex_count, m.indices, m.triangle_count, a);
+    bool ok = transform_mesh(&m, &identity, &positions) &&
+              add_albedo(s, ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO), &a) &&
+              add_triangles(s, &w, positions, m.normals, m.vertex_count, m.indices, m.triangle_count, a);
     s->degenerate_count = m.degenerate_count;
+    free(positions);
     ao_mesh_finish(&m);
-    struct ao_vec3 lo, hi;
-    if (ok && bounds(s, &lo, &hi)) {
-        ao_camera_frame_box(&s->camera, lo, hi);
-        float size = 25.0f * fmaxf(hi.x - lo.x, fmaxf(hi.y - lo.y, hi.z - lo.z));
-        struct ao_vec3 mid = ao_vec3_scale(ao_vec3_add(lo, hi), 0.5f);
-        struct ao_vec3 p[4] = {ao_vec3_make(mid.x - size, lo.y, mid.z - size), ao_vec3_make(mid.x - size, lo.y, mid.z + size),
-                               ao_vec3_make(mid.x + size, lo.y, mid.z + size), ao_vec3_make(mid.x + size, lo.y, mid.z - size)};
+    if (ok && bounds(s, &w, &lo, &hi)) {
+        /* The camera framed on the mesh about its centre, then kept in world space. */
+        struct dvec mid = dvec_scale(dvec_add(lo, hi), 0.5);
+        ao_camera_frame_box(&s->camera, narrow(dvec_sub(lo, mid)), narrow(dvec_sub(hi, mid)));
+        w.eye = dvec_add(mid, dvec_of(s->camera.eye));
+        w.target = dvec_add(mid, dvec_of(s->camera.target));
+        w.has_camera = true;
+        double size = 25.0 * fmax(hi.x - lo.x, fmax(hi.y - lo.y, hi.z - lo.z));
+        struct dvec p[4] = {dvec_make(mid.x - size, lo.y, mid.z - size), dvec_make(mid.x - size, lo.y, mid.z + size),
+                            dvec_make(mid.x + size, lo.y, mid.z + size), dvec_make(mid.x + size, lo.y, mid.z - size)};
         struct ao_vec3 up = ao_vec3_make(0, 1, 0), normals[4] = {up, up, up, up};
         static const uint32_t tris[6] = {0, 1, 2, 0, 2, 3};
-        ok = add_albedo(s, ao_vec3_make(0.5f, 0.5f, 0.5f), &a) && add_triangles(s, p, normals, 4, tris, 2, a);
+        ok = add_albedo(s, ao_vec3_make(0.5f, 0.5f, 0.5f), &a) && add_triangles(s, &w, p, normals, 4, tris, 2, a);
     }
-    if (!ok) {
+    if (!ok)
         fprintf(stderr, "%s: out of memory\n", path);
+    ok = ok && place(s, &w, &c);
+    free(w.positions);
+    if (!ok)
         ao_scene_finish(s);
-    }
     return ok;
 }
 

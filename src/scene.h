@@ -1,5 +1,8 @@
 /* Scenes: the .scene file format of SPEC.md (or a bare mesh on a ground quad) turned into a camera,
- * analytic spheres and one world-space triangle soup for every mesh and quad. */
+ * analytic spheres and one triangle soup for every mesh and quad, all in the scene's local frame:
+ * read and transformed in double precision, then stored in float relative to an origin near the
+ * scene (scene.c's place()), so that float precision follows the scene's size, not its distance
+ * from (0, 0, 0). Everything downstream (camera moves, tracer, estimator) works in that frame. */
 #ifndef AO_SCENE_H
 #define AO_SCENE_H
 
@@ -20,13 +23,14 @@ struct ao_sphere {
 /* A whole scene; the caller owns it (ao_scene_load fills it, ao_scene_finish frees it). */
 struct ao_scene {
     char name[64];                /* file name without directory, for titles */
-    struct ao_camera camera;
+    double origin[3];             /* world position of the local frame's (0, 0, 0) */
+    struct ao_camera camera;      /* local frame */
     int width, height;            /* the file's `image` size, 0 when not given */
     struct ao_vec3 background;    /* value of eye rays that miss */
     float ao_distance;            /* occlusion range; INFINITY when not given */
-    struct ao_sphere *spheres;
+    struct ao_sphere *spheres;    /* centres in the local frame */
     size_t sphere_count;
-    struct ao_vec3 *positions;    /* all triangles of all meshes and quads, world space */
+    struct ao_vec3 *positions;    /* all triangles of all meshes and quads, local frame */
     struct ao_vec3 *normals;      /* per vertex, unit or zero */
     size_t vertex_count;
     uint32_t *indices;            /* 3 per triangle */

@@ -70,6 +70,12 @@ static inline struct ao_vec3 ao_vec3_normalize(struct ao_vec3 a)
     return len2 > 0.0f ? ao_vec3_scale(a, 1.0f / sqrtf(len2)) : a;
 }
 
+/* Component-wise |a|. */
+static inline struct ao_vec3 ao_vec3_abs(struct ao_vec3 a)
+{
+    return ao_vec3_make(fabsf(a.x), fabsf(a.y), fabsf(a.z));
+}
+
 /* Largest absolute component of a finite vector, the scale of a position's rounding error
  * (comparisons rather than fmaxf, which gcc leaves to a libm call). */
 static inline float ao_vec3_max_abs(struct ao_vec3 a)

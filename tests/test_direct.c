@@ -22,8 +22,9 @@ static const double EPS = 1e-4;
 /* Triangle hits at a smaller cosine of incidence are too close to call: float t then carries a
  * relative error of about 2^-24 / cosine, which nears 1e-4 there. */
 static const double GRAZING = 1e-2;
-/* Hits this close to t = 0, relative to |origin| (16 ulps), are too close to call. It lies well
- * under aoview's surface offset (2^-17 of the position, 64 ulps), so AO rays are still checked. */
+/* Hits this close to t = 0, relative to |origin| (16 ulps), are too close to call. AO rays start
+ * closer than that to the surface they leave (ao_surface_lift: a few ulps of the point), which
+ * too_close() therefore leaves out: neither back end may find it. */
 static const double T_NEAR = 1e-6;
 
 /* ---- random numbers ---- */
@@ -80,11 +81,15 @@ static bool candidate(double t, double tfar, double scale, double *first, double
 
 /* True when ray o + t d (t in [0, tfar]) passes within EPS of a sphere's silhouette or a triangle's
  * edge, starts on a surface, ends on one, grazes a triangle, or meets two surfaces at nearly the
- * same t: there float rounding may rightly decide either way. */
-static bool too_close(const struct ao_scene *s, const double o[3], const double d[3], double tfar)
+ * same t: there float rounding may rightly decide either way. Primitive `leaves` (-1: none) is
+ * the one an AO ray leaves from outside, away from it: a plane or a convex sphere it cannot meet,
+ * so it is not consulted, and a back end that finds it fails the comparison. */
+static bool too_close(const struct ao_scene *s, const double o[3], const double d[3], double tfar, long leaves)
 {
     double first = INFINITY, second = INFINITY, a = dot(d, d), scale = sqrt(dot(o, o)) + 1e-3;
     for (size_t i = 0; i < s->sphere_count; i++) {
+        if ((long)i == leaves)
+            continue;
         double c[3], f[3], l[3], r = s->spheres[i].radius;
         from_vec3(s->spheres[i].center, c);
         for (int k = 0; k < 3; k++)
@@ -103,6 +108,8 @@ static bool too_close(const struct ao_scene *s, const double o[3], const double 
         }
     }
     for (size_t i = 0; i < s->triangle_count; i++) {
+        if ((long)(s->sphere_count + i) == leaves)
+            continue;
         double p[3][3], e1[3], e2[3], n[3], w[3];
         for (int v = 0; v < 3; v++)
             from_vec3(s->positions[s->indices[3 * i + v]], p[v]);
@@ -195,11 +202,40 @@ static void point_on(const struct ao_scene *s, uint64_t *rng, size_t prim, bool 
         n[k] *= side / len;
 }
 
-/* One random ray of the given kind: origin and direction in double (the float ray is their
- * rounding), tfar infinite or random. */
-static void make_ray(const struct ao_scene *s, uint64_t *rng, enum ray_kind kind, double o[3], double d[3],
-                     double *tfar)
+/* Where aoview starts occlusion rays from x, a point of primitive `prim` with unit normal n: x as
+ * aoview computes it (ao_triangle_point at x's barycentrics, ao_sphere_point), lifted past its
+ * error bound along n (ao_surface_lift). */
+static void lifted_origin(const struct ao_scene *s, size_t prim, const double x[3], const double n[3], double o[3])
 {
+    struct ao_vec3 p, error, normal = ao_vec3_make((float)n[0], (float)n[1], (float)n[2]);
+    if (prim < s->sphere_count) {
+        struct ao_vec3 outward;
+        p = ao_sphere_point(s->spheres[prim].center, s->spheres[prim].radius,
+                            ao_vec3_make((float)x[0], (float)x[1], (float)x[2]), &outward, &error);
+    } else {
+        const uint32_t *idx = &s->indices[3 * (prim - s->sphere_count)];
+        struct ao_vec3 v[3] = {s->positions[idx[0]], s->positions[idx[1]], s->positions[idx[2]]};
+        double p0[3], p1[3], p2[3], e1[3], e2[3], w[3];
+        from_vec3(v[0], p0);
+        from_vec3(v[1], p1);
+        from_vec3(v[2], p2);
+        for (int k = 0; k < 3; k++)
+            e1[k] = p1[k] - p0[k], e2[k] = p2[k] - p0[k], w[k] = x[k] - p0[k];
+        /* Barycentrics from the normal equations of x - p0 = u e1 + v e2. */
+        double a = dot(e1, e1), b = dot(e1, e2), c = dot(e2, e2), det = a * c - b * b;
+        double u = (c * dot(e1, w) - b * dot(e2, w)) / det, vv = (a * dot(e2, w) - b * dot(e1, w)) / det;
+        p = ao_triangle_point(v[0], v[1], v[2], (float)u, (float)vv, &error);
+    }
+    struct ao_vec3 lifted = ao_surface_lift(p, normal, error);
+    from_vec3(lifted, o);
+}
+
+/* One random ray of the given kind: origin and direction in double (the float ray is their
+ * rounding), tfar infinite or random; *leaves is the primitive an AO ray leaves, else -1. */
+static void make_ray(const struct ao_scene *s, uint64_t *rng, enum ray_kind kind, double o[3], double d[3],
+                     double *tfar, long *leaves)
+{
+    *leaves = -1;
     size_t prims = s->sphere_count + s->triangle_count;
     size_t prim = (size_t)(uniform(rng) * (double)prims);
     double x[3], n[3];
@@ -215,10 +251,8 @@ static void make_ray(const struct ao_scene *s, uint64_t *rng, enum ray_kind kind
     } else {
         /* An AO ray: off the surface by aoview's own offset, into the normal's hemisphere. */
         point_on(s, rng, prim, false, x, n);
-        struct ao_vec3 p = ao_vec3_make((float)x[0], (float)x[1], (float)x[2]);
-        double offset = ao_surface_offset(p, 0.0f, p);
-        for (int k = 0; k < 3; k++)
-            o[k] = (float)x[k] + offset * n[k];
+        lifted_origin(s, prim, x, n, o);
+        *leaves = (long)prim;
         unit_vector(rng, d);
         double dn = dot(d, n);
         for (int k = 0; k < 3; k++)
@@ -268,7 +302,8 @@ static void compare(const struct ao_scene *scene, uint64_t seed, int packets, st
         bool skip[AO_PACKET_SIZE];
         for (int k = 0; k < rays.count; k++) {
             double o[3], d[3], tfar;
-            make_ray(scene, &rng, (enum ray_kind)((p + k) % RAY_KINDS), o, d, &tfar);
+            long leaves;
+            make_ray(scene, &rng, (enum ray_kind)((p + k) % RAY_KINDS), o, d, &tfar, &leaves);
             rays.org_x[k] = (float)o[0];
             rays.org_y[k] = (float)o[1];
             rays.org_z[k] = (float)o[2];
@@ -279,7 +314,7 @@ static void compare(const struct ao_scene *scene, uint64_t seed, int packets, st
             /* Judge the float ray that is actually traced. */
             double of[3] = {rays.org_x[k], rays.org_y[k], rays.org_z[k]};
             double df[3] = {rays.dir_x[k], rays.dir_y[k], rays.dir_z[k]};
-            skip[k] = too_close(scene, of, df, rays.tfar[k]);
+            skip[k] = too_close(scene, of, df, rays.tfar[k], leaves);
         }
         struct ao_hit he[AO_PACKET_SIZE], hd[AO_PACKET_SIZE];
         uint8_t oe[AO_PACKET_SIZE], od[AO_PACKET_SIZE];
@@ -421,15 +456,15 @@ static void test_no_self_occlusion(void **state)
             struct ao_packet rays = {.count = AO_PACKET_SIZE};
             for (int k = 0; k < AO_PACKET_SIZE; k++) {
                 double x[3], n[3], d[3];
+                double o[3];
                 point_on(&scene, &rng, 0, false, x, n);
-                struct ao_vec3 px = ao_vec3_make((float)x[0], (float)x[1], (float)x[2]);
-                double offset = ao_surface_offset(px, 0.0f, px);
+                lifted_origin(&scene, 0, x, n, o);
                 /* Half the rays within a hair of the tangent plane. */
                 unit_vector(&rng, d);
                 double dn = dot(d, n), lift = k % 2 ? fabs(dn) : 1e-3 * fabs(dn);
-                rays.org_x[k] = (float)(x[0] + offset * n[0]);
-                rays.org_y[k] = (float)(x[1] + offset * n[1]);
-                rays.org_z[k] = (float)(x[2] + offset * n[2]);
+                rays.org_x[k] = (float)o[0];
+                rays.org_y[k] = (float)o[1];
+                rays.org_z[k] = (float)o[2];
                 rays.dir_x[k] = (float)(d[0] - dn * n[0] + lift * n[0]);
                 rays.dir_y[k] = (float)(d[1] - dn * n[1] + lift * n[1]);
                 rays.dir_z[k] = (float)(d[2] - dn * n[2] + lift * n[2]);

@@ -50,7 +50,7 @@ static struct ao_surface ground_point(float x)
 {
     struct ao_vec3 up = ao_vec3_make(0, 1, 0), p = ao_vec3_make(x, 0, 0);
     struct ao_surface s = {.position = p, .ng = up, .ns = up, .albedo = ao_vec3_make(RHO, RHO, RHO)};
-    s.offset = ao_surface_offset(p, 0.0f, p);
+    s.origin = ao_surface_lift(p, up, ao_vec3_make(0, 0, 0)); /* exact: the plane is y = 0 */
     return s;
 }
 
@@ -137,9 +137,10 @@ static void test_inside_closed_sphere_gives_zero(void **state)
     for (int mode = 0; mode < 3; mode++) {
         f.ctx.sampling = (enum ao_sampling)mode;
         /* A point on the inside of the shell, normal pointing inwards, as an eye ray finds it. */
-        struct ao_vec3 p = ao_vec3_make(0, 0, -2), n = ao_vec3_make(0, 0, 1);
+        struct ao_vec3 n, error, p = ao_sphere_point(ao_vec3_make(0, 0, 0), 2, ao_vec3_make(0, 0, -2), &n, &error);
+        n = ao_vec3_scale(n, -1.0f);
         struct ao_surface s = {.position = p, .ng = n, .ns = n, .albedo = ao_vec3_make(1, 1, 1)};
-        s.offset = ao_surface_offset(ao_vec3_make(0, 0, 0.5f), 2.5f, p);
+        s.origin = ao_surface_lift(p, n, error);
         uint64_t rays = 0;
         struct ao_vec3 sum = ao_estimate_surface(&f.ctx, &s, 3, 0, 100000, &rays);
         assert_true(sum.x == 0.0f && sum.y == 0.0f && sum.z == 0.0f);

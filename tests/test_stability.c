@@ -27,12 +27,21 @@ struct fixture {
     struct ao_tracer *tracer;
 };
 
-static void setup(struct fixture *f, const char *text, const char *path)
+static void setup_with(struct fixture *f, const char *text, const char *path, enum ao_backend backend)
 {
     assert_true(ao_scene_parse(&f->scene, text, path));
-    f->tracer = ao_tracer_create(&f->scene);
+    f->tracer = ao_tracer_create_with(&f->scene, backend);
     assert_non_null(f->tracer);
 }
+
+static void setup(struct fixture *f, const char *text, const char *path)
+{
+    setup_with(f, text, path, AO_BACKEND_AUTO);
+}
+
+/* Both back ends, for the tests where rays leave surfaces at their finest: each has its own
+ * intersection arithmetic, and the lift must clear both. */
+static const enum ao_backend BACKENDS[2] = {AO_BACKEND_DIRECT, AO_BACKEND_EMBREE};
 
 static void teardown(struct fixture *f)
 {
@@ -40,14 +49,14 @@ static void teardown(struct fixture *f)
     ao_scene_finish(&f->scene);
 }
 
-/* Renders the fixture's scene through the renderer (one sample per pass, two threads) and returns
- * a malloc'd copy of the final linear image. */
-static float *render(const struct fixture *f, int width, int height, uint32_t spp, enum ao_sampling sampling,
-                     bool aa)
+/* Renders the fixture's scene through the renderer (spppp samples per pass, two threads) and
+ * returns a malloc'd copy of the final linear image. */
+static float *render_passes(const struct fixture *f, int width, int height, uint32_t spp, uint32_t spppp,
+                            enum ao_sampling sampling, bool aa)
 {
     struct ao_render_config config = {.scene = &f->scene, .tracer = f->tracer, .width = width, .height = height,
                                       .threads = 2, .seed = 9, .target_spp = spp, .ao_distance = INFINITY};
-    struct ao_settings settings = {.sampling = sampling, .aa = aa, .spppp = 1, .camera = f->scene.camera};
+    struct ao_settings settings = {.sampling = sampling, .aa = aa, .spppp = spppp, .camera = f->scene.camera};
     struct ao_render *r = ao_render_create(&config, &settings);
     assert_non_null(r);
     assert_true(ao_render_wait(r));
@@ -59,6 +68,35 @@ static float *render(const struct fixture *f, int width, int height, uint32_t sp
     memcpy(copy, frame->rgb, bytes);
     ao_render_destroy(r);
     return copy;
+}
+
+/* render_passes with one sample per pass. */
+static float *render(const struct fixture *f, int width, int height, uint32_t spp, enum ao_sampling sampling,
+                     bool aa)
+{
+    return render_passes(f, width, height, spp, 1, sampling, aa);
+}
+
+/* The surface aoview shades where the eye ray from `from` towards `to` (local frame) first hits,
+ * found and shaded as the renderer does; false on a miss. */
+static bool shade(const struct fixture *f, struct ao_vec3 from, struct ao_vec3 to, struct ao_surface *s)
+{
+    struct ao_vec3 d = ao_vec3_normalize(ao_vec3_sub(to, from));
+    struct ao_packet eye = {.org_x = {from.x}, .org_y = {from.y}, .org_z = {from.z}, .dir_x = {d.x},
+                            .dir_y = {d.y}, .dir_z = {d.z}, .tfar = {INFINITY}, .count = 1};
+    struct ao_hit hit;
+    ao_tracer_intersect(f->tracer, &eye, &hit);
+    if (hit.t == INFINITY)
+        return false;
+    ao_surface_from_hit(&f->scene, from, d, &hit, s);
+    return true;
+}
+
+/* World point w in the scene's local frame, in double. */
+static void to_local(const struct ao_scene *scene, const double w[3], double out[3])
+{
+    for (int k = 0; k < 3; k++)
+        out[k] = w[k] - scene->origin[k];
 }
 
 /* A fresh directory for files the scenes load, removed with its files by remove_dir. */
@@ -102,117 +140,306 @@ static const char TILTED_TRIANGLE[] = "v -7.5 -13 -2\n"       /* -10 U - 10 V */
 static void test_open_plane_at_any_scale_has_no_acne(void **state)
 {
     (void)state;
-    /* The tilted triangle, scaled by s and translated by (1e4, 1e4, 1e4), seen obliquely from
-     * 5 s above its plane so that it fills the view. Nothing can occlude a lone plane, and cosine
+    /* The tilted triangle, scaled by s and translated by T = (t, t, t), seen obliquely from 5 s
+     * above its plane so that it fills the view. Nothing can occlude a lone plane, and cosine
      * sampling weighs every open direction exactly 1, so each pass adds exactly rho to a pixel; the
      * double sums of rho over 256 passes are exact and so is their mean. Any pixel below rho is a
      * self-hit (acne); any at the background (0.25) a miss. Bound: exactly rho everywhere. At
-     * s = 1e-3 the plane spans about 40 float ulps of its position (1e-3 at 1e4), the extreme case. */
+     * t = 0 the plane passes through the origin and stays where it is; translated, it is stored
+     * about its own centre (scene.h). The camera is placed in double. */
     struct temp_dir dir;
     make_dir(&dir);
     write_file(&dir, "plane.obj", TILTED_TRIANGLE);
     char path[128];
     snprintf(path, sizeof path, "%s/plane.scene", dir.path);
-    const float scales[] = {1e-3f, 1.0f, 1e3f}, rho = 0.7f, t = 1e4f;
-    const struct ao_vec3 shift = {t, t, t};
+    const double scales[] = {1e-3, 1.0, 1e3}, shifts[] = {0.0, 1e4, 1e6};
+    const float rho = 0.7f;
     struct ao_vec3 n = ao_vec3_normalize(ao_vec3_cross(U, V));
     enum { W = 32, H = 24, SPP = 256 };
-    for (int k = 0; k < 3; k++) {
-        float s = scales[k];
-        struct ao_vec3 eye = ao_vec3_add(shift, ao_vec3_scale(ao_vec3_add(ao_vec3_scale(n, 5.0f), ao_vec3_scale(U, 2.0f)), s));
-        struct ao_vec3 target = ao_vec3_add(shift, ao_vec3_scale(V, 0.5f * s));
-        char text[512];
-        snprintf(text, sizeof text,
-                 "camera eye %.9g %.9g %.9g target %.9g %.9g %.9g up 0 1 0 fov 40\nbackground 0.25\n"
-                 "mesh plane.obj albedo %.9g scale %.9g translate %.9g %.9g %.9g\n",
-                 (double)eye.x, (double)eye.y, (double)eye.z, (double)target.x, (double)target.y, (double)target.z,
-                 (double)rho, (double)s, (double)t, (double)t, (double)t);
-        struct fixture f;
-        setup(&f, text, path);
-        float *rgb = render(&f, W, H, SPP, AO_SAMPLING_COSINE, true);
-        int acne = 0, missed = 0;
-        float lowest = rho;
-        for (int p = 0; p < W * H; p++) {
-            acne += rgb[3 * p] < rho && rgb[3 * p] != 0.25f;
-            missed += rgb[3 * p] == 0.25f;
-            lowest = fminf(lowest, rgb[3 * p]);
+    for (int b = 0; b < 6; b++)
+        for (int k = 0; k < 3; k++) {
+            int j = b % 3;
+            double s = scales[k], t = shifts[j], eye[3], target[3];
+            const float *nn = &n.x, *u = &U.x, *v = &V.x;
+            for (int a = 0; a < 3; a++) {
+                eye[a] = t + s * (5.0 * nn[a] + 2.0 * u[a]);
+                target[a] = t + s * 0.5 * v[a];
+            }
+            char text[512];
+            snprintf(text, sizeof text,
+                     "camera eye %.17g %.17g %.17g target %.17g %.17g %.17g up 0 1 0 fov 40\nbackground 0.25\n"
+                     "mesh plane.obj albedo %.9g scale %.17g translate %.17g %.17g %.17g\n",
+                     eye[0], eye[1], eye[2], target[0], target[1], target[2], (double)rho, s, t, t, t);
+            struct fixture f;
+            setup_with(&f, text, path, BACKENDS[b / 3]);
+            float *rgb = render(&f, W, H, SPP, AO_SAMPLING_COSINE, true);
+            int acne = 0, missed = 0;
+            float lowest = rho;
+            for (int p = 0; p < W * H; p++) {
+                acne += rgb[3 * p] < rho && rgb[3 * p] != 0.25f;
+                missed += rgb[3 * p] == 0.25f;
+                lowest = fminf(lowest, rgb[3 * p]);
+            }
+            print_message("plane at %g, scale %g, %s: %d of %d pixels below rho (lowest %.6f, %d missed), %d "
+                          "samples each\n", t, s, ao_tracer_backend(f.tracer), acne, W * H, (double)lowest, missed,
+                          SPP);
+            assert_int_equal(acne, 0);
+            assert_int_equal(missed, 0);
+            for (int p = 0; p < 3 * W * H; p++)
+                assert_true(rgb[p] == rho);
+            free(rgb);
+            teardown(&f);
         }
-        print_message("plane at 1e4, scale %g: %d of %d pixels below rho (lowest %.6f, %d missed), %d samples each\n",
-                      (double)s, acne, W * H, (double)lowest, missed, SPP);
-        assert_int_equal(acne, 0);
-        assert_int_equal(missed, 0);
-        for (int p = 0; p < 3 * W * H; p++)
-            assert_true(rgb[p] == rho);
-        free(rgb);
-        teardown(&f);
-    }
     remove_dir(&dir, "plane.obj");
 }
 
 static void test_contact_occlusion_is_kept(void **state)
 {
     (void)state;
-    /* A sphere of radius r resting on a ground quad, both scaled by s and translated by T, seen
-     * from about 8 r away. A ground point at distance x from the contact, d = sqrt(x^2 + r^2) from
-     * the centre, has AO rho (1 - F0) with F0 = r^3 / d^3 (the form factor of a sphere wholly above
-     * it). Occlusion rays start delta = ao_surface_offset above the point, where the sphere's
-     * lower surface is g = r - sqrt(r^2 - x^2) above the ground.
+    /* A sphere of radius r resting on a ground quad, placed at the origin and far from it. A ground
+     * point at distance x from the contact, d = sqrt(x^2 + r^2) from the centre, has AO rho (1 - F0)
+     * with F0 = r^3 / d^3 (the form factor of a sphere wholly above it). The point is found and
+     * shaded as the renderer does (an eye ray, grazing at tan = x / r so that it passes under the
+     * sphere, which needs tan <= 2 x / r); its occlusion rays start delta above the recomputed
+     * point (ao_surface_lift), where the sphere's lower surface is g = r - sqrt(r^2 - x^2) above
+     * the ground.
+     * - The origin is outside the sphere at every x >= 0.001 r: checked in double.
      * - Contact occlusion is never lost: a point lifted by delta sees the sphere (centre now
      *   u = r - delta above it) at least as much as F(u) = r^2 u / (x^2 + u^2)^(3/2) (the signed
      *   form factor, which counts the part dipping below its horizon negatively), and dF/du < 0
      *   for x^2 < 2 u^2, true for every x <= r here: so the estimate's mean is at most the exact
      *   AO. Bound: mean <= exact + 4 standard errors, where with cosine sampling each sample is rho
      *   with probability q = 1 - F0 and 0 otherwise: standard error rho sqrt(q (1-q) / N).
-     * - Where the origin is outside the sphere (g > delta), the estimate is also not darker than
-     *   the offset explains: to first order in delta the occlusion grows by
+     * - Nor is it darker than the lift explains: to first order in delta the occlusion grows by
      *   -F'(r) delta = delta r^2 (2 r^2 - x^2) / (x^2 + r^2)^(5/2) <= 2 delta / r; the part below
-     *   the horizon is second order (a quadrature of the exact occluded fraction at the lifted
-     *   points agrees with the first-order term within 1 %). Bound: |mean - exact| <= 4 standard
-     *   errors + 1.25 rho times that term.
-     * - Where g <= delta the origin lies inside the sphere and every ray is occluded: contact
-     *   closer than the offset resolves as touching, the estimate is 0 (checked by the first bound
-     *   and printed). */
+     *   the horizon is second order. Bound: |mean - exact| <= 4 standard errors + 1.25 rho times
+     *   that term. (At x = 0.001 r, q = 1.5e-6: N = 10^6 samples see about 1.5 open rays, so there
+     *   the geometric check carries the weight.) */
     enum { N = 1000000 };
     static const struct {
-        float scale, shift;
-    } cases[] = {{1.0f, 0.0f}, {1e3f, 1e4f}};
-    for (int c = 0; c < 2; c++) {
-        float s = cases[c].scale, t = cases[c].shift, r = 0.5f * s, rho = 0.8f;
-        char text[512];
+        double radius, shift;
+    } cases[] = {{0.5, 0.0}, {500.0, 1e4}, {1.0, 1e4}, {1.0, 1e6}};
+    const double fractions[] = {0.001, 0.003, 0.01, 0.03, 0.1, 0.3, 1.0}, rho = 0.8;
+    for (int c = 0; c < 8; c++) {
+        double r = cases[c % 4].radius, t = cases[c % 4].shift, w = 20 * r;
+        char text[1024];
         snprintf(text, sizeof text,
-                 "camera eye %.9g %.9g %.9g target %.9g %.9g %.9g\n"
-                 "quad corner %.9g %.9g %.9g edge1 0 0 %.9g edge2 %.9g 0 0 albedo 0.8\n"
-                 "sphere center %.9g %.9g %.9g radius %.9g albedo 0.8\n",
-                 (double)t, (double)(t + 3 * s), (double)(t + 3 * s), (double)t, (double)t, (double)t,
-                 (double)(t - 10 * s), (double)t, (double)(t - 10 * s), (double)(20 * s), (double)(20 * s),
-                 (double)t, (double)(t + r), (double)t, (double)r);
+                 "camera eye %.17g %.17g %.17g target %.17g %.17g %.17g\n"
+                 "quad corner %.17g %.17g %.17g edge1 0 0 %.17g edge2 %.17g 0 0 albedo 0.8\n"
+                 "sphere center %.17g %.17g %.17g radius %.17g albedo 0.8\n",
+                 t, t + 6 * r, t + 6 * r, t, t, t, t - w, t, t - w, 2 * w, 2 * w, t, t + r, t, r);
         struct fixture f;
-        setup(&f, text, "contact.scene");
+        setup_with(&f, text, "contact.scene", BACKENDS[c / 4]);
         struct ao_context ctx = {.scene = &f.scene, .tracer = f.tracer, .sampling = AO_SAMPLING_COSINE,
                                  .ao_distance = INFINITY, .seed = 17};
-        const float fractions[] = {0.01f, 0.02f, 0.05f, 0.1f, 0.3f, 1.0f};
-        for (int k = 0; k < 6; k++) {
-            struct ao_vec3 up = ao_vec3_make(0, 1, 0), p = ao_vec3_make(t + fractions[k] * r, t, t);
-            struct ao_vec3 eye = ao_vec3_add(p, ao_vec3_make(6 * r, 6 * r, 0));
-            struct ao_surface surface = {.position = p, .ng = up, .ns = up, .albedo = ao_vec3_make(rho, rho, rho)};
-            surface.offset = ao_surface_offset(eye, ao_vec3_length(ao_vec3_sub(eye, p)), p);
+        double contact[3], center[3];
+        to_local(&f.scene, (const double[3]){t, t, t}, contact);
+        to_local(&f.scene, (const double[3]){t, t + r, t}, center);
+        for (int k = 0; k < 7; k++) {
+            double x0 = fractions[k] * r;
+            struct ao_vec3 to = ao_vec3_make((float)(contact[0] + x0), (float)contact[1], (float)contact[2]);
+            struct ao_vec3 from = ao_vec3_add(to, ao_vec3_make((float)(2 * r), (float)(2 * x0), 0));
+            struct ao_surface surface;
+            assert_true(shade(&f, from, to, &surface));
+            surface.albedo = ao_vec3_make((float)rho, (float)rho, (float)rho);
             uint64_t rays = 0;
             double mean = ao_estimate_surface(&ctx, &surface, (uint64_t)k, 0, N, &rays).x / N;
-            double x = (double)p.x - t, rr = (double)r, d2 = x * x + rr * rr, delta = surface.offset;
-            double q = 1.0 - rr * rr * rr / (d2 * sqrt(d2)), expected = rho * q;
-            double se = rho * sqrt(q * (1.0 - q) / N), gap = rr - sqrt(rr * rr - x * x);
-            double first_order = delta * rr * rr * (2.0 * rr * rr - x * x) / (d2 * d2 * sqrt(d2));
-            print_message("contact, scale %g at %g: x/r = %.2f AO %.6f, exact %.6f (%+.1f se); offset %.2g r, "
-                          "gap %.2g r%s\n", (double)s, (double)t, (double)fractions[k], mean, expected,
-                          (mean - expected) / se, delta / rr, gap / rr, gap > delta ? "" : ": origin in the sphere");
+            double o[3] = {surface.origin.x - center[0], surface.origin.y - center[1], surface.origin.z - center[2]};
+            double x = hypot(surface.position.x - contact[0], surface.position.z - contact[2]);
+            double delta = surface.origin.y - contact[1], d2 = x * x + r * r;
+            double q = 1.0 - r * r * r / (d2 * sqrt(d2)), expected = rho * q;
+            double se = rho * sqrt(q * (1.0 - q) / N), gap = x < r ? r - sqrt(r * r - x * x) : r;
+            double first_order = delta * r * r * (2.0 * r * r - x * x) / (d2 * d2 * sqrt(d2));
+            bool outside = o[0] * o[0] + o[1] * o[1] + o[2] * o[2] > r * r;
+            print_message("contact, r %g at %g, %s: x/r = %.3f AO %.7f, exact %.7f (%+.1f se); lift %.2g r, gap %.2g r%s\n",
+                          r, t, ao_tracer_backend(f.tracer), x / r, mean, expected, (mean - expected) / se, delta / r,
+                          gap / r, outside ? "" : ": origin in the sphere");
+            assert_true(outside);
             assert_true(mean <= expected + 4.0 * se);
-            if (gap > delta)
-                assert_true(fabs(mean - expected) <= 4.0 * se + 1.25 * rho * first_order);
-            else
-                assert_true(mean == 0.0);
+            assert_true(fabs(mean - expected) <= 4.0 * se + 1.25 * rho * first_order);
         }
         teardown(&f);
     }
+}
+
+/* Probability that a binomial(n, p) count lies at least as far from its mean as k, on k's side
+ * (the one-sided tail), summed outward from k until the terms no longer count. */
+static double binomial_tail(int n, double p, int k)
+{
+    if (p <= 0.0 || p >= 1.0)
+        return (double)k == n * p ? 1.0 : 0.0;
+    int step = k < n * p ? -1 : 1;
+    double log_norm = lgamma(n + 1.0), sum = 0.0;
+    for (int j = k; j >= 0 && j <= n; j += step) {
+        double term = exp(log_norm - lgamma(j + 1.0) - lgamma(n - j + 1.0) + j * log(p) + (n - j) * log1p(-p));
+        sum += term;
+        if (term < 1e-17 * sum)
+            break;
+    }
+    return fmin(1.0, sum);
+}
+
+/* The z of a one-sided normal tail of probability p (bisection on erfc). */
+static double tail_z(double p)
+{
+    double lo = 0.0, hi = 40.0;
+    for (int i = 0; i < 100; i++) {
+        double mid = 0.5 * (lo + hi);
+        if (0.5 * erfc(mid / sqrt(2.0)) > p)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    return lo;
+}
+
+static void test_sphere_on_ground_matches_the_closed_form_anywhere(void **state)
+{
+    (void)state;
+    /* A sphere of radius 1 resting on a ground quad of +-2e4, placed at the origin, at (1e4, 1e4,
+     * 1e4) and at (1e6, 1e6, 1e6); cosine sampling, 2048 samples, no AA, 96x72 pixels. Without AA
+     * each pixel shades one point, the one found here as the renderer finds it, and with cosine
+     * sampling its value is rho K / N with K ~ binomial(N, q), q the open fraction in closed form
+     * (aoview-exact's): on the ground 1 - r^2 h / d^3 (h = r, d the distance to the centre), on
+     * the sphere (1 + n.N) / 2 for an infinite ground (this one changes it by less than 6.4e-5,
+     * exact.c's bound). Bounds: each pixel's count within its binomial 5-sigma tails (one-sided
+     * probability 2.9e-7; over about 6,800 pixels a false alarm has probability 0.004), exact tails
+     * rather than a normal approximation since occlusion is rare over most of the ground; and the
+     * mean error over the pixels, whose standard error is sqrt(sum of rho^2 q (1-q) / N) / pixels
+     * (independent pixels), within 4 of those. */
+    enum { W = 96, H = 72, N = 2048 };
+    const double shifts[] = {0.0, 1e4, 1e6}, rho = 0.8, r = 1.0;
+    for (int c = 0; c < 6; c++) {
+        double t = shifts[c % 3];
+        char text[1024];
+        snprintf(text, sizeof text,
+                 "camera eye %.17g %.17g %.17g target %.17g %.17g %.17g fov 40\n"
+                 "quad corner %.17g %.17g %.17g edge1 0 0 4e4 edge2 4e4 0 0 albedo 0.8\n"
+                 "sphere center %.17g %.17g %.17g radius 1 albedo 0.8\n",
+                 t, t + 3.2, t + 6.4, t, t + 0.7, t, t - 2e4, t, t - 2e4, t, t + r, t);
+        struct fixture f;
+        setup_with(&f, text, "sphere-on-ground.scene", BACKENDS[c / 3]);
+        float *rgb = render_passes(&f, W, H, N, 64, AO_SAMPLING_COSINE, false);
+        struct ao_view view;
+        assert_true(ao_camera_view(&f.scene.camera, W, H, &view));
+        double center[3];
+        to_local(&f.scene, (const double[3]){t, t + r, t}, center);
+        int pixels = 0, worst_i = 0, worst_j = 0;
+        double worst_z = 0.0, sum_error = 0.0, sum_variance = 0.0, worst_value = 0.0, worst_exact = 0.0;
+        for (int j = 0; j < H; j++)
+            for (int i = 0; i < W; i++) {
+                struct ao_surface s;
+                struct ao_vec3 d = ao_camera_ray(&view, (float)i + 0.5f, (float)j + 0.5f);
+                if (!shade(&f, view.eye, ao_vec3_add(view.eye, d), &s))
+                    continue;
+                double to_c[3] = {center[0] - s.position.x, center[1] - s.position.y, center[2] - s.position.z};
+                double q;
+                if (s.ng.y > 0.99f && s.position.y < center[1] - 0.5 * r) { /* the ground */
+                    double dist = sqrt(to_c[0] * to_c[0] + to_c[1] * to_c[1] + to_c[2] * to_c[2]);
+                    q = 1.0 - r * r * r / (dist * dist * dist);
+                } else {
+                    q = 0.5 * (1.0 + (double)s.ns.y);
+                }
+                double value = rgb[3 * (j * W + i)], expected = rho * q;
+                int k = (int)lround(value * N / rho);
+                double z = tail_z(binomial_tail(N, q, k));
+                if (z > worst_z)
+                    worst_z = z, worst_i = i, worst_j = j, worst_value = value, worst_exact = expected;
+                pixels++;
+                sum_error += value - expected;
+                sum_variance += rho * rho * q * (1.0 - q) / N;
+            }
+        double bias = sum_error / pixels, tstat = sum_error / sqrt(sum_variance);
+        print_message("sphere on ground at %g (local origin %g), %s: %d pixels, worst |z| %.2f at (%d, %d): %.5f "
+                      "against %.5f; mean bias %+.7f (t %+.2f)\n", t, f.scene.origin[0], ao_tracer_backend(f.tracer),
+                      pixels, worst_z, worst_i, worst_j, worst_value, worst_exact, bias, tstat);
+        assert_true(pixels > W * H / 2);
+        assert_true(worst_z <= 5.0);
+        assert_true(fabs(tstat) < 4.0);
+        free(rgb);
+        teardown(&f);
+    }
+}
+
+static void test_default_scene_renders_the_same_far_from_the_origin(void **state)
+{
+    (void)state;
+    /* The default scene (the bunny on its ground quad) as shipped and moved by (1e6, 1e6, 1e6):
+     * camera, mesh translation and quad shifted in the scene text, the same seed. Stored about
+     * its own centre, the far scene's local coordinates differ from the near one's only by that
+     * centre's offset, so hit points and occlusion rays differ by float rounding, and a sample can
+     * change only where a ray passes within rounding of an edge or silhouette: the images must
+     * agree but for a few values. Bound: at most 0.1 % of the values differ. (Placed in world
+     * floats, where 1e6 is good to 0.06, 62 % of the values differed, by up to 0.68, at 160x120
+     * and 256 samples.) */
+    const char *root = getenv("AO_SOURCE_ROOT");
+    if (!root) {
+        print_message("AO_SOURCE_ROOT is not set (run it through meson test): no bunny to load\n");
+        skip();
+    }
+    enum { W = 80, H = 60, SPP = 64 };
+    float *rgb[2];
+    for (int k = 0; k < 2; k++) {
+        double t = k ? 1e6 : 0.0;
+        char text[4096];
+        snprintf(text, sizeof text,
+                 "camera eye %.17g %.17g %.17g target %.17g %.17g %.17g up 0 1 0 fov 35\nbackground 1\n"
+                 "mesh %s/assets/bunny.obj albedo 0.8 0.75 0.7 scale 0.1 translate %.17g %.17g %.17g\n"
+                 "quad corner %.17g %.17g %.17g edge1 0 0 100 edge2 100 0 0 albedo 0.8\n",
+                 t + 0.5, t + 1.0, t + 2.5, t, t + 0.42, t, root, t, t + 0.0003, t, t - 50, t, t - 50);
+        struct fixture f;
+        setup(&f, text, "bunny-far.scene");
+        rgb[k] = render_passes(&f, W, H, SPP, 16, AO_SAMPLING_COSINE, true);
+        teardown(&f);
+    }
+    int differ = 0;
+    double largest = 0.0;
+    for (int p = 0; p < 3 * W * H; p++) {
+        differ += rgb[0][p] != rgb[1][p];
+        largest = fmax(largest, fabs((double)rgb[0][p] - rgb[1][p]));
+    }
+    print_message("default scene at 1e6 against the origin: %d of %d values differ (largest %.4f)\n", differ,
+                  3 * W * H, largest);
+    assert_true(differ * 1000 <= 3 * W * H);
+    free(rgb[0]);
+    free(rgb[1]);
+}
+
+static void test_camera_moves_hold_far_from_the_origin(void **state)
+{
+    (void)state;
+    /* The viewer's moves on a scene at (1e6, 1e6, 1e6), whose camera lives in the scene's local
+     * frame: a full orbit in 64 yaw steps, a pan there and back, a zoom in and out. In world
+     * floats the eye could not be placed closer than 0.0625 (the spacing of floats at 1e6), 1 % of
+     * the eye's distance of 6.3. Here each step rounds at float precision of that distance: the
+     * orbit's inverse and forward trigonometry move the eye by a few ulps of it, about 1e-6 of the
+     * distance per step, so 64 steps stay within 1e-5 of it even if every error adds up; the pan
+     * and the zoom take two steps each. Bound: 1e-5 of the distance. */
+    const double t = 1e6;
+    char text[512];
+    snprintf(text, sizeof text, "camera eye %.17g %.17g %.17g target %.17g %.17g %.17g\n"
+             "sphere center %.17g %.17g %.17g radius 1\n", t, t + 3.0, t + 5.8, t, t + 0.5, t, t, t + 1, t);
+    struct fixture f;
+    setup(&f, text, "far-camera.scene");
+    struct ao_camera c = f.scene.camera;
+    const struct ao_camera start = c;
+    float distance = ao_vec3_length(ao_vec3_sub(c.eye, c.target));
+    for (int k = 0; k < 64; k++)
+        ao_camera_orbit(&c, 6.283185307179586f / 64.0f, 0.0f);
+    float orbit = ao_vec3_length(ao_vec3_sub(c.eye, start.eye));
+    c = start;
+    ao_camera_pan(&c, 0.3f, -0.2f);
+    ao_camera_pan(&c, -0.3f, 0.2f);
+    float pan = fmaxf(ao_vec3_length(ao_vec3_sub(c.eye, start.eye)), ao_vec3_length(ao_vec3_sub(c.target, start.target)));
+    c = start;
+    ao_camera_zoom(&c, 0.5f);
+    ao_camera_zoom(&c, 2.0f);
+    float zoom = ao_vec3_length(ao_vec3_sub(c.eye, start.eye));
+    print_message("camera at 1e6, eye %.2f from the target: full orbit off by %.2g, pan there and back %.2g, "
+                  "zoom in and out %.2g (world floats: 0.0625 per coordinate)\n", (double)distance, (double)orbit,
+                  (double)pan, (double)zoom);
+    assert_true(orbit <= 1e-5f * distance && pan <= 1e-5f * distance && zoom <= 1e-5f * distance);
+    teardown(&f);
 }
 
 /* ------------------------------------------------------------------ degenerate geometry */
@@ -418,7 +645,7 @@ static void test_uniform_sphere_variance_is_five_times_the_hemisphere(void **sta
     struct ao_context ctx = {.scene = &f.scene, .tracer = f.tracer, .ao_distance = INFINITY, .seed = 23};
     struct ao_vec3 up = ao_vec3_make(0, 1, 0), p = ao_vec3_make(0.3f, 0, -0.2f);
     struct ao_surface s = {.position = p, .ng = up, .ns = up, .albedo = ao_vec3_make(1, 1, 1)};
-    s.offset = ao_surface_offset(ao_vec3_make(0, 5, 5), 5.0f, p);
+    s.origin = ao_surface_lift(p, up, ao_vec3_make(0, 0, 0)); /* exact: the plane is y = 0 */
     double variance[2];
     const enum ao_sampling modes[2] = {AO_SAMPLING_UNIFORM, AO_SAMPLING_HEMISPHERE};
     for (int m = 0; m < 2; m++) {
@@ -446,6 +673,9 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_open_plane_at_any_scale_has_no_acne),
         cmocka_unit_test(test_contact_occlusion_is_kept),
+        cmocka_unit_test(test_sphere_on_ground_matches_the_closed_form_anywhere),
+        cmocka_unit_test(test_default_scene_renders_the_same_far_from_the_origin),
+        cmocka_unit_test(test_camera_moves_hold_far_from_the_origin),
         cmocka_unit_test(test_degenerate_geometry_gives_no_nan),
         cmocka_unit_test(test_silhouettes_converge_to_the_box_filter),
         cmocka_unit_test(test_long_accumulation_resolves_exactly),
