@@ -69,7 +69,8 @@ def main():
                             os.path.join(args.work, 'run.pfm'), scene] + extra, check=True)
             ratios = []
             for r in csv.DictReader(open(stats)):
-                true, est = float(r['rmse']) / mean, float(r['error'])
+                # A black image (the closed box) has no relative error: its RMSE is 0 as it is.
+                true, est = float(r['rmse']) / mean if mean > 0 else float(r['rmse']), float(r['error'])
                 rows.append([name, label, r['pass'], r['mean_spp'], '%.6g' % est, '%.6g' % true])
                 if float(r['mean_spp']) >= 10 and true > 0:
                     ratios.append(est / true)
