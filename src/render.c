@@ -118,8 +118,16 @@ static struct ao_tile_work tile_work(const struct ao_render *r, const struct til
     uint32_t spp = ts->spp[0] + ts->spp[1], left = r->config.target_spp - spp;
     int samples = (uint32_t)r->samples < left ? r->samples : (int)left;
     struct ao_tile_work w = {.half = half, .rounds = 1, .count = samples};
-    if (r->per_ray && samples > r->per_ray && samples % r->per_ray == 0)
-        w.rounds = samples / r->per_ray, w.count = r->per_ray;
+    if (r->per_ray) {
+        /* Auto passes: a tile at most doubles its samples in a pass, so that a tile rejoining late
+         * does not put nearly all its samples into one half; and it takes whole rounds of
+         * per_ray samples (the rest in a later pass), or its eye rays would be too few for AA. */
+        samples = (uint32_t)samples <= spp + 1 ? samples : (int)spp + 1;
+        if (samples > r->per_ray)
+            w.rounds = samples / r->per_ray, w.count = r->per_ray;
+        else
+            w.count = samples;
+    }
     /* Random streams are numbered since the restart; Sobol ones within the half (see ao.h). */
     bool own = r->ctx.sequence == AO_SEQUENCE_SOBOL;
     w.first_ray = own ? ts->rays[half] : ts->rays[0] + ts->rays[1];
