@@ -2,7 +2,8 @@
 """The error estimate against the truth: for each scene, aoview runs with --stats against a
 reference, and every row's estimated relative RMSE (the `error` column, from the even and odd
 passes, no reference) is set beside the true one (rmse / the reference's mean). Writes
-error-estimate.csv, error-estimate.png (gnuplot) and error-estimate.md into --out.
+error-estimate.png (gnuplot) and error-estimate.md into --out, and every row into
+error-estimate.csv in --work.
 
   tests/error_estimate.py [--aoview BIN] [--exact BIN] [--size WxH] [--spp N] [--work DIR]
                           [--out DIR] SCENE...
@@ -25,20 +26,23 @@ def mean_of(path):
 
 
 def reference(args, scene, name, checksum):
+    """The reference image's path and what it is, made once per binary (its kind in a side file)."""
     path = os.path.join(args.work, 'reference-%s-%s-%s.pfm' % (name, args.size, checksum))
-    if os.path.exists(path):
-        return path, 'cached'
+    if os.path.exists(path) and os.path.exists(path + '.kind'):
+        return path, open(path + '.kind').read()
     exact = subprocess.run([args.exact, '-q', '--size', args.size, '--spp', '4096', '-o', path, scene],
                            stderr=subprocess.PIPE, text=True)
-    if exact.returncode == 0:
-        return path, 'exact'
-    if 'no closed form' not in exact.stderr:
-        sys.exit(exact.stderr.strip())
-    print('error_estimate.py: %s: 16384-spp reference' % name, file=sys.stderr)
-    subprocess.run([args.aoview, '--headless', '-q', '--threads', '2', '--size', args.size, '--spp', '16384',
-                    '--sampler', 'sobol', '--spppp', 'auto', '--adaptive', 'off', '--seed', '1001', '-o', path,
-                    scene], check=True)
-    return path, '16384 spp'
+    kind = 'exact'
+    if exact.returncode != 0:
+        if 'no closed form' not in exact.stderr:
+            sys.exit(exact.stderr.strip())
+        print('error_estimate.py: %s: 16384-spp reference' % name, file=sys.stderr)
+        subprocess.run([args.aoview, '--headless', '-q', '--threads', '2', '--size', args.size, '--spp', '16384',
+                        '--sampler', 'sobol', '--spppp', 'auto', '--adaptive', 'off', '--seed', '1001', '-o', path,
+                        scene], check=True)
+        kind = '16384 spp'
+    open(path + '.kind', 'w').write(kind)
+    return path, kind
 
 
 def main():
@@ -80,7 +84,7 @@ def main():
                           max(ratios, default=float('nan')), worst, last[3], float(last[4]), float(last[5])))
             print('%s, %s: %d rows from 10 spp, estimate/true %.3f to %.3f' % (name, label, len(ratios),
                   table[-1][4], table[-1][5]), file=sys.stderr)
-    with open(os.path.join(args.out, 'error-estimate.csv'), 'w', newline='') as f:
+    with open(os.path.join(args.work, 'error-estimate.csv'), 'w', newline='') as f:
         w = csv.writer(f)
         w.writerow(['scene', 'config', 'pass', 'mean_spp', 'estimate', 'true'])
         w.writerows(rows)
@@ -96,7 +100,7 @@ def chart(args, rows):
     """Estimate against truth, one panel, log-log, a point per row from 10 spp, the diagonal and
     the factor-1.25 band."""
     data = os.path.join(args.work, 'points.dat')
-    names = sorted({r[0] for r in rows})
+    names = sorted({r[0] for r in rows if float(r[3]) >= 10 and float(r[5]) > 0})
     with open(data, 'w') as f:
         for name in names:
             f.write('# %s\n' % name)
