@@ -84,6 +84,7 @@ struct ao_render {
     int per_ray;                         /* AO samples per eye ray; 0: all on one eye ray */
     int tiles_x, tiles_y;
     struct tile_state *tiles;            /* tiles_x * tiles_y, row by row */
+    double image_mean;                   /* of the running average, as of the last survey */
     int *work;                           /* the pass's tiles, grouped by share */
     struct share *shares;                /* one per thread, the render thread's first */
     atomic_uint_fast64_t eye_rays, shadow_rays;
@@ -302,7 +303,7 @@ static size_t select_tiles(struct ao_render *r, bool adaptive)
 }
 
 /* Fills in info's per-pixel counts, error estimate, converged share and whether the run is done,
- * and selects the next pass's tiles. */
+ * keeps the image mean, and selects the next pass's tiles. */
 static void survey(struct ao_render *r, struct ao_frame_info *info, bool adaptive)
 {
     int tiles = r->tiles_x * r->tiles_y;
@@ -320,6 +321,7 @@ static void survey(struct ao_render *r, struct ao_frame_info *info, bool adaptiv
         all_settled = all_settled && (settled(ts) || spp >= r->config.target_spp);
     }
     info->mean_spp = samples / image;
+    r->image_mean = mean / image;
     /* sqrt(variance / image) / (mean / image), 0 or infinite for a black image */
     info->error = !halves ? NAN : mean > 0.0 ? sqrt(variance * image) / mean : variance > 0.0 ? INFINITY : 0.0;
     size_t next = select_tiles(r, adaptive);
@@ -361,12 +363,9 @@ static void publish(struct ao_render *r, struct ao_frame_info *info)
     size_t count = 3 * (size_t)f->width * (size_t)f->height;
     ao_accum_resolve(&r->accum, f->rgb);
     info->rmse = r->config.reference ? rmse(f->rgb, r->config.reference, count) : NAN;
-    double mean = 0.0;
     for (int t = 0; t < f->tiles_x * f->tiles_y; t++)
-        mean += r->tiles[t].mean;
-    mean /= (double)f->width * (double)f->height;
-    for (int t = 0; t < f->tiles_x * f->tiles_y; t++)
-        f->tile_error[t] = mean > 0.0 ? (float)(sqrt(r->tiles[t].variance / tile_pixels(r, t)) / mean) : 0.0f;
+        f->tile_error[t] = r->image_mean > 0.0 ? (float)(sqrt(r->tiles[t].variance / tile_pixels(r, t)) / r->image_mean)
+                                               : 0.0f;
     f->info = *info;
     unsigned previous = atomic_exchange(&r->middle, (unsigned)r->back | FRESH);
     r->back = (int)(previous & ~(unsigned)FRESH);
