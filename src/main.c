@@ -93,7 +93,7 @@ static void on_pass(const struct ao_frame_info *info, void *user)
     ao_window_notify();
 }
 
-/* The difference view of frame from reference as a heat map PNG (headless.c draws it). */
+/* The difference view of frame from reference as a heat map PNG with its colour bar. */
 static bool write_difference_png(const char *path, const struct ao_frame *frame, const float *reference)
 {
     float *heat = malloc(3 * sizeof *heat * (size_t)frame->width * (size_t)frame->height);
@@ -102,7 +102,8 @@ static bool write_difference_png(const char *path, const struct ao_frame *frame,
         return false;
     }
     ao_heatmap_pixels(frame->rgb, reference, frame->width, frame->height, heat);
-    bool ok = ao_headless_write_png(path, heat, frame->width, frame->height);
+    bool ok = ao_headless_write_heatmap(path, heat, frame->width, frame->height, &ao_heatmap_difference,
+                                        "|image - reference|");
     free(heat);
     return ok;
 }

@@ -314,7 +314,7 @@ elif [ "$mode" = chart ]; then
     python3 -c "import sys; sys.exit(not float('$mean') < 0.05)" || fail "D changed the saved PFM (mean difference $mean)"
 else
     # Random keys (no S, Q or Esc), drags, wheel steps and resizes, as fast as xdotool goes.
-    keys=(u h c a space r plus minus equal KP_Add KP_Subtract F1 F2 question)
+    keys=(u h c a n f d e g space r plus minus equal KP_Add KP_Subtract F1 F2 question)
     RANDOM=1
     for i in $(seq 200); do
         case $((RANDOM % 4)) in
