@@ -17,8 +17,8 @@ struct ao_notes {
     char values[AO_NOTES_MAX][160];
 };
 
-/* Fills out with "software" and aoview.* attributes (scene, spp, sampling, aa, view, shading, seed, seconds)
- * from the frame's info, the scene's name and the seed. Any thread. */
+/* Fills out with "software" and aoview.* attributes (scene, spp, sampling, aa, view, shading,
+ * seed, seconds) from the frame's info, the scene's name and the seed. Any thread. */
 void ao_notes_make(struct ao_notes *out, const struct ao_frame_info *info, const char *scene,
                    uint64_t seed);
 

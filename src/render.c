@@ -316,8 +316,9 @@ static void survey(struct ao_render *r, struct ao_frame_info *info, bool adaptiv
     info->error = !halves ? NAN : mean > 0.0 ? sqrt(variance * image) / mean : variance > 0.0 ? INFINITY : 0.0;
     size_t next = select_tiles(r, adaptive);
     info->converged = adaptive ? 1.0 - (double)next / image : 0.0;
-    info->done = next == 0 || (r->config.target_error > 0.0 && all_settled && info->error <= r->config.target_error) ||
-                 (r->config.time_limit > 0.0 && info->seconds >= r->config.time_limit);
+    bool error_reached = r->config.target_error > 0.0 && all_settled && info->error <= r->config.target_error;
+    bool time_up = r->config.time_limit > 0.0 && info->seconds >= r->config.time_limit;
+    info->done = next == 0 || error_reached || time_up;
 }
 
 /* The AO samples per pixel of the next pass: the setting, or with auto the schedule's next step

@@ -41,7 +41,8 @@ static void test_time_limit_and_error_trend(void **state)
     info.seconds = 4.0;
     assert_true(ao_progress_left(&p, &info) == 0.0);               /* past it: the pass ends it */
     /* Error 2 % toward 1 %: four times the samples, three times the time spent so far. */
-    info = (struct ao_frame_info){.spp = 10, .target_spp = 1000, .seconds = 2.0, .error = 0.02, .target_error = 0.01};
+    info = (struct ao_frame_info){.spp = 10, .target_spp = 1000, .seconds = 2.0, .error = 0.02,
+                                  .target_error = 0.01};
     struct ao_progress q = {0};
     ao_progress_add(&q, &info);
     assert_float_equal(ao_progress_left(&q, &info), 6.0, 1e-9);

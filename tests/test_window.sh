@@ -179,7 +179,28 @@ args=()
 scene=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
 if [ "$mode" = keys ]; then
     # The spheres and, for F, a coarse mesh: an octahedron whose vertex normals point outwards.
-    printf 'v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\nvn 1 0 0\nvn -1 0 0\nvn 0 1 0\nvn 0 -1 0\nvn 0 0 1\nvn 0 0 -1\nf 1//1 3//3 5//5\nf 5//5 3//3 2//2\nf 2//2 3//3 6//6\nf 6//6 3//3 1//1\nf 5//5 4//4 1//1\nf 2//2 4//4 5//5\nf 6//6 4//4 2//2\nf 1//1 4//4 6//6\n' >octahedron.obj
+    cat >octahedron.obj <<'EOF'
+v 1 0 0
+v -1 0 0
+v 0 1 0
+v 0 -1 0
+v 0 0 1
+v 0 0 -1
+vn 1 0 0
+vn -1 0 0
+vn 0 1 0
+vn 0 -1 0
+vn 0 0 1
+vn 0 0 -1
+f 1//1 3//3 5//5
+f 5//5 3//3 2//2
+f 2//2 3//3 6//6
+f 6//6 3//3 1//1
+f 5//5 4//4 1//1
+f 2//2 4//4 5//5
+f 6//6 4//4 2//2
+f 1//1 4//4 6//6
+EOF
     { cat "$scene"; echo "mesh octahedron.obj scale 0.4 translate 1.2 0.4 0.8"; } >keys.scene
     scene=$work/keys.scene
 fi
