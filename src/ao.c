@@ -52,8 +52,8 @@ static void draw_pairs(const struct ao_context *ctx, uint64_t key, uint64_t firs
             draw_pair(ctx, key, first + (uint64_t)k, &u1[k], &u2[k]);
 }
 
-void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,
-                         const struct ao_hit *hit, struct ao_surface *s)
+void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, struct ao_vec3 org,
+                         struct ao_vec3 dir, const struct ao_hit *hit, struct ao_surface *s)
 {
     /* The hit point recomputed from the primitive, with its error bound: Embree's org + t dir
      * carries the error of t, which grows with the distance from the eye. (Built in a local and
@@ -78,7 +78,7 @@ void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struc
         n = ao_vec3_add(n, ao_vec3_scale(scene->normals[i[1]], hit->u));
         n = ao_vec3_add(n, ao_vec3_scale(scene->normals[i[2]], hit->v));
         float len = ao_vec3_length(n);
-        r.ns = len > 1e-6f && isfinite(len) ? ao_vec3_scale(n, 1.0f / len) : r.ng;
+        r.ns = shading == AO_SHADING_PHONG && len > 1e-6f && isfinite(len) ? ao_vec3_scale(n, 1.0f / len) : r.ng;
         r.albedo = scene->albedos[scene->triangle_albedo[hit->prim]];
     }
     if (!(ao_vec3_dot(r.ng, r.ng) > 0.25f)) /* not a unit normal: degenerate triangle, NaN */
@@ -275,7 +275,9 @@ static void make_eye_rays(const struct ao_context *ctx, uint64_t stream, uint64_
 }
 
 /* One eye ray per pixel of the tile (number `ray`) and `count` AO samples from `first_sample`; adds
- * each pixel's sum of sample values (background on a miss) to sums. */
+ * each pixel's sum of sample values (background on a miss) to sums. The normals view gives each of
+ * the `count` samples the value (n + 1) / 2 and a miss black: a unit normal's colour is never
+ * black, whereas a background's value could pass for one. */
 static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile, int half, uint64_t ray,
                         uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
                         uint64_t *shadow_rays)
@@ -309,15 +311,21 @@ static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile
                 continue;
             struct ao_surface s;
             struct ao_vec3 d = ao_vec3_make(eye.dir_x[k], eye.dir_y[k], eye.dir_z[k]);
-            ao_surface_from_hit(ctx->scene, ctx->view.eye, d, &hits[k], &s);
+            ao_surface_from_hit(ctx->scene, ctx->shading, ctx->view.eye, d, &hits[k], &s);
+            if (ctx->output == AO_OUTPUT_NORMALS) {
+                albedo[first + k] = ao_vec3_scale(ao_vec3_add(s.ns, ao_vec3_make(1.0f, 1.0f, 1.0f)), 0.5f);
+                sum[first + k] = (double)count;
+                continue;
+            }
             albedo[first + k] = s.albedo;
             queue_samples(&q, &s, ao_rng_key(ctx->seed, index[k], ao_stream), first_sample, count, &sum[first + k]);
         }
     }
     flush(&q);
     for (int k = 0; k < pixels; k++)
-        sums[k] = ao_vec3_add(sums[k], miss[k] ? ao_vec3_scale(ctx->scene->background, (float)count)
-                                               : ao_vec3_scale(albedo[k], (float)sum[k]));
+        sums[k] = ao_vec3_add(sums[k], !miss[k] ? ao_vec3_scale(albedo[k], (float)sum[k])
+                                       : ctx->output == AO_OUTPUT_NORMALS ? ao_vec3_make(0.0f, 0.0f, 0.0f)
+                                       : ao_vec3_scale(ctx->scene->background, (float)count));
     *shadow_rays += q.traced;
 }
 

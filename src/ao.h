@@ -19,6 +19,20 @@ enum ao_below {
     AO_BELOW_TRACE,          /* traced as they are: they hit the surface itself and count occluded */
 };
 
+/* What a pixel sample's value is: the AO estimate, or the shading normal n the estimate uses
+ * (turned to face the eye) as the colour (n + 1) / 2, black where the eye ray misses. */
+enum ao_output {
+    AO_OUTPUT_AO,
+    AO_OUTPUT_NORMALS,
+};
+
+/* The shading normal of a mesh point: the vertex normals Phong-interpolated, or the face normal.
+ * Spheres use their exact normal either way. */
+enum ao_shading {
+    AO_SHADING_PHONG,
+    AO_SHADING_FLAT,
+};
+
 /* Everything one pass's pixel samples share; read-only while a pass runs. */
 struct ao_context {
     const struct ao_scene *scene;
@@ -30,6 +44,8 @@ struct ao_context {
     uint64_t seed;
     enum ao_sequence sequence;
     enum ao_below below;
+    enum ao_output output;
+    enum ao_shading shading;
 };
 
 /* A shading point: unit normals turned to face the eye ray, and where its occlusion rays start. */
@@ -105,10 +121,10 @@ static inline struct ao_vec3 ao_surface_lift(struct ao_vec3 position, struct ao_
 }
 
 /* Shades the eye ray org + t dir's hit into *s: the point recomputed from the primitive and lifted
- * past its error bound, exact sphere normal, Phong-interpolated mesh normal (the geometric one
- * where the vertex normals cancel), both turned to the eye's side. */
-void ao_surface_from_hit(const struct ao_scene *scene, struct ao_vec3 org, struct ao_vec3 dir,
-                         const struct ao_hit *hit, struct ao_surface *s);
+ * past its error bound, exact sphere normal, mesh normal per `shading` (Phong: the geometric one
+ * where the vertex normals cancel), both turned to the eye's side. Any thread. */
+void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, struct ao_vec3 org,
+                         struct ao_vec3 dir, const struct ao_hit *hit, struct ao_surface *s);
 
 /* Sum over `count` AO samples (numbered first_sample, ...) at s of albedo * V * weight, whose
  * mean estimates AO; `pixel` keys the random streams; adds the rays traced to *shadow_rays. */
@@ -132,7 +148,8 @@ struct ao_tile_work {
 };
 
 /* One pass over a tile: per pixel `rounds` eye rays (jittered with AA), each with `count` AO
- * samples; writes each pixel's sum of sample values (background on a miss) to sums, row by row,
+ * samples (with AO_OUTPUT_NORMALS, `count` samples of the normal's colour and no AO rays); writes
+ * each pixel's sum of sample values (background on a miss, black for normals) to sums, row by row,
  * and adds the rays traced to *eye_rays / *shadow_rays. Eye rays go to the tracer in packets of
  * 16, AO rays in batches of up to AO_BATCH_RAYS gathered across the tile. Any thread. */
 void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, const struct ao_tile_work *work,

@@ -16,8 +16,12 @@ enum { MAX_SPP = 1 << 30, MAX_SPPPP = 65536, MAX_THREADS = 256 };
 enum option_id {
     OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
     OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
-    OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR, OPT_SAVE_FORMAT,
+    OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR, OPT_SAVE_FORMAT, OPT_TIME,
+    OPT_VIEW, OPT_SHADING,
 };
+
+/* The longest --time: a year, far beyond any render, short of overflowing anything. */
+static const double MAX_SECONDS = 365.0 * 24 * 3600;
 
 /* Names of the --sampler and --below-surface values, in their enums' order. */
 static const char *const sequences[] = {[AO_SEQUENCE_RANDOM] = "random", [AO_SEQUENCE_SOBOL] = "sobol", NULL};
@@ -25,6 +29,10 @@ static const char *const belows[] = {[AO_BELOW_REFLECT] = "reflect", [AO_BELOW_T
 static const char *const switches[] = {"off", "on", NULL};
 /* Names of the --save-format values: false, true for opts->save_exr. */
 static const char *const save_formats[] = {"pfm", "exr", NULL};
+/* Names of the --view and --shading values, in their enums' order. */
+static const char *const views[] = {[AO_VIEW_MODE_AO] = "ao", [AO_VIEW_MODE_NORMALS] = "normals",
+                                    [AO_VIEW_MODE_DIFFERENCE] = "difference", NULL};
+static const char *const shadings[] = {[AO_SHADING_PHONG] = "phong", [AO_SHADING_FLAT] = "flat", NULL};
 
 /* One row of the option table: long name, short name (or 0), whether it takes a value. */
 struct option_spec {
@@ -56,6 +64,9 @@ static const struct option_spec specs[] = {
     {"--adaptive", 0, true, OPT_ADAPTIVE},
     {"--target-error", 0, true, OPT_TARGET_ERROR},
     {"--save-format", 0, true, OPT_SAVE_FORMAT},
+    {"--time", 0, true, OPT_TIME},
+    {"--view", 0, true, OPT_VIEW},
+    {"--shading", 0, true, OPT_SHADING},
 };
 
 static const char usage[] =
@@ -72,6 +83,11 @@ static const char usage[] =
     "  --adaptive on|off     samples go where the estimated error is (default on)\n"
     "  --target-error E      stop once the estimated RMSE is at most E times the\n"
     "                        image mean, e.g. 0.01 (default: run to --spp)\n"
+    "  --time S              stop after S seconds of rendering, or at --spp if sooner\n"
+    "  --view V              ao | normals (shading normals as (n + 1) / 2) |\n"
+    "                        difference (|AO - reference|, needs --reference)\n"
+    "                        (default ao)\n"
+    "  --shading S           phong | flat mesh normals (default phong)\n"
     "  --sampling M          uniform | hemisphere | cosine (default cosine)\n"
     "  --sampler S           random | sobol (Owen-scrambled) numbers for jitter and\n"
     "                        directions (default sobol)\n"
@@ -92,7 +108,8 @@ static const char usage[] =
     "  --version             show the version\n"
     "\n"
     "Window keys: U/H/C sampling, A anti-aliasing, Space pause, R restart,\n"
-    "+/- samples per pass, G adaptive sampling, S screenshot,\n"
+    "+/- samples per pass, G adaptive sampling, E error map, N normals,\n"
+    "F flat/Phong, D difference, S screenshot,\n"
     "drag/wheel orbit, pan, zoom, F1 or ? help, Esc/Q quit.\n";
 
 const char *ao_cli_usage(void)
@@ -169,6 +186,20 @@ static bool parse_fraction(const char *name, const char *value, double *out, cha
     return false;
 }
 
+/* A duration in seconds: a finite number in (0, MAX_SECONDS]. */
+static bool parse_seconds(const char *name, const char *value, double *out, char *msg, size_t msg_size)
+{
+    char *end;
+    double t = strtod(value, &end);
+    if (!isspace((unsigned char)*value) && *end == '\0' && t > 0.0 && t <= MAX_SECONDS) {
+        *out = t;
+        return true;
+    }
+    snprintf(msg, msg_size, "%s: expected seconds greater than 0 and at most %.0f, got '%s'", name, MAX_SECONDS,
+             value);
+    return false;
+}
+
 static bool has_suffix(const char *s, const char *suffix)
 {
     size_t n = strlen(s), k = strlen(suffix);
@@ -201,13 +232,19 @@ static bool parse_sampling(const char *name, const char *value, enum ao_sampling
 static bool parse_choice(const char *name, const char *value, const char *const *choices, int *out,
                          char *msg, size_t msg_size)
 {
-    for (int k = 0; choices[k]; k++) {
-        if (strcmp(value, choices[k]) == 0) {
-            *out = k;
+    int n = 0;
+    for (; choices[n]; n++) {
+        if (strcmp(value, choices[n]) == 0) {
+            *out = n;
             return true;
         }
     }
-    snprintf(msg, msg_size, "%s: expected %s or %s, got '%s'", name, choices[0], choices[1], value);
+    size_t used = (size_t)snprintf(msg, msg_size, "%s: expected ", name);
+    for (int k = 0; k < n && used < msg_size; k++)
+        used += (size_t)snprintf(msg + used, msg_size - used, "%s%s", choices[k],
+                                 k + 2 < n ? ", " : k + 2 == n ? " or " : "");
+    if (used < msg_size)
+        snprintf(msg + used, msg_size - used, ", got '%s'", value);
     return false;
 }
 
@@ -272,6 +309,17 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
             return false;
         opts->save_exr = choice == 1;
         return true;
+    case OPT_TIME: return parse_seconds(name, value, &opts->time_limit, msg, msg_size);
+    case OPT_VIEW:
+        if (!parse_choice(name, value, views, &choice, msg, msg_size))
+            return false;
+        opts->view = (enum ao_view_mode)choice;
+        return true;
+    case OPT_SHADING:
+        if (!parse_choice(name, value, shadings, &choice, msg, msg_size))
+            return false;
+        opts->shading = (enum ao_shading)choice;
+        return true;
     }
     return false;
 }
@@ -335,6 +383,10 @@ bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, siz
         } else {
             opts->scene_path = arg;
         }
+    }
+    if (opts->view == AO_VIEW_MODE_DIFFERENCE && !opts->reference_path) {
+        snprintf(msg, msg_size, "--view difference: needs --reference FILE to compare against");
+        return false;
     }
     return true;
 }

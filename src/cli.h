@@ -10,6 +10,14 @@
 #include "rng.h"
 #include "sampling.h"
 
+/* What --view shows: the AO image, the shading normals (both estimates the renderer accumulates),
+ * or |AO - reference| as a heat map (a display of the AO image; needs --reference). */
+enum ao_view_mode {
+    AO_VIEW_MODE_AO,
+    AO_VIEW_MODE_NORMALS,
+    AO_VIEW_MODE_DIFFERENCE,
+};
+
 /* Everything SPEC.md's command line can say; strings point into argv. */
 struct ao_options {
     const char *scene_path;   /* NULL: the built-in default scene */
@@ -19,6 +27,9 @@ struct ao_options {
     uint32_t spppp;           /* 0: auto, the default */
     bool adaptive;            /* --adaptive: default on */
     double target_error;      /* --target-error: 0 (none) by default */
+    double time_limit;        /* --time: seconds, 0 (none) by default */
+    enum ao_view_mode view;   /* --view: default ao */
+    enum ao_shading shading;  /* --shading: default phong */
     enum ao_sampling sampling;/* default cosine */
     enum ao_sequence sequence;/* --sampler: default sobol */
     enum ao_below below;      /* --below-surface: default reflect */
@@ -33,8 +44,9 @@ struct ao_options {
     bool quiet, help, version;
 };
 
-/* Parses argv into *opts (defaults first); --size obeys image.h's AO_IMAGE_MAX_SIDE/_PIXELS.
- * On a usage error writes one line naming the option into msg and returns false. */
+/* Parses argv into *opts (defaults first); --size obeys image.h's AO_IMAGE_MAX_SIDE/_PIXELS;
+ * --view difference needs --reference. On a usage error writes one line naming the option into
+ * msg and returns false. */
 bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, size_t msg_size);
 
 /* The --help text. */

@@ -166,6 +166,11 @@ static void flip_rows(uint8_t *pixels, size_t row, int height)
 
 bool ao_display_write_png(struct ao_display *d, const char *path)
 {
+    return ao_display_write_png_with(d, path, NULL, NULL);
+}
+
+bool ao_display_write_png_with(struct ao_display *d, const char *path, ao_display_overlay *overlay, void *user)
+{
     const struct ao_glapi *gl = d->gl;
     if (d->width == 0) {
         fprintf(stderr, "aoview: %s: no image to save yet\n", path);
@@ -184,6 +189,8 @@ bool ao_display_write_png(struct ao_display *d, const char *path)
 
     /* Draw at 1:1 and read back tightly packed (rows of 3 * width bytes). */
     draw_image(d, (struct ao_display_rect){0, 0, d->width, d->height});
+    if (overlay)
+        overlay(user, d->width, d->height);
     gl->PixelStorei(GL_PACK_ALIGNMENT, 1);
     gl->ReadPixels(0, 0, d->width, d->height, GL_RGB, GL_UNSIGNED_BYTE, pixels);
     gl->BindFramebuffer(GL_FRAMEBUFFER, 0);

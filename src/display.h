@@ -45,4 +45,11 @@ void ao_display_draw(struct ao_display *display, int fb_width, int fb_height);
  * (the displayed image without overlays); false with one message. GL thread. */
 bool ao_display_write_png(struct ao_display *display, const char *path);
 
+/* Draws over the image at 1:1 (framebuffer width x height, bound) before it is read back. */
+typedef void ao_display_overlay(void *user, int width, int height);
+
+/* As ao_display_write_png, with overlay(user, ...) drawn over the image first. GL thread. */
+bool ao_display_write_png_with(struct ao_display *display, const char *path, ao_display_overlay *overlay,
+                               void *user);
+
 #endif

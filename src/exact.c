@@ -323,7 +323,7 @@ static void render(const struct ao_scene *scene, const struct ao_tracer *tracer,
                     if (hits[k].t != INFINITY) {
                         struct ao_surface s;
                         struct ao_vec3 d = ao_vec3_make(eye.dir_x[k], eye.dir_y[k], eye.dir_z[k]);
-                        ao_surface_from_hit(scene, view->eye, d, &hits[k], &s);
+                        ao_surface_from_hit(scene, AO_SHADING_PHONG, view->eye, d, &hits[k], &s);
                         value = exact_value(cf, &s, hits[k].sphere);
                     }
                     sum[0] += value.x;

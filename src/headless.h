@@ -5,9 +5,21 @@
 
 #include <stdbool.h>
 
+#include "heatmap.h"
+
 /* Renders rgb (linear, width x height, top row first) through the display shader in an OSMesa
  * core-profile context, reads it back and writes path as PNG; false with one message on failure.
  * Any one thread at a time; uses no window system. */
 bool ao_headless_write_png(const char *path, const float *rgb, int width, int height);
+
+/* As ao_headless_write_png for a heat map (heatmap.h's colours on range), with its colour bar,
+ * titled, in the top right corner where the image is at least AO_HEADLESS_BAR_WIDTH x
+ * AO_HEADLESS_BAR_HEIGHT pixels (smaller images would be hidden under it). */
+bool ao_headless_write_heatmap(const char *path, const float *heat, int width, int height,
+                               const struct ao_heatmap_scale *range, const char *title);
+
+/* The smallest image that ao_headless_write_heatmap draws the colour bar on. */
+#define AO_HEADLESS_BAR_WIDTH 320
+#define AO_HEADLESS_BAR_HEIGHT 200
 
 #endif

@@ -13,12 +13,15 @@ static const float STOPS[][3] = {
 };
 enum { STOP_COUNT = sizeof STOPS / sizeof STOPS[0] };
 
+const struct ao_heatmap_scale ao_heatmap_error = {.low = -4, .high = -1, .percent = true};
+const struct ao_heatmap_scale ao_heatmap_difference = {.low = -4, .high = 0, .percent = false};
+
 /* The position of value on the scale, from 0 (low end) to 1 (high end). */
-static float position(double value)
+static float position(const struct ao_heatmap_scale *scale, double value)
 {
     if (!(value > 0.0))
         return 0.0f;
-    double t = (log10(value) - AO_HEATMAP_LOW) / (AO_HEATMAP_HIGH - AO_HEATMAP_LOW);
+    double t = (log10(value) - scale->low) / (scale->high - scale->low);
     return t < 0.0 ? 0.0f : t > 1.0 ? 1.0f : (float)t;
 }
 
@@ -32,9 +35,9 @@ static void ramp(float t, float rgb[3])
         rgb[c] = STOPS[k][c] + f * (STOPS[k + 1][c] - STOPS[k][c]);
 }
 
-void ao_heatmap_colour(double value, float rgb[3])
+void ao_heatmap_colour(const struct ao_heatmap_scale *scale, double value, float rgb[3])
 {
-    ramp(position(value), rgb);
+    ramp(position(scale, value), rgb);
 }
 
 void ao_heatmap_tiles(const struct ao_frame *frame, float *heat)
@@ -42,18 +45,41 @@ void ao_heatmap_tiles(const struct ao_frame *frame, float *heat)
     for (int j = 0; j < frame->height; j++)
         for (int i = 0; i < frame->width; i++) {
             int t = j / frame->tile * frame->tiles_x + i / frame->tile;
-            ao_heatmap_colour(frame->tile_error[t], heat + 3 * ((size_t)j * (size_t)frame->width + (size_t)i));
+            ao_heatmap_colour(&ao_heatmap_error, frame->tile_error[t],
+                              heat + 3 * ((size_t)j * (size_t)frame->width + (size_t)i));
         }
+}
+
+void ao_heatmap_pixels(const float *rgb, const float *reference, int width, int height, float *heat)
+{
+    size_t pixels = (size_t)width * (size_t)height;
+    for (size_t p = 0; p < pixels; p++) {
+        const float *a = rgb + 3 * p, *b = reference + 3 * p;
+        double d = (fabs((double)a[0] - b[0]) + fabs((double)a[1] - b[1]) + fabs((double)a[2] - b[2])) / 3.0;
+        ao_heatmap_colour(&ao_heatmap_difference, d, heat + 3 * p);
+    }
+}
+
+/* A decade's label: 10^d as a percentage or a plain number. */
+static void label(const struct ao_heatmap_scale *scale, int d, char *text, size_t size)
+{
+    if (scale->percent)
+        snprintf(text, size, "%g %%", 100.0 * pow(10.0, d));
+    else
+        snprintf(text, size, "%g", pow(10.0, d));
 }
 
 /* The bar's size in font pixels (times the scale): its ramp, and the room for its labels. */
 enum { BAR_WIDTH = 12, BAR_HEIGHT = 120, STEPS = 48 };
 
-void ao_heatmap_draw_bar(struct ao_hud *hud, const char *title, int x, int y, float scale, int fb_width,
-                         int fb_height)
+void ao_heatmap_draw_bar(struct ao_hud *hud, const struct ao_heatmap_scale *range, const char *title, int x, int y,
+                         float scale, int fb_width, int fb_height)
 {
+    /* The widest label is the low end's. */
+    char text[16];
+    label(range, range->low, text, sizeof text);
     int label_width, label_height;
-    ao_hud_measure(hud, "0.01 %", scale, &label_width, &label_height);
+    ao_hud_measure(hud, text, scale, &label_width, &label_height);
     int title_width, title_height;
     ao_hud_measure(hud, title, scale, &title_width, &title_height);
     float pad = AO_HUD_PADDING * scale, width = BAR_WIDTH * scale, height = BAR_HEIGHT * scale;
@@ -74,10 +100,9 @@ void ao_heatmap_draw_bar(struct ao_hud *hud, const char *title, int x, int y, fl
                     bar_top + height * (float)(s + 1) / STEPS, c);
     }
     /* A label per decade. */
-    for (int d = AO_HEATMAP_HIGH; d >= AO_HEATMAP_LOW; d--) {
-        char text[16];
-        snprintf(text, sizeof text, "%g %%", 100.0 * pow(10.0, d));
-        float ty = bar_top + height * (float)(AO_HEATMAP_HIGH - d) / (AO_HEATMAP_HIGH - AO_HEATMAP_LOW);
+    for (int d = range->high; d >= range->low; d--) {
+        label(range, d, text, sizeof text);
+        float ty = bar_top + height * (float)(range->high - d) / (float)(range->high - range->low);
         ao_hud_text(hud, text, left + 2 * pad + width, ty - (float)label_height / 2, scale,
                     (struct ao_hud_colour){1.0f, 1.0f, 1.0f, 1.0f});
     }

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "progress.h"
 #include "sampling.h"
 #include "shaders/ao_shaders.h"
 
@@ -57,10 +58,18 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, char *o
     item(out, size, &used, separator, "%s", s->scene);
     item(out, size, &used, separator, "%s", ao_sampling_name(f->sampling));
     item(out, size, &used, separator, "AA %s", f->aa ? "on" : "off");
+    if (f->output == AO_OUTPUT_NORMALS)
+        item(out, size, &used, separator, "normals");
+    if (f->shading == AO_SHADING_FLAT)
+        item(out, size, &used, separator, "flat");
     item(out, size, &used, separator, "spp %u of %u", (unsigned)f->spp, (unsigned)f->target_spp);
     if (isfinite(f->error))
         item(out, size, &used, separator, "error %.2f %%", 100.0 * f->error);
     item(out, size, &used, separator, "%.1fs", s->seconds);
+    char left[32];
+    ao_progress_format(f->done ? NAN : s->seconds_left, left, sizeof left);
+    if (left[0])
+        item(out, size, &used, separator, "%s", left);
     item(out, size, &used, separator, "%.1f Mrays/s", mrays);
     item(out, size, &used, separator, "pass %u", (unsigned)f->pass);
     if (s->spppp)

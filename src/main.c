@@ -8,13 +8,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "cli.h"
 #include "config.h"
 #include "headless.h"
+#include "heatmap.h"
 #include "image.h"
 #include "notes.h"
+#include "progress.h"
 #include "render.h"
 #include "scene.h"
 #include "tracer.h"
@@ -22,20 +25,54 @@
 
 enum { EXIT_RUNTIME = 1, EXIT_USAGE = 2 };
 
+static double mrays_per_second(const struct ao_frame_info *info)
+{
+    return info->seconds > 0.0 ? (double)(info->eye_rays + info->shadow_rays) / info->seconds / 1e6 : 0.0;
+}
+
+/* The headless progress bar redraws at most this often (and once more at the end). */
+static const double BAR_SECONDS = 0.1;
+
 /* What the per-pass callback reports to. */
 struct reporter {
     FILE *stats;
     const char *stats_path;
     bool progress;         /* a progress bar on stderr (a terminal, not --quiet) */
     bool stats_failed;
+    struct ao_progress eta;   /* the bar's time-left estimate */
+    double drawn_at;          /* monotonic seconds of the bar's last redraw; 0: never */
 };
 
-static double mrays_per_second(const struct ao_frame_info *info)
+static double monotonic_seconds(void)
 {
-    return info->seconds > 0.0 ? (double)(info->eye_rays + info->shadow_rays) / info->seconds / 1e6 : 0.0;
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* Runs on the render thread after every published pass. */
+/* Redraws the progress bar: filled by the share of the run's time gone where the time left is
+ * estimated, else by spp; at most every BAR_SECONDS, and at the end. */
+static void draw_bar(struct reporter *rep, const struct ao_frame_info *info)
+{
+    ao_progress_add(&rep->eta, info);
+    double now = monotonic_seconds();
+    if (!info->done && rep->drawn_at > 0.0 && now - rep->drawn_at < BAR_SECONDS)
+        return;
+    rep->drawn_at = now;
+    double left = ao_progress_left(&rep->eta, info);
+    double share = !isnan(left) && info->seconds + left > 0.0 ? info->seconds / (info->seconds + left)
+                                                              : (double)info->spp / info->target_spp;
+    int filled = (int)(30.0 * (share < 1.0 ? share : 1.0));
+    char left_text[32];
+    ao_progress_format(left, left_text, sizeof left_text);
+    fprintf(stderr, "\r[%.*s%*s] spp %u/%u  error %.2f %%  %.1f s  %s  %.1f Mrays/s \033[K", filled,
+            "##############################", 30 - filled, "", info->spp, info->target_spp, 100.0 * info->error,
+            info->seconds, left_text, mrays_per_second(info));
+    if (info->done)
+        fputc('\n', stderr);
+}
+
+/* Runs on the render thread after every published pass (and on main once after an interruption). */
 static void on_pass(const struct ao_frame_info *info, void *user)
 {
     struct reporter *rep = user;
@@ -51,24 +88,34 @@ static void on_pass(const struct ao_frame_info *info, void *user)
             rep->stats_failed = true;
         }
     }
-    if (rep->progress) {
-        int filled = (int)(30.0 * info->spp / info->target_spp);
-        fprintf(stderr, "\r[%.*s%*s] spp %u/%u  error %.2f %%  %.1f s  %.1f Mrays/s", filled,
-                "##############################", 30 - filled, "", info->spp, info->target_spp,
-                100.0 * info->error, info->seconds, mrays_per_second(info));
-        if (info->done)
-            fputc('\n', stderr);
-    }
+    if (rep->progress)
+        draw_bar(rep, info);
     ao_window_notify();
 }
 
+/* The difference view of frame from reference as a heat map PNG with its colour bar. */
+static bool write_difference_png(const char *path, const struct ao_frame *frame, const float *reference)
+{
+    float *heat = malloc(3 * sizeof *heat * (size_t)frame->width * (size_t)frame->height);
+    if (!heat) {
+        fprintf(stderr, "aoview: %s: out of memory for the difference image\n", path);
+        return false;
+    }
+    ao_heatmap_pixels(frame->rgb, reference, frame->width, frame->height, heat);
+    bool ok = ao_headless_write_heatmap(path, heat, frame->width, frame->height, &ao_heatmap_difference,
+                                        "|image - reference|");
+    free(heat);
+    return ok;
+}
+
 /* Writes the final frame as PFM or EXR (linear; EXR with the settings in its header) or PNG
- * (through the display code). */
+ * (through the display code; with a difference reference, the difference view's heat map). */
 static bool write_output(const char *path, const struct ao_frame *frame, const char *scene,
-                         uint64_t seed)
+                         uint64_t seed, const float *difference)
 {
     if (ao_image_has_extension(path, ".png"))
-        return ao_headless_write_png(path, frame->rgb, frame->width, frame->height);
+        return difference ? write_difference_png(path, frame, difference)
+                          : ao_headless_write_png(path, frame->rgb, frame->width, frame->height);
     struct ao_notes notes;
     ao_notes_make(&notes, &frame->info, scene, seed);
     return ao_image_write_linear(path, frame->rgb, frame->width, frame->height, notes.notes,
@@ -128,7 +175,7 @@ static bool start_watcher(struct interrupt *in, struct ao_render *render)
 
 /* Waits for the target spp (or an interruption) and writes the output; SPEC.md's headless path. */
 static int run_headless(struct ao_render *render, const struct ao_options *opts, struct interrupt *in,
-                        struct reporter *reporter, const char *scene)
+                        struct reporter *reporter, const char *scene, const float *reference)
 {
     const char *output = opts->output ? opts->output : "aoview.png";
     bool finished = ao_render_wait(render);
@@ -141,7 +188,8 @@ static int run_headless(struct ao_render *render, const struct ao_options *opts,
                 frame->info.spp);
         on_pass(&frame->info, reporter);
     }
-    if (!frame || !write_output(output, frame, scene, opts->seed))
+    const float *difference = opts->view == AO_VIEW_MODE_DIFFERENCE ? reference : NULL;
+    if (!frame || !write_output(output, frame, scene, opts->seed, difference))
         return EXIT_RUNTIME;
     if (!opts->quiet)
         fprintf(stderr, "aoview: wrote %s (%u spp, %.2f s, %.1f Mrays/s)\n", output, frame->info.spp,
@@ -214,11 +262,14 @@ static int run(struct app *app, const struct ao_options *opts)
         .scene = &app->scene, .tracer = app->tracer, .width = width, .height = height,
         .threads = opts->threads ? opts->threads : (cores > 0 ? (int)cores : 1),
         .seed = opts->seed, .target_spp = opts->spp, .target_error = opts->target_error,
+        .time_limit = opts->time_limit,
         .ao_distance = isnan(opts->ao_distance) ? app->scene.ao_distance : opts->ao_distance,
         .sequence = opts->sequence, .below = opts->below,
         .reference = app->reference, .on_pass = on_pass, .user = &app->reporter};
     struct ao_settings settings = {.sampling = opts->sampling, .aa = opts->aa, .spppp = (int)opts->spppp,
-                                   .adaptive = opts->adaptive, .camera = app->scene.camera};
+                                   .adaptive = opts->adaptive, .camera = app->scene.camera,
+                                   .output = opts->view == AO_VIEW_MODE_NORMALS ? AO_OUTPUT_NORMALS : AO_OUTPUT_AO,
+                                   .shading = opts->shading};
     struct ao_view view;
     if (!ao_camera_view(&settings.camera, width, height, &view)) {
         fprintf(stderr, "%s: the camera cannot form an image\n", app->scene.name);
@@ -232,7 +283,9 @@ static int run(struct app *app, const struct ao_options *opts)
     /* Window, or headless output (also where no window can be opened). */
     if (window) {
         struct ao_window_info info = {.scene_name = app->scene.name, .quiet = opts->quiet,
-                                      .seed = opts->seed, .save_exr = opts->save_exr};
+                                      .seed = opts->seed, .save_exr = opts->save_exr,
+                                      .reference = app->reference,
+                                      .difference = opts->view == AO_VIEW_MODE_DIFFERENCE};
         enum ao_window_result result = ao_window_run(app->render, &info);
         if (result != AO_WINDOW_NO_DISPLAY)
             return result == AO_WINDOW_OK ? 0 : EXIT_RUNTIME;
@@ -241,7 +294,7 @@ static int run(struct app *app, const struct ao_options *opts)
         app->reporter.progress = !opts->quiet && isatty(STDERR_FILENO);
     }
     atomic_store(&app->interrupt.graceful, true);
-    return run_headless(app->render, opts, &app->interrupt, &app->reporter, app->scene.name);
+    return run_headless(app->render, opts, &app->interrupt, &app->reporter, app->scene.name, app->reference);
 }
 
 int main(int argc, char **argv)

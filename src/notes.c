@@ -28,6 +28,8 @@ void ao_notes_make(struct ao_notes *out, const struct ao_frame_info *info, const
     add(out, "aoview.spp", "%" PRIu32, info->spp);
     add(out, "aoview.sampling", "%s", ao_sampling_name(info->sampling));
     add(out, "aoview.aa", "%s", info->aa ? "on" : "off");
+    add(out, "aoview.view", "%s", info->output == AO_OUTPUT_NORMALS ? "normals" : "ao");
+    add(out, "aoview.shading", "%s", info->shading == AO_SHADING_FLAT ? "flat" : "phong");
     add(out, "aoview.seed", "%" PRIu64, seed);
     add(out, "aoview.seconds", "%.3f", info->seconds);
 }

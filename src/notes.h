@@ -8,7 +8,7 @@
 #include "image.h"
 #include "render.h"
 
-enum { AO_NOTES_MAX = 8 };
+enum { AO_NOTES_MAX = 9 };
 
 /* The attributes and the text they point to; the caller owns it (usually on the stack). */
 struct ao_notes {
@@ -17,8 +17,8 @@ struct ao_notes {
     char values[AO_NOTES_MAX][160];
 };
 
-/* Fills out with "software" and aoview.* attributes (scene, spp, sampling, aa, seed, seconds)
- * from the frame's info, the scene's name and the seed. Any thread. */
+/* Fills out with "software" and aoview.* attributes (scene, spp, sampling, aa, view, shading,
+ * seed, seconds) from the frame's info, the scene's name and the seed. Any thread. */
 void ao_notes_make(struct ao_notes *out, const struct ao_frame_info *info, const char *scene,
                    uint64_t seed);
 

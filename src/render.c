@@ -326,7 +326,9 @@ static void survey(struct ao_render *r, struct ao_frame_info *info, bool adaptiv
     info->error = !halves ? NAN : mean > 0.0 ? sqrt(variance * image) / mean : variance > 0.0 ? INFINITY : 0.0;
     size_t next = select_tiles(r, adaptive);
     info->converged = adaptive ? 1.0 - (double)next / image : 0.0;
-    info->done = next == 0 || (r->config.target_error > 0.0 && all_settled && info->error <= r->config.target_error);
+    bool error_reached = r->config.target_error > 0.0 && all_settled && info->error <= r->config.target_error;
+    bool time_up = r->config.time_limit > 0.0 && info->seconds >= r->config.time_limit;
+    info->done = next == 0 || error_reached || time_up;
 }
 
 /* The AO samples per pixel of the next pass: the setting, or with auto the schedule's next step
@@ -402,7 +404,9 @@ static void *render_main(void *arg)
         if (info.restarts != r->restarts) {
             ao_accum_reset(&r->accum);
             memset(r->tiles, 0, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
-            info = (struct ao_frame_info){.restarts = r->restarts, .target_spp = r->config.target_spp};
+            info = (struct ao_frame_info){.restarts = r->restarts, .target_spp = r->config.target_spp,
+                                          .target_error = r->config.target_error,
+                                          .time_limit = r->config.time_limit};
             r->done = false;
         }
         pthread_mutex_unlock(&r->lock);
@@ -418,6 +422,8 @@ static void *render_main(void *arg)
             double start = now_seconds();
             r->ctx.sampling = s.sampling;
             r->ctx.aa = s.aa;
+            r->ctx.output = s.output;
+            r->ctx.shading = s.shading;
             ao_camera_view(&s.camera, r->config.width, r->config.height, &r->ctx.view);
             r->pass_restarts = info.restarts;
             atomic_store(&r->eye_rays, 0);
@@ -428,6 +434,8 @@ static void *render_main(void *arg)
             info.seconds += now_seconds() - start;
             info.sampling = s.sampling;
             info.aa = s.aa;
+            info.output = s.output;
+            info.shading = s.shading;
         }
 
         /* Publish it. */
@@ -603,6 +611,7 @@ void ao_render_set_settings(struct ao_render *render, const struct ao_settings *
     pthread_mutex_lock(&render->lock);
     const struct ao_settings *old = &render->settings;
     bool changes_estimate = old->sampling != settings->sampling || old->aa != settings->aa ||
+                            old->output != settings->output || old->shading != settings->shading ||
                             memcmp(&old->camera, &settings->camera, sizeof old->camera) != 0;
     if (old->adaptive != settings->adaptive) /* what is left to sample changes */
         render->done = false;

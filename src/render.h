@@ -19,6 +19,8 @@ struct ao_settings {
     int spppp;               /* AO samples per pixel per pass; 0: auto (render.c's schedule) */
     bool adaptive;           /* samples go where the estimated error is (render.c) */
     bool paused;
+    enum ao_output output;   /* AO or the normals view */
+    enum ao_shading shading; /* Phong or flat mesh normals */
     struct ao_camera camera;
 };
 
@@ -28,6 +30,8 @@ struct ao_frame_info {
     uint32_t pass;           /* passes since the last restart, this one included */
     uint32_t spp;            /* AO samples per pixel since the last restart (the most any pixel has) */
     uint32_t target_spp;
+    double target_error;     /* the configuration's, 0 for none */
+    double time_limit;       /* the configuration's, 0 for none */
     uint32_t spppp;          /* AO samples per pixel of this pass */
     double mean_spp;         /* AO samples per pixel, averaged over the image */
     double error;            /* estimated RMSE relative to the image mean, from the even and odd
@@ -38,8 +42,11 @@ struct ao_frame_info {
     double rmse;             /* against the reference; NAN without one */
     enum ao_sampling sampling;
     bool aa;
+    enum ao_output output;
+    enum ao_shading shading;
     bool done;               /* spp reached target_spp, or the estimated error reached target_error,
-                                or adaptive sampling found nothing left to sample */
+                                or seconds reached time_limit, or adaptive sampling found nothing
+                                left to sample */
 };
 
 /* A published frame: the running average, 3 linear floats per pixel, top row first, and the
@@ -62,6 +69,7 @@ struct ao_render_config {
     uint64_t seed;
     uint32_t target_spp;     /* per pixel; with adaptive sampling the most a pixel gets */
     double target_error;     /* stop when the estimated relative RMSE is at most this; 0: never */
+    double time_limit;       /* stop at the first pass boundary after this many seconds; 0: never */
     float ao_distance;
     enum ao_sequence sequence;   /* random or Sobol numbers for jitter and directions */
     enum ao_below below;         /* directions below the geometric surface */
@@ -85,7 +93,7 @@ void ao_render_destroy(struct ao_render *render);
 /* Copies the current settings into *out. Any thread. */
 void ao_render_get_settings(struct ao_render *render, struct ao_settings *out);
 
-/* Applies new settings: a change of sampling, AA or camera aborts the pass in flight and restarts
+/* Applies new settings: a change of sampling, AA, output, shading or camera aborts the pass in flight and restarts
  * accumulation; spppp and pause take effect at the next pass boundary. Any thread. */
 void ao_render_set_settings(struct ao_render *render, const struct ao_settings *settings);
 

@@ -21,6 +21,7 @@
 #include "hud.h"
 #include "image.h"
 #include "notes.h"
+#include "progress.h"
 
 /* glfwPostEmptyEvent is legal from any thread, but only between glfwInit and glfwTerminate. */
 static pthread_mutex_t wake_lock = PTHREAD_MUTEX_INITIALIZER;
@@ -36,6 +37,9 @@ static const char HELP[] =
     "+ -  double/halve samples per pass (leaves auto)\n"
     "G  adaptive sampling on/off\n"
     "E  estimated error map on/off\n"
+    "D  difference from --reference on/off\n"
+    "N  normals view on/off (restarts)\n"
+    "F  flat/Phong mesh normals (restarts)\n"
     "S  save aoview-N.png and aoview-N.pfm (or .exr)\n"
     "left drag  orbit\n"
     "right drag  pan\n"
@@ -46,6 +50,14 @@ static const char HELP[] =
 
 /* The redraw rate while the image changes; idle at the target spp. */
 #define FRAME_SECONDS (1.0 / 60.0)
+
+/* What the window shows of the frame: the image, or a heat map of its estimated error or of its
+ * difference from the reference (display modes: the image accumulates on underneath). */
+enum show {
+    SHOW_IMAGE,
+    SHOW_ERROR,
+    SHOW_DIFFERENCE,
+};
 
 /* What the window shows: it is redrawn when this changes. */
 struct look {
@@ -64,8 +76,9 @@ struct viewer {
     const struct ao_frame *shown;    /* on screen; valid until the next ao_render_take_frame */
     double shown_at;                 /* glfwGetTime() when it was taken */
     bool show_hud, show_help, save;
-    bool show_error;                 /* the estimated error map instead of the image */
-    float *heat;                     /* its colours, allocated on first use */
+    enum show show;
+    float *heat;                     /* the heat map's colours, allocated on first use */
+    struct ao_progress progress;     /* the time-left estimate, fed the frames taken */
     int drag;                        /* mouse button held over the window, or -1 */
     double cursor_x, cursor_y;
     double orbit_x, orbit_y, pan_x, pan_y, wheel;   /* mouse input not yet applied */
@@ -120,7 +133,20 @@ static void on_char(GLFWwindow *window, unsigned int codepoint)
     case '+': case '=': s.spppp = scale_spppp(v, s.spppp, 2); break;
     case '-': s.spppp = scale_spppp(v, s.spppp, 0); break;
     case 'g': s.adaptive = !s.adaptive; break;
-    case 'e': v->show_error = !v->show_error; v->reupload = true; return;
+    case 'n': s.output = s.output == AO_OUTPUT_NORMALS ? AO_OUTPUT_AO : AO_OUTPUT_NORMALS; break;
+    case 'f': s.shading = s.shading == AO_SHADING_FLAT ? AO_SHADING_PHONG : AO_SHADING_FLAT; break;
+    case 'e': v->show = v->show == SHOW_ERROR ? SHOW_IMAGE : SHOW_ERROR; v->reupload = true; return;
+    case 'd':
+        if (!v->info->reference) {
+            if (!v->info->quiet) {
+                printf("aoview: D shows the difference from --reference; none was given\n");
+                fflush(stdout);
+            }
+            return;
+        }
+        v->show = v->show == SHOW_DIFFERENCE ? SHOW_IMAGE : SHOW_DIFFERENCE;
+        v->reupload = true;
+        return;
     case 'r': ao_render_restart(v->render); return;
     case 's': v->save = true; return;
     case '?': v->show_help = !v->show_help; return;
@@ -238,8 +264,12 @@ static struct ao_hud_status status(const struct viewer *v, const struct ao_setti
                               .spppp = settings->spppp, .adaptive = settings->adaptive,
                               .paused = settings->paused};
     s.seconds = s.info.seconds;
-    if (!s.paused && !s.info.done)
-        s.seconds += glfwGetTime() - v->shown_at;
+    s.seconds_left = ao_progress_left(&v->progress, &s.info);
+    if (!s.paused && !s.info.done) {
+        double since = glfwGetTime() - v->shown_at;
+        s.seconds += since;
+        s.seconds_left = isnan(s.seconds_left) ? NAN : fmax(0.0, s.seconds_left - since);
+    }
     return s;
 }
 
@@ -281,9 +311,10 @@ static void draw(struct viewer *v, const struct look *look, const struct ao_hud_
         char text[sizeof look->status];
         ao_hud_format(s, "\n", text, sizeof text);
         ao_hud_draw(v->hud, text, (int)(8 * scale), (int)(8 * scale), scale, look->width, look->height);
-        if (v->show_error)
-            ao_heatmap_draw_bar(v->hud, "estimated error", look->width - (int)(8 * scale), (int)(8 * scale), scale,
-                                look->width, look->height);
+        if (v->show != SHOW_IMAGE)
+            ao_heatmap_draw_bar(v->hud, v->show == SHOW_ERROR ? &ao_heatmap_error : &ao_heatmap_difference,
+                                v->show == SHOW_ERROR ? "estimated error" : "|image - reference|",
+                                look->width - (int)(8 * scale), (int)(8 * scale), scale, look->width, look->height);
         draw_chart(v, look, content_scale);
     }
 }
@@ -395,19 +426,22 @@ static enum ao_window_result open_window(struct viewer *v)
     return AO_WINDOW_OK;
 }
 
-/* Uploads the frame on screen as the view shows it: the image, or its error map; false when the
- * upload failed. */
+/* Uploads the frame on screen as the view shows it: the image, its error map or its difference
+ * from the reference; false when the upload failed. */
 static bool upload(struct viewer *v)
 {
     const struct ao_frame *f = v->shown;
     v->dirty = true;
-    if (!v->show_error)
+    if (v->show == SHOW_IMAGE)
         return ao_display_upload(v->display, f->rgb, f->width, f->height);
     if (!v->heat && !(v->heat = malloc(3 * sizeof *v->heat * (size_t)f->width * (size_t)f->height))) {
-        fprintf(stderr, "aoview: out of memory for the error map\n");
+        fprintf(stderr, "aoview: out of memory for the heat map\n");
         return false;
     }
-    ao_heatmap_tiles(f, v->heat);
+    if (v->show == SHOW_ERROR)
+        ao_heatmap_tiles(f, v->heat);
+    else
+        ao_heatmap_pixels(f->rgb, v->info->reference, f->width, f->height, v->heat);
     return ao_display_upload(v->display, v->heat, f->width, f->height);
 }
 
@@ -425,6 +459,7 @@ static bool take_frame(struct viewer *v)
     v->shown_at = glfwGetTime();
     v->reupload = false;
     ao_chart_add(&v->chart, &f->info);
+    ao_progress_add(&v->progress, &f->info);
     return upload(v);
 }
 
@@ -483,7 +518,8 @@ enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_wi
         return AO_WINDOW_NO_DISPLAY;
     }
     set_glfw_running(true);
-    struct viewer v = {.render = render, .info = info, .show_hud = true, .drag = -1};
+    struct viewer v = {.render = render, .info = info, .show_hud = true, .drag = -1,
+                       .show = info->difference && info->reference ? SHOW_DIFFERENCE : SHOW_IMAGE};
     enum ao_window_result result = open_window(&v);
     if (result == AO_WINDOW_OK)
         result = loop(&v);

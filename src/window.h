@@ -14,6 +14,8 @@ struct ao_window_info {
     bool quiet;              /* no screenshot names on stdout */
     uint64_t seed;           /* for the saved EXR's header */
     bool save_exr;           /* S saves aoview-N.exr beside the PNG instead of aoview-N.pfm */
+    const float *reference;  /* --reference for the difference view (the frames' size), or NULL */
+    bool difference;         /* start in the difference view (needs reference) */
 };
 
 /* How ao_window_run ended. */

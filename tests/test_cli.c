@@ -215,6 +215,34 @@ static void test_exr_and_save_format(void **state)
     REJECT("--save-format: expected pfm or exr", "'png'", "--save-format", "png");
 }
 
+/* --time, --view and --shading: values, defaults, and difference's need of a reference. */
+static void test_view_options(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE_NONE(&o));
+    assert_true(o.time_limit == 0.0);
+    assert_int_equal(o.view, AO_VIEW_MODE_AO);
+    assert_int_equal(o.shading, AO_SHADING_PHONG);
+    assert_true(PARSE(&o, "--time", "2.5", "--view", "normals", "--shading", "flat"));
+    assert_true(o.time_limit == 2.5);
+    assert_int_equal(o.view, AO_VIEW_MODE_NORMALS);
+    assert_int_equal(o.shading, AO_SHADING_FLAT);
+    assert_true(PARSE(&o, "--view=difference", "--reference=r.pfm", "--shading=phong", "--view=ao", "--time=1e-3"));
+    assert_int_equal(o.view, AO_VIEW_MODE_AO);
+    assert_int_equal(o.shading, AO_SHADING_PHONG);
+    assert_true(o.time_limit == 1e-3);
+    assert_true(PARSE(&o, "--reference", "r.pfm", "--view", "difference"));
+    assert_int_equal(o.view, AO_VIEW_MODE_DIFFERENCE);
+    const char *times[] = {"0", "-1", "nan", "inf", "", "1s", " 1", "1e9", "1e-400"};
+    for (size_t i = 0; i < sizeof times / sizeof times[0]; i++)
+        REJECT("--time", times[i], "--time", (char *)times[i]);
+    REJECT("--view: expected ao, normals or difference", "'Normals'", "--view", "Normals");
+    REJECT("--shading: expected phong or flat", "'smooth'", "--shading", "smooth");
+    REJECT("--view difference", "--reference", "--view", "difference");
+    REJECT("--view", "missing value", "--view");
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -222,6 +250,7 @@ static void test_usage_lists_every_option(void **state)
     const char *names[] = {"--headless", "-o, --output", "--spp", "--spppp", "--sampling",
                            "--aa", "--no-aa", "--size", "--threads", "--seed", "--ao-distance",
                            "--stats", "--reference", "-q, --quiet", "-h, --help", "--version",
+                           "--time", "--view", "--shading", "N normals", "F flat/Phong", "D difference",
                            "default 256", "default cosine", "640x480", "Esc"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         assert_non_null(strstr(u, names[i]));
@@ -240,6 +269,7 @@ int main(void)
         cmocka_unit_test(test_bad_structure),
         cmocka_unit_test(test_adaptive_options),
         cmocka_unit_test(test_exr_and_save_format),
+        cmocka_unit_test(test_view_options),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

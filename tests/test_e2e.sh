@@ -81,6 +81,24 @@ status=$?
 "$bin" --headless -q --size 40x30 --spp 6 --spppp 2 --threads 2 --seed 9 "$root/assets/scenes/spheres.scene" -o t2.pfm
 cmp -s t1.pfm t2.pfm || fail "--threads 1 and 2 differ"
 
+# Views: --view difference writes the heat map as PNG and keeps the PFM the linear AO image, the
+# very one a plain run makes; --view normals and --shading flat render; --time ends a run that
+# --spp alone would keep going for hours.
+diff_args=(--headless -q --size 32x24 --spp 8 --spppp 4 "$root/assets/scenes/bunny.scene")
+"$bin" "${diff_args[@]}" --view difference --reference ref.pfm -o diff.png || fail "--view difference failed"
+[ "$(head -c 8 diff.png 2>/dev/null | od -An -tx1 | tr -d ' ')" = 89504e470d0a1a0a ] || fail "diff.png is not a PNG"
+"$bin" "${diff_args[@]}" -o plain.png && cmp -s plain.png diff.png && fail "--view difference wrote the AO image"
+"$bin" "${diff_args[@]}" --view difference --reference ref.pfm -o diff.pfm || fail "--view difference to PFM failed"
+"$bin" "${diff_args[@]}" -o plain.pfm && cmp -s plain.pfm diff.pfm || fail "--view difference changed the PFM"
+"$bin" "${diff_args[@]}" --view normals --shading flat -o normals.pfm && pfm_check normals.pfm 32 24 ||
+  fail "--view normals --shading flat failed"
+cmp -s plain.pfm normals.pfm && fail "--view normals wrote the AO image"
+start=$SECONDS
+"$bin" --headless -q --size 32x24 --spp 100000000 --time 0.5 "$root/assets/scenes/spheres.scene" -o timed.pfm ||
+  fail "--time run failed"
+[ $((SECONDS - start)) -le 20 ] || fail "--time 0.5 took $((SECONDS - start)) s"
+pfm_check timed.pfm 32 24 || fail "timed.pfm is not a clean 32x24 PFM"
+
 # Bad input: expect_error STATUS TEXT ARGS...
 expect_error() {
   local want=$1 text=$2
@@ -101,6 +119,11 @@ expect_error 2 --size --size 0x5
 expect_error 2 --size --size 100000x100000
 expect_error 2 --sampling --sampling foo
 expect_error 2 --bogus --bogus
+expect_error 2 "--view difference: needs --reference" --view difference
+expect_error 2 --view --view depth
+expect_error 2 --shading --shading smooth
+expect_error 2 --time --time 0
+expect_error 2 --time --time -3
 expect_error 1 nowhere.scene nowhere.scene
 expect_error 1 "$root/assets" "$root/assets"
 printf 'camera eye 0 1 4 target 0 0 0\nsphere center 0 0 0 radius -1\n' > neg.scene

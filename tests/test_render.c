@@ -6,6 +6,7 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -169,6 +170,19 @@ static void test_restart_resets_and_settings_apply(void **state)
     frame = ao_render_take_frame(r);
     assert_int_equal(frame->info.restarts, 2);
     assert_int_equal(frame->info.pass, 4);
+    /* The normals view and flat shading are other estimates: each restarts. */
+    settings.output = AO_OUTPUT_NORMALS;
+    ao_render_set_settings(r, &settings);
+    assert_true(ao_render_wait(r));
+    frame = ao_render_take_frame(r);
+    assert_int_equal(frame->info.restarts, 3);
+    assert_int_equal(frame->info.output, AO_OUTPUT_NORMALS);
+    settings.shading = AO_SHADING_FLAT;
+    ao_render_set_settings(r, &settings);
+    assert_true(ao_render_wait(r));
+    frame = ao_render_take_frame(r);
+    assert_int_equal(frame->info.restarts, 4);
+    assert_int_equal(frame->info.shading, AO_SHADING_FLAT);
     ao_render_destroy(r);
     ao_tracer_destroy(tracer);
     ao_scene_finish(&scene);
@@ -279,6 +293,164 @@ static void test_target_error_stops_the_run(void **state)
     }
 }
 
+/* --time: a run with a target it would take hours to reach stops at the first pass boundary after
+ * the limit (passes of one sample at 64x48 take milliseconds; 5 s allows a loaded machine). */
+static void test_time_limit_stops_the_run(void **state)
+{
+    (void)state;
+    struct counter counter = {0};
+    struct ao_frame_info info;
+    struct ao_render_config config = {.width = 64, .height = 48, .threads = 2, .seed = 9,
+                                      .target_spp = 1u << 30, .time_limit = 0.3};
+    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 1};
+    free(render_scene(SCENE, config, settings, &info, &counter));
+    assert_true(info.done);
+    assert_true(info.time_limit == 0.3);
+    assert_true(info.seconds >= 0.3 && info.seconds < 5.0);
+    assert_true(info.spp < config.target_spp);
+    assert_int_equal(counter.last_spp, info.spp);
+}
+
+/* A 2x2 quad (front side up) seen from straight above, over a coloured background. */
+static const char QUAD_FROM_ABOVE[] = "camera eye 0 5 0 target 0 0 0 up 0 0 -1 fov 40\n"
+                                      "background 0.2 0.3 0.4\n"
+                                      "quad corner -1 0 -1 edge1 0 0 2 edge2 2 0 0 albedo 0.6\n";
+
+/* The normals view: (n + 1) / 2 of the upward normal, (0.5, 1, 0.5), wherever the quad fills the
+ * pixel (here the middle; it spans 2 / (2 * 5 tan 20 deg) = 55 % of the image), and black, not the
+ * background, where the eye rays miss (the corners), with AA on and any number of passes. */
+static void test_normals_view_of_a_quad_from_above(void **state)
+{
+    (void)state;
+    struct counter counter = {0};
+    struct ao_frame_info info;
+    struct ao_render_config config = {.width = 32, .height = 32, .threads = 2, .seed = 4, .target_spp = 8};
+    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 2,
+                                   .output = AO_OUTPUT_NORMALS};
+    float *rgb = render_scene(QUAD_FROM_ABOVE, config, settings, &info, &counter);
+    assert_int_equal(info.output, AO_OUTPUT_NORMALS);
+    assert_int_equal(info.shadow_rays, 0); /* no occlusion rays for normals */
+    for (int j = 12; j < 20; j++)
+        for (int i = 12; i < 20; i++) {
+            const float *p = rgb + 3 * (j * 32 + i);
+            assert_float_equal(p[0], 0.5f, 1e-6f);
+            assert_float_equal(p[1], 1.0f, 1e-6f);
+            assert_float_equal(p[2], 0.5f, 1e-6f);
+        }
+    int corners[] = {0, 31, 31 * 32, 32 * 32 - 1};
+    for (int k = 0; k < 4; k++)
+        for (int c = 0; c < 3; c++)
+            assert_true(rgb[3 * corners[k] + c] == 0.0f);
+    free(rgb);
+}
+
+/* A coarse sphere mesh: the unit octahedron, each vertex's normal its own direction, so that the
+ * Phong normal at a point p of a face is p / |p| and the face normal (+-1, +-1, +-1) / sqrt 3. */
+static const char OCTAHEDRON[] = "v 1 0 0\nv -1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nv 0 0 -1\n"
+                                 "vn 1 0 0\nvn -1 0 0\nvn 0 1 0\nvn 0 -1 0\nvn 0 0 1\nvn 0 0 -1\n"
+                                 "f 1//1 3//3 5//5\nf 5//5 3//3 2//2\nf 2//2 3//3 6//6\nf 6//6 3//3 1//1\n"
+                                 "f 5//5 4//4 1//1\nf 2//2 4//4 5//5\nf 6//6 4//4 2//2\nf 1//1 4//4 6//6\n";
+
+/* Writes OCTAHEDRON into a fresh directory and the scene text that looks down on it into text. */
+static void octahedron_scene(char *dir, size_t dir_size, char *text, size_t text_size)
+{
+    snprintf(dir, dir_size, "/tmp/aoview-render-XXXXXX");
+    assert_non_null(mkdtemp(dir));
+    char path[128];
+    snprintf(path, sizeof path, "%s/octahedron.obj", dir);
+    FILE *f = fopen(path, "w");
+    assert_non_null(f);
+    assert_true(fputs(OCTAHEDRON, f) >= 0);
+    assert_int_equal(fclose(f), 0);
+    snprintf(text, text_size, "camera eye 0 4 0 target 0 0 0 up 0 0 -1 fov 40\nmesh %s\n", path);
+}
+
+static void remove_octahedron(const char *dir)
+{
+    char path[128];
+    snprintf(path, sizeof path, "%s/octahedron.obj", dir);
+    assert_int_equal(remove(path), 0);
+    assert_int_equal(remove(dir), 0);
+}
+
+/* Flat shading gives the face normal, Phong the interpolated one, at a known point; spheres keep
+ * their exact normal either way. */
+static void test_flat_is_the_face_normal_and_phong_interpolates(void **state)
+{
+    (void)state;
+    char dir[64], text[256];
+    octahedron_scene(dir, sizeof dir, text, sizeof text);
+    struct ao_scene scene;
+    assert_true(ao_scene_parse(&scene, text, "octahedron.scene"));
+    remove_octahedron(dir);
+    struct ao_tracer *tracer = ao_tracer_create(&scene);
+    assert_non_null(tracer);
+    ao_tracer_thread_init();
+    /* Straight down onto (0.3, 0.5, 0.2) of the face x + y + z = 1. */
+    struct ao_vec3 org = ao_vec3_make(0.3f, 5.0f, 0.2f), dir_down = ao_vec3_make(0.0f, -1.0f, 0.0f);
+    struct ao_packet eye = {.count = 1, .org_x = {org.x}, .org_y = {org.y}, .org_z = {org.z},
+                            .dir_x = {0.0f}, .dir_y = {-1.0f}, .dir_z = {0.0f}, .tfar = {INFINITY}};
+    struct ao_hit hit;
+    ao_tracer_intersect(tracer, &eye, &hit);
+    assert_true(hit.t < INFINITY && !hit.sphere);
+    struct ao_surface flat, phong;
+    ao_surface_from_hit(&scene, AO_SHADING_FLAT, org, dir_down, &hit, &flat);
+    ao_surface_from_hit(&scene, AO_SHADING_PHONG, org, dir_down, &hit, &phong);
+    float third = 1.0f / sqrtf(3.0f), p = sqrtf(0.3f * 0.3f + 0.5f * 0.5f + 0.2f * 0.2f);
+    assert_float_equal(flat.ns.x, third, 1e-5f);
+    assert_float_equal(flat.ns.y, third, 1e-5f);
+    assert_float_equal(flat.ns.z, third, 1e-5f);
+    assert_true(flat.ns.x == flat.ng.x && flat.ns.y == flat.ng.y && flat.ns.z == flat.ng.z);
+    assert_float_equal(phong.ns.x, 0.3f / p, 1e-5f);
+    assert_float_equal(phong.ns.y, 0.5f / p, 1e-5f);
+    assert_float_equal(phong.ns.z, 0.2f / p, 1e-5f);
+    ao_tracer_destroy(tracer);
+    ao_scene_finish(&scene);
+}
+
+/* The normals view of the octahedron from above without AA: flat, every pixel is black (a miss) or
+ * one of the four upper faces' colours; Phong, most of the hit pixels are neither, and the two
+ * images differ by more than 0.02 on average over the hit pixels (the normals differ by up to
+ * 55 degrees, and the colours by 0.1 or more over most of the faces). */
+static void test_flat_and_phong_normals_views_differ(void **state)
+{
+    (void)state;
+    char dir[64], text[256];
+    octahedron_scene(dir, sizeof dir, text, sizeof text);
+    float *image[2];
+    for (int shading = 0; shading < 2; shading++) {
+        struct counter counter = {0};
+        struct ao_frame_info info;
+        struct ao_render_config config = {.width = 24, .height = 24, .threads = 2, .seed = 4, .target_spp = 1};
+        struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = false, .spppp = 1,
+                                       .output = AO_OUTPUT_NORMALS, .shading = (enum ao_shading)shading};
+        image[shading] = render_scene(text, config, settings, &info, &counter);
+    }
+    remove_octahedron(dir);
+    const float *phong = image[AO_SHADING_PHONG], *flat = image[AO_SHADING_FLAT];
+    float lo = 0.5f - 0.5f / sqrtf(3.0f), hi = 0.5f + 0.5f / sqrtf(3.0f), top = hi;
+    int hits = 0, off_face = 0;
+    double difference = 0.0;
+    for (int k = 0; k < 24 * 24; k++) {
+        const float *f = flat + 3 * k, *g = phong + 3 * k;
+        if (f[0] == 0.0f && f[1] == 0.0f && f[2] == 0.0f) {
+            assert_true(g[0] == 0.0f && g[1] == 0.0f && g[2] == 0.0f);
+            continue;
+        }
+        hits++;
+        assert_float_equal(f[1], top, 1e-5f);
+        assert_true(fabsf(f[0] - lo) < 1e-5f || fabsf(f[0] - hi) < 1e-5f);
+        assert_true(fabsf(f[2] - lo) < 1e-5f || fabsf(f[2] - hi) < 1e-5f);
+        off_face += fabsf(g[1] - top) > 1e-3f;
+        difference += (fabs((double)f[0] - g[0]) + fabs((double)f[1] - g[1]) + fabs((double)f[2] - g[2])) / 3.0;
+    }
+    assert_true(hits > 100);
+    assert_true(off_face > hits / 2);
+    assert_true(difference / hits > 0.02);
+    free(image[0]);
+    free(image[1]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -291,6 +463,10 @@ int main(void)
         cmocka_unit_test(test_auto_passes_start_at_one_and_double),
         cmocka_unit_test(test_adaptive_stops_an_open_plane_after_the_minimum),
         cmocka_unit_test(test_target_error_stops_the_run),
+        cmocka_unit_test(test_time_limit_stops_the_run),
+        cmocka_unit_test(test_normals_view_of_a_quad_from_above),
+        cmocka_unit_test(test_flat_is_the_face_normal_and_phong_interpolates),
+        cmocka_unit_test(test_flat_and_phong_normals_views_differ),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

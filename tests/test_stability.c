@@ -88,7 +88,7 @@ static bool shade(const struct fixture *f, struct ao_vec3 from, struct ao_vec3 t
     ao_tracer_intersect(f->tracer, &eye, &hit);
     if (hit.t == INFINITY)
         return false;
-    ao_surface_from_hit(&f->scene, from, d, &hit, s);
+    ao_surface_from_hit(&f->scene, AO_SHADING_PHONG, from, d, &hit, s);
     return true;
 }
 

@@ -1,13 +1,14 @@
 #!/bin/bash
 # window suite: the real viewer in a real X window under Xvfb, driven by xdotool.
-#   test_window.sh keys    presses C, U, A, S, +, R, G, E, Esc in turn and checks the title, the
-#                          screenshot files (E: the error map) and a clean exit within a second
-#                          of Esc
+#   test_window.sh keys    presses C, U, A, S, +, R, G, E, N, F, D, Esc in turn and checks the
+#                          title, the screenshot files (E: the error map; N: the normals view,
+#                          F: flat normals on the scene's octahedron; D without a reference:
+#                          nothing but a message) and a clean exit within a second of Esc
 #   test_window.sh stress  200 random keys, drags and resizes in a few seconds, then a screenshot
 #                          (no NaN in its PFM) and a clean exit
 #   test_window.sh chart   with --reference: a run in each sampling mode (H, then U, then C) leaves
 #                          a curve in its colour on the screen, read from Xvfb's framebuffer file;
-#                          F2 hides the chart
+#                          F2 hides the chart; D shows the difference heat map
 # Needs AO_BINARY and AO_SOURCE_ROOT (tests/meson.build sets both); exits 77 when Xvfb or
 # xdotool is missing.
 set -u
@@ -88,8 +89,9 @@ assert not bad, '%d non-finite values' % len(bad)
 EOF
 }
 
-# The number of distinct colours in PNG $1 (8-bit RGB, any filter), read with zlib alone.
-png_colours() {
+# The number of distinct colours in PNG $1 (8-bit RGB, any filter), read with zlib alone, and the
+# share of its pixels that are not grey (channels more than 24 apart).
+png_stats() {
     python3 - "$1" <<'EOF'
 import struct, sys, zlib
 data = open(sys.argv[1], 'rb').read()
@@ -101,7 +103,7 @@ while pos < len(data):
     elif kind == b'IDAT':
         idat += data[pos + 8:pos + 8 + n]
     pos += 12 + n
-raw, stride, prev, colours = zlib.decompress(idat), 3 * w, bytearray(3 * w), set()
+raw, stride, prev, colours, coloured = zlib.decompress(idat), 3 * w, bytearray(3 * w), set(), 0
 for y in range(h):
     kind, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
     for x in range(stride):
@@ -111,8 +113,32 @@ for y in range(h):
                 a if abs(p - a) <= abs(p - b) and abs(p - a) <= abs(p - c) else b if abs(p - b) <= abs(p - c) else c][kind]
         line[x] = (line[x] + pred) & 255
     colours.update(bytes(line[i:i + 3]) for i in range(0, stride, 3))
+    coloured += sum(max(line[i:i + 3]) - min(line[i:i + 3]) > 24 for i in range(0, stride, 3))
     prev = line
-print(len(colours))
+print(len(colours), coloured / (w * h))
+EOF
+}
+png_colours() { png_stats "$1" | cut -d' ' -f1; }
+
+# Counts the pixels of PFM $1 within 1e-4 of the colour ($2, $3, $4), and those that differ by more
+# than 0.01 in some channel from PFM $5 (or 0 without it); then the mean absolute difference.
+pfm_count() {
+    python3 - "$@" <<'EOF'
+import struct, sys
+def read(path):
+    header = open(path, 'rb').read().split(b'\n', 3)
+    w, h = map(int, header[1].split())
+    return struct.unpack('<' + 'f' * (3 * w * h), header[3])
+a = read(sys.argv[1])
+colour = [float(x) for x in sys.argv[2:5]]
+pixels = [a[i:i + 3] for i in range(0, len(a), 3)]
+same = sum(all(abs(p[c] - colour[c]) < 1e-4 for c in range(3)) for p in pixels)
+differ, mean = 0, 0.0
+if len(sys.argv) > 5:
+    b = read(sys.argv[5])
+    differ = sum(any(abs(a[i + c] - b[i + c]) > 0.01 for c in range(3)) for i in range(0, len(a), 3))
+    mean = sum(abs(x - y) for x, y in zip(a, b)) / len(a)
+print(same, differ, mean)
 EOF
 }
 
@@ -150,15 +176,44 @@ work=$(mktemp -d)
 trap 'kill "$pid" 2>/dev/null; rm -rf "$work" "$AO_FBDIR"' EXIT
 cd "$work" || exit 1
 args=()
+scene=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
+if [ "$mode" = keys ]; then
+    # The spheres and, for F, a coarse mesh: an octahedron whose vertex normals point outwards.
+    cat >octahedron.obj <<'EOF'
+v 1 0 0
+v -1 0 0
+v 0 1 0
+v 0 -1 0
+v 0 0 1
+v 0 0 -1
+vn 1 0 0
+vn -1 0 0
+vn 0 1 0
+vn 0 -1 0
+vn 0 0 1
+vn 0 0 -1
+f 1//1 3//3 5//5
+f 5//5 3//3 2//2
+f 2//2 3//3 6//6
+f 6//6 3//3 1//1
+f 5//5 4//4 1//1
+f 2//2 4//4 5//5
+f 6//6 4//4 2//2
+f 1//1 4//4 6//6
+EOF
+    { cat "$scene"; echo "mesh octahedron.obj scale 0.4 translate 1.2 0.4 0.8"; } >keys.scene
+    scene=$work/keys.scene
+fi
 if [ "$mode" = chart ]; then
     W=320
     H=240
     "$AO_BINARY" --headless -q --size ${W}x$H --spp 64 --spppp 16 -o ref.pfm \
-        "$AO_SOURCE_ROOT/assets/scenes/spheres.scene" || { echo "FAIL: no reference"; exit 1; }
+        "$scene" || { echo "FAIL: no reference"; exit 1; }
     args=(--reference ref.pfm)
 fi
-"$AO_BINARY" --size ${W}x$H --spp 1000000 --spppp 1 --threads 2 --sampling hemisphere "${args[@]}" \
-    "$AO_SOURCE_ROOT/assets/scenes/spheres.scene" >stdout 2>stderr &
+# Adaptive sampling off, so that G turns it on.
+"$AO_BINARY" --size ${W}x$H --spp 1000000 --spppp 1 --threads 2 --sampling hemisphere --adaptive off "${args[@]}" \
+    "$scene" >stdout 2>stderr &
 pid=$!
 wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window appeared"
 wid=${wid%%$'\n'*}
@@ -213,6 +268,32 @@ if [ "$mode" = keys ]; then
     check_screenshot 3
     colours=$(png_colours "$work/aoview-3.png")
     [ "$colours" -gt 80 ] || fail "E again did not show the image ($colours colours)"
+
+    # N: the normals view, a restart; the ground shows (n + 1) / 2 = (0.5, 1, 0.5) exactly (AA is
+    # off since A above, so the images below are exact pass after pass).
+    press n
+    wait_title " — AA off — normals — "
+    sleep 0.5
+    press s
+    check_screenshot 4
+    read -r ground _ _ < <(pfm_count "$work/aoview-4.pfm" 0.5 1 0.5)
+    [ "$ground" -ge $((W * H / 4)) ] || fail "N did not show the normals ($ground ground pixels)"
+    # F: flat normals; only the octahedron's pixels change, and a few hundred of them show.
+    press f
+    wait_title " — normals — flat — "
+    sleep 0.5
+    press s
+    check_screenshot 5
+    read -r _ changed _ < <(pfm_count "$work/aoview-5.pfm" 0.5 1 0.5 "$work/aoview-4.pfm")
+    [ "$changed" -ge 50 ] || fail "F did not change the normals ($changed pixels changed)"
+    # D without a reference: a message on stdout, and the same image as before.
+    press d
+    sleep 0.5
+    grep -q "D shows the difference from --reference; none was given" stdout || fail "D without a reference said nothing"
+    kill -0 "$pid" 2>/dev/null || fail "D without a reference killed the viewer"
+    press s
+    check_screenshot 6
+    cmp -s "$work/aoview-5.png" "$work/aoview-6.png" || fail "D without a reference changed the image"
 elif [ "$mode" = chart ]; then
     # The legend shows every mode's colour from the start; each run's curve adds to its mode's
     # count. Each run lasts 1.5 s: scores of frames, a line across most of the plot.
@@ -236,9 +317,25 @@ elif [ "$mode" = chart ]; then
     sleep 0.5
     read -r u3 h3 c3 < <(chart_colours)
     [ $((u3 + h3 + c3)) -le 3 ] || fail "F2 left the chart on screen ($u3 $h3 $c3)"
+    # D: the difference heat map, in colour nearly everywhere (the image itself is mostly grey);
+    # S still saves the linear image as the PFM, close to the reference (a heat map's colours are
+    # not: its darkest is 0.06 in blue, the image about 0.5 to 1).
+    press s
+    check_screenshot 1
+    press d
+    sleep 0.5
+    press s
+    check_screenshot 2
+    read -r _ image_share < <(png_stats "$work/aoview-1.png")
+    read -r _ heat_share < <(png_stats "$work/aoview-2.png")
+    echo "coloured share: image $image_share, difference $heat_share"
+    python3 -c "import sys; sys.exit(not (float('$heat_share') > 0.8 and float('$image_share') < 0.5))" ||
+        fail "D did not show the difference heat map"
+    read -r _ _ mean < <(pfm_count "$work/aoview-2.pfm" 0 0 0 "$work/ref.pfm")
+    python3 -c "import sys; sys.exit(not float('$mean') < 0.05)" || fail "D changed the saved PFM (mean difference $mean)"
 else
     # Random keys (no S, Q or Esc), drags, wheel steps and resizes, as fast as xdotool goes.
-    keys=(u h c a space r plus minus equal KP_Add KP_Subtract F1 F2 question)
+    keys=(u h c a n f d e g space r plus minus equal KP_Add KP_Subtract F1 F2 question)
     RANDOM=1
     for i in $(seq 200); do
         case $((RANDOM % 4)) in
