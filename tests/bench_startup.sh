@@ -1,10 +1,11 @@
 #!/bin/bash
 # Benchmark: time to the first result. hyperfine times, for each aoview binary given (the built one
 # and, say, an older build to compare), `--version`, a 1x1 headless PFM of sphere-on-plane (start,
-# scene, BVH and output with nothing to trace), and bunny at 256x256 with 16 spp as PFM and as PNG
-# (the PNG through OSMesa); and the floor: BARE, a program linked to Embree alone that creates a
-# device. Rounds of all commands in turn (the machine may be shared), then each command's median
-# wall time over all runs, its quartiles, its mean CPU time and its excess over BARE's median.
+# scene, BVH and output with nothing to trace) and the same as PNG (plus OSMesa's load, context and
+# shaders), and bunny at 256x256 with 16 spp as PFM and as PNG; and the floor: BARE, a program
+# linked to Embree alone that creates a device. Rounds of all commands in turn (the machine may be
+# shared), then each command's median wall time over all runs, its quartiles, its mean CPU time and
+# its excess over BARE's median.
 # Prints figures; asserts nothing. Exits 77 without hyperfine or python3.
 # Run: meson test -C build --benchmark startup -v
 #  or: bash tests/bench_startup.sh build/tests/bench_embree_start build/aoview OTHER/aoview
@@ -25,6 +26,7 @@ commands=("$bare")
 for aoview in "$@"; do
     commands+=("$aoview --version"
                "$aoview --headless -q --size 1x1 --spp 1 -o $work/tiny.pfm $scenes/sphere-on-plane.scene"
+               "$aoview --headless -q --size 1x1 --spp 1 -o $work/tiny.png $scenes/sphere-on-plane.scene"
                "$aoview --headless -q --size 256x256 --spp 16 -o $work/bunny.pfm $scenes/bunny.scene"
                "$aoview --headless -q --size 256x256 --spp 16 -o $work/bunny.png $scenes/bunny.scene")
 done
