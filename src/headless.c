@@ -22,7 +22,7 @@ typedef GLboolean (GLAPIENTRY *make_current_fn)(OSMesaContext context, void *buf
 typedef OSMESAproc (GLAPIENTRY *get_proc_address_fn)(const char *name);
 typedef void (GLAPIENTRY *destroy_context_fn)(OSMesaContext context);
 
-/* _Generic leaves its operand unevaluated: the header's declarations are checked, not linked. */
+/* _Generic leaves its operand unevaluated: the header's declarations are checked, not linked to. */
 #define SAME_TYPE(function, type) _Static_assert(_Generic(&function, type : 1, default : 0), #function)
 SAME_TYPE(OSMesaCreateContextAttribs, create_context_attribs_fn);
 SAME_TYPE(OSMesaMakeCurrent, make_current_fn);
@@ -59,8 +59,8 @@ static bool find(void *library, const char *name, void *function)
     return true;
 }
 
-/* Opens the first of library_names that loads and finds its functions; otherwise leaves dlerror's
- * reasons in osmesa.error. Runs once. */
+/* Opens the first of library_names that loads and finds its functions in it; otherwise leaves
+ * dlerror's reasons (each name's, or the missing function's) in osmesa.error. Runs once. */
 static void load(void)
 {
     void *library = NULL;
