@@ -8,8 +8,9 @@
 #include "heatmap.h"
 
 /* Renders rgb (linear, width x height, top row first) through the display shader in an OSMesa
- * core-profile context, reads it back and writes path as PNG; false with one message on failure.
- * Any one thread at a time; uses no window system. */
+ * core-profile context, reads it back and writes path as PNG; false with one message on failure,
+ * libOSMesa not loading included (it is opened at the first call and kept). Any one thread at a
+ * time; uses no window system. */
 bool ao_headless_write_png(const char *path, const float *rgb, int width, int height);
 
 /* As ao_headless_write_png for a heat map (heatmap.h's colours on range), with its colour bar,

@@ -9,6 +9,10 @@
 #                                        context", and no headless fallback
 #   test_viewer_faults.sh headless-no-gl33   the same OpenGL under --headless: a PNG fails with
 #                                        one line, a PFM (no OpenGL needed) is still written
+#   test_viewer_faults.sh headless-no-osmesa   libOSMesa shadowed (LD_LIBRARY_PATH) by files that
+#                                        do not load, then by a library without its functions: a PNG
+#                                        fails with one line naming the library and the loader's
+#                                        reason, a PFM is still written
 # Needs AO_BINARY and AO_SOURCE_ROOT; the first two exit 77 without Xvfb (and xdotool).
 set -u
 mode=${1:?mode}
@@ -122,6 +126,30 @@ headless-no-gl33)
         fail "no PFM without OpenGL 3.3"
     [ -s out.pfm ] || fail "out.pfm missing"
     echo "ok: the PFM needs no OpenGL"
+    ;;
+headless-no-osmesa)
+    # Both names headless.c tries: empty files, which the loader refuses ("file too short").
+    mkdir shadow && : >shadow/libOSMesa.so.8 && : >shadow/libOSMesa.so || fail "cannot make the stubs"
+    # A PNG under the shadow: status 1, stderr the one line /$1/, no file left behind.
+    png() {
+        LD_LIBRARY_PATH=$work/shadow "$AO_BINARY" --headless -q --size 40x30 --spp 4 -o out.png "$scene" 2>err.txt
+        status=$?
+        [ "$status" -eq 1 ] || fail "exit status $status for a PNG without OSMesa"
+        one_line "$1"
+        [ -z "$(ls -A | grep -Ev '^(err\.txt|shadow)$')" ] || fail "files left behind: $(ls -A)"
+        echo "ok: $(cat err.txt)"
+    }
+    png '^aoview: out\.png: cannot load OSMesa \(.*/shadow/libOSMesa\.so\.8: .+; .*/shadow/libOSMesa\.so: .+\)$'
+    LD_LIBRARY_PATH=$work/shadow "$AO_BINARY" --headless -q --size 40x30 --spp 4 -o out.pfm "$scene" 2>err.txt ||
+        fail "no PFM without OSMesa"
+    [ -s out.pfm ] || fail "out.pfm missing"
+    rm out.pfm
+    echo "ok: the PFM needs no OSMesa"
+    # A real library under OSMesa's name that lacks its functions: the C library's libm.
+    libm=$(ldd "$AO_BINARY" | awk '$1 == "libm.so.6" { print $3 }')
+    [ -f "$libm" ] || fail "libm.so.6 not found in ldd $AO_BINARY"
+    rm shadow/libOSMesa.so.8 && ln -s "$libm" shadow/libOSMesa.so.8 || fail "cannot link $libm"
+    png '^aoview: out\.png: cannot load OSMesa \(.*libm\.so\.6: undefined symbol: OSMesaCreateContextAttribs\)$'
     ;;
 *)
     echo "unknown mode $mode"
