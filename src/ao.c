@@ -32,24 +32,14 @@ static void random_pairs(uint64_t key, uint64_t first, int n, float *restrict u1
         ao_rng_pair(key, first + (uint64_t)k, &u1[k], &u2[k]);
 }
 
-/* The index-th pair of uniform numbers of the stream `key`, from the context's sequence. */
-static inline void draw_pair(const struct ao_context *ctx, uint64_t key, uint64_t index, float *u1, float *u2)
-{
-    if (ctx->sequence == AO_SEQUENCE_SOBOL)
-        ao_rng_sobol_pair(key, index, u1, u2);
-    else
-        ao_rng_pair(key, index, u1, u2);
-}
-
-/* Pairs first .. first + n - 1 of the stream `key` into u1/u2, from the context's sequence: the
- * random sequence's in one vectorized loop, others one by one. */
+/* Pairs first .. first + n - 1 of the stream `key` into u1/u2, from the context's sequence, each in
+ * one vectorized loop. */
 static void draw_pairs(const struct ao_context *ctx, uint64_t key, uint64_t first, int n, float *u1, float *u2)
 {
-    if (ctx->sequence == AO_SEQUENCE_RANDOM)
-        random_pairs(key, first, n, u1, u2);
+    if (ctx->sequence == AO_SEQUENCE_SOBOL)
+        ao_rng_sobol_pairs(key, first, n, u1, u2);
     else
-        for (int k = 0; k < n; k++)
-            draw_pair(ctx, key, first + (uint64_t)k, &u1[k], &u2[k]);
+        random_pairs(key, first, n, u1, u2);
 }
 
 void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, struct ao_vec3 org,
@@ -260,7 +250,7 @@ static void make_eye_rays(const struct ao_context *ctx, uint64_t stream, uint64_
             ao_rng_pair(ao_rng_key(ctx->seed, index[k], stream), ray, &du[k], &dv[k]);
     else
         for (int k = 0; k < eye->count; k++)
-            draw_pair(ctx, ao_rng_key(ctx->seed, index[k], stream), ray, &du[k], &dv[k]);
+            ao_rng_sobol_pair(ao_rng_key(ctx->seed, index[k], stream), ray, &du[k], &dv[k]);
     const struct ao_view *view = &ctx->view;
     for (int k = 0; k < eye->count; k++) {
         struct ao_vec3 d = ao_camera_ray(view, (float)column[k] + du[k], (float)row[k] + dv[k]);
