@@ -99,12 +99,27 @@ static inline void ao_rng_sobol_pair(uint64_t key, uint64_t sample, float *u1, f
     *u2 = (float)(d1 >> 8) * 0x1.0p-24f;
 }
 
-/* Pairs first .. first + n - 1 of the Sobol stream `key` into u1/u2; one loop that vectorizes. */
+/* The most pairs ao_rng_pairs draws in one call. */
+enum { AO_RNG_LANES = 16 };
+
+/* Pair index[k] of the stream key[k] from `sequence` into u1[k]/u2[k], for k below n (at most
+ * AO_RNG_LANES): loops that vectorize across lanes, whatever their streams and indices. */
 AO_VECTOR_CLONES
-static inline void ao_rng_sobol_pairs(uint64_t key, uint64_t first, int n, float *restrict u1, float *restrict u2)
+static inline void ao_rng_pairs(enum ao_sequence sequence, const uint64_t *restrict key, const uint64_t *restrict index,
+                                int n, float *restrict u1, float *restrict u2)
 {
-    for (int k = 0; k < n; k++)
-        ao_rng_sobol_pair(key, first + (uint64_t)k, &u1[k], &u2[k]);
+    if (sequence == AO_SEQUENCE_SOBOL) {
+        /* Sobol reads the indices' low halves only, which GCC would load as every other word; a
+         * load with gaps keeps the last vector's lanes scalar, all 16 of a packet. Copied out
+         * first, the main loop loads whole vectors. */
+        uint32_t low[AO_RNG_LANES];
+        for (int k = 0; k < n; k++)
+            low[k] = (uint32_t)index[k];
+        for (int k = 0; k < n; k++)
+            ao_rng_sobol_pair(key[k], low[k], &u1[k], &u2[k]);
+    } else
+        for (int k = 0; k < n; k++)
+            ao_rng_pair(key[k], index[k], &u1[k], &u2[k]);
 }
 
 #endif

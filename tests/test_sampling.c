@@ -11,7 +11,6 @@
 
 #include "rng.h"
 #include "sampling.h"
-#include "simd.h"
 
 static const double PI = 3.14159265358979323846;
 
@@ -211,27 +210,16 @@ static void reference_sobol_pair(uint64_t key, uint64_t sample, float *u1, float
     *u2 = (float)(ao_rng_owen(d1, (uint32_t)(seeds >> 32)) >> 8) * 0x1.0p-24f;
 }
 
-/* Pair `sample` of the streams key[0 .. n-1], as the eye jitter draws them: across keys, one loop
- * cloned per vector width as in src/ao.c. */
-AO_VECTOR_CLONES
-static void sobol_pairs_of_keys(const uint64_t *key, uint64_t sample, int n, float *restrict u1, float *restrict u2)
-{
-    for (int k = 0; k < n; k++)
-        ao_rng_sobol_pair(key[k], sample, &u1[k], &u2[k]);
-}
-
-/* Fails naming the first pair of u1/u2 (pair k of `key` at `sample`, for each k below n, with
- * key_step 0 or 1 along the arrays) that differs from the reference in any bit. */
-static void assert_reference_pairs(const uint64_t *key, int key_step, const uint64_t *sample, int sample_step,
-                                   int n, const float *u1, const float *u2)
+/* Fails naming the first of the n pairs u1/u2 (pair index[k] of stream key[k]) that differs from the
+ * reference in any bit. */
+static void assert_reference_pairs(const uint64_t *key, const uint64_t *index, int n, const float *u1, const float *u2)
 {
     for (int k = 0; k < n; k++) {
         float r1, r2;
-        uint64_t kk = key[k * key_step], ss = *sample + (uint64_t)(k * sample_step);
-        reference_sobol_pair(kk, ss, &r1, &r2);
+        reference_sobol_pair(key[k], index[k], &r1, &r2);
         if (memcmp(&r1, &u1[k], sizeof r1) != 0 || memcmp(&r2, &u2[k], sizeof r2) != 0)
-            fail_msg("key %#llx sample %#llx: (%a, %a), the reference gives (%a, %a)", (unsigned long long)kk,
-                     (unsigned long long)ss, (double)u1[k], (double)u2[k], (double)r1, (double)r2);
+            fail_msg("key %#llx index %#llx: (%a, %a), the reference gives (%a, %a)", (unsigned long long)key[k],
+                     (unsigned long long)index[k], (double)u1[k], (double)u2[k], (double)r1, (double)r2);
     }
 }
 
@@ -239,33 +227,38 @@ static void test_vector_sobol_equals_reference(void **state)
 {
     (void)state;
     /* Keys: 0, all ones, and pseudo-random ones (fixed seed); indices from 0, and around 2^31 (the
-     * top bit of the scrambled index), 2^32 (where the sample number is truncated) and 2^40. */
-    enum { KEYS = 66, SPAN = 4096, LANES = 16 };
+     * top bit of the scrambled index), 2^32 (where the sample number is truncated), 2^40 and the
+     * top of the range. Drawn as the AO samples are (one stream, consecutive indices) and as the
+     * eye jitter is (one index, a stream per lane), in calls of every length up to AO_RNG_LANES,
+     * so that the vector loops run at every length and leave every remainder. */
+    enum { KEYS = 66, SPAN = 4096 };
     static const uint64_t STARTS[] = {0, (1ULL << 31) - SPAN / 2, (1ULL << 32) - SPAN / 2, (1ULL << 40) - SPAN / 2,
                                       UINT64_MAX - SPAN + 1};
-    /* Chunk lengths that start the vector loops at every alignment and leave every remainder. */
-    static const int CHUNKS[] = {1, 2, 3, 5, 7, 8, 15, 16, 17, 31, 33, 63, 64, 65, 127};
-    enum { CHUNK_COUNT = sizeof CHUNKS / sizeof CHUNKS[0] };
+    enum { START_COUNT = sizeof STARTS / sizeof STARTS[0] };
     uint64_t keys[KEYS] = {0, UINT64_MAX};
     for (int j = 2; j < KEYS; j++)
         keys[j] = ao_rng_mix(0x243f6a8885a308d3ULL + (uint64_t)j);
-    static float u1[SPAN], u2[SPAN];
+    uint64_t key[AO_RNG_LANES], index[AO_RNG_LANES];
+    float u1[AO_RNG_LANES], u2[AO_RNG_LANES];
     for (int j = 0; j < KEYS; j++)
-        for (size_t s = 0; s < sizeof STARTS / sizeof STARTS[0]; s++)
+        for (int s = 0; s < START_COUNT; s++)
             for (int done = 0, c = j; done < SPAN; c++) {
-                int n = CHUNKS[c % CHUNK_COUNT] < SPAN - done ? CHUNKS[c % CHUNK_COUNT] : SPAN - done;
-                uint64_t first = STARTS[s] + (uint64_t)done;
-                ao_rng_sobol_pairs(keys[j], first, n, u1, u2);
-                assert_reference_pairs(&keys[j], 0, &first, 1, n, u1, u2);
+                int n = 1 + c % AO_RNG_LANES < SPAN - done ? 1 + c % AO_RNG_LANES : SPAN - done;
+                for (int k = 0; k < n; k++)
+                    key[k] = keys[j], index[k] = STARTS[s] + (uint64_t)(done + k);
+                ao_rng_pairs(AO_SEQUENCE_SOBOL, key, index, n, u1, u2);
+                assert_reference_pairs(key, index, n, u1, u2);
                 done += n;
             }
-    /* Across keys at one index, a packet's lanes at a time, as the eye jitter draws. */
-    for (size_t s = 0; s < sizeof STARTS / sizeof STARTS[0]; s++)
-        for (uint64_t sample = STARTS[s]; sample != STARTS[s] + 64; sample++)
-            for (int j = 0; j < KEYS; j += LANES) {
-                int n = KEYS - j < LANES ? KEYS - j : LANES;
-                sobol_pairs_of_keys(keys + j, sample, n, u1, u2);
-                assert_reference_pairs(keys + j, 1, &sample, 0, n, u1, u2);
+    for (int s = 0; s < START_COUNT; s++)
+        for (uint64_t i = STARTS[s]; i != STARTS[s] + 64; i++)
+            for (int j = 0, c = (int)i; j < KEYS; c++) {
+                int n = 1 + c % AO_RNG_LANES < KEYS - j ? 1 + c % AO_RNG_LANES : KEYS - j;
+                for (int k = 0; k < n; k++)
+                    key[k] = keys[j + k], index[k] = i;
+                ao_rng_pairs(AO_SEQUENCE_SOBOL, key, index, n, u1, u2);
+                assert_reference_pairs(key, index, n, u1, u2);
+                j += n;
             }
 }
 
