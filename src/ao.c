@@ -24,8 +24,6 @@ static uint64_t stream_for_half(const struct ao_context *ctx, uint64_t stream, i
     return ctx->sequence == AO_SEQUENCE_SOBOL && half ? stream - 2 : stream;
 }
 
-_Static_assert((int)AO_PACKET_SIZE <= (int)AO_RNG_LANES, "a packet's pairs are drawn in one call");
-
 void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, struct ao_vec3 org,
                          struct ao_vec3 dir, const struct ao_hit *hit, struct ao_surface *s)
 {

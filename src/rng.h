@@ -49,6 +49,17 @@ static inline uint32_t ao_rng_reverse(uint32_t x)
     return ((x & 0x55555555u) << 1) | ((x >> 1) & 0x55555555u);
 }
 
+/* The bits of x in reverse order, 64 of them: the low half's reversed bits land in the high half. */
+static inline uint64_t ao_rng_reverse64(uint64_t x)
+{
+    x = (x << 32) | (x >> 32);
+    x = ((x & 0x0000ffff0000ffffULL) << 16) | ((x >> 16) & 0x0000ffff0000ffffULL);
+    x = ((x & 0x00ff00ff00ff00ffULL) << 8) | ((x >> 8) & 0x00ff00ff00ff00ffULL);
+    x = ((x & 0x0f0f0f0f0f0f0f0fULL) << 4) | ((x >> 4) & 0x0f0f0f0f0f0f0f0fULL);
+    x = ((x & 0x3333333333333333ULL) << 2) | ((x >> 2) & 0x3333333333333333ULL);
+    return ((x & 0x5555555555555555ULL) << 1) | ((x >> 1) & 0x5555555555555555ULL);
+}
+
 /* The hash of Laine and Karras, a nested uniform (Owen) scramble of bits given in reverse order:
  * each bit is flipped by a hash of the bits below it, since additions and multiplications carry only
  * upwards (Burley, "Practical hash-based Owen scrambling", JCGT 2020). */
@@ -60,13 +71,6 @@ static inline uint32_t ao_rng_laine_karras(uint32_t x, uint32_t seed)
     x ^= x * 0xc7afe638u;
     x ^= x * 0x8d22f6e6u;
     return x;
-}
-
-/* A nested uniform (Owen) scramble of x keyed by seed: each bit is flipped by a hash of the bits
- * above it. */
-static inline uint32_t ao_rng_owen(uint32_t x, uint32_t seed)
-{
-    return ao_rng_reverse(ao_rng_laine_karras(ao_rng_reverse(x), seed));
 }
 
 /* Sobol's second dimension, bit-reversed: bit j of the result is the parity of the bits i >= j of x
@@ -92,32 +96,26 @@ static inline uint32_t ao_rng_pascal(uint32_t x)
 static inline void ao_rng_sobol_pair(uint64_t key, uint64_t sample, float *u1, float *u2)
 {
     uint64_t seeds = ao_rng_mix(key ^ 0x5851f42d4c957f2dULL);
-    uint32_t index = ao_rng_owen((uint32_t)sample, (uint32_t)key);
+    /* The Owen scramble of the sample number's low half, whose reversal is taken from the whole
+     * number's: a loop over lanes then loads whole numbers, where for the low halves alone GCC
+     * loads every other word and leaves the last vector's lanes, all 16 of a packet, scalar. */
+    uint32_t index = ao_rng_reverse(ao_rng_laine_karras((uint32_t)(ao_rng_reverse64(sample) >> 32), (uint32_t)key));
     uint32_t d0 = ao_rng_reverse(ao_rng_laine_karras(index, (uint32_t)seeds));
     uint32_t d1 = ao_rng_reverse(ao_rng_laine_karras(ao_rng_pascal(index), (uint32_t)(seeds >> 32)));
     *u1 = (float)(d0 >> 8) * 0x1.0p-24f;
     *u2 = (float)(d1 >> 8) * 0x1.0p-24f;
 }
 
-/* The most pairs ao_rng_pairs draws in one call. */
-enum { AO_RNG_LANES = 16 };
-
-/* Pair index[k] of the stream key[k] from `sequence` into u1[k]/u2[k], for k below n (at most
- * AO_RNG_LANES): loops that vectorize across lanes, whatever their streams and indices. */
+/* Pair index[k] of the stream key[k] from `sequence` into u1[k]/u2[k], for k below n: loops
+ * that vectorize across lanes, whatever their streams and indices. */
 AO_VECTOR_CLONES
 static inline void ao_rng_pairs(enum ao_sequence sequence, const uint64_t *restrict key, const uint64_t *restrict index,
                                 int n, float *restrict u1, float *restrict u2)
 {
-    if (sequence == AO_SEQUENCE_SOBOL) {
-        /* Sobol reads the indices' low halves only, which GCC would load as every other word; a
-         * load with gaps keeps the last vector's lanes scalar, all 16 of a packet. Copied out
-         * first, the main loop loads whole vectors. */
-        uint32_t low[AO_RNG_LANES];
+    if (sequence == AO_SEQUENCE_SOBOL)
         for (int k = 0; k < n; k++)
-            low[k] = (uint32_t)index[k];
-        for (int k = 0; k < n; k++)
-            ao_rng_sobol_pair(key[k], low[k], &u1[k], &u2[k]);
-    } else
+            ao_rng_sobol_pair(key[k], index[k], &u1[k], &u2[k]);
+    else
         for (int k = 0; k < n; k++)
             ao_rng_pair(key[k], index[k], &u1[k], &u2[k]);
 }
