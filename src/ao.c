@@ -24,34 +24,6 @@ static uint64_t stream_for_half(const struct ao_context *ctx, uint64_t stream, i
     return ctx->sequence == AO_SEQUENCE_SOBOL && half ? stream - 2 : stream;
 }
 
-/* Pairs first .. first + n - 1 of the random stream `key` into u1/u2; one loop that vectorizes. */
-AO_VECTOR_CLONES
-static void random_pairs(uint64_t key, uint64_t first, int n, float *restrict u1, float *restrict u2)
-{
-    for (int k = 0; k < n; k++)
-        ao_rng_pair(key, first + (uint64_t)k, &u1[k], &u2[k]);
-}
-
-/* The index-th pair of uniform numbers of the stream `key`, from the context's sequence. */
-static inline void draw_pair(const struct ao_context *ctx, uint64_t key, uint64_t index, float *u1, float *u2)
-{
-    if (ctx->sequence == AO_SEQUENCE_SOBOL)
-        ao_rng_sobol_pair(key, index, u1, u2);
-    else
-        ao_rng_pair(key, index, u1, u2);
-}
-
-/* Pairs first .. first + n - 1 of the stream `key` into u1/u2, from the context's sequence: the
- * random sequence's in one vectorized loop, others one by one. */
-static void draw_pairs(const struct ao_context *ctx, uint64_t key, uint64_t first, int n, float *u1, float *u2)
-{
-    if (ctx->sequence == AO_SEQUENCE_RANDOM)
-        random_pairs(key, first, n, u1, u2);
-    else
-        for (int k = 0; k < n; k++)
-            draw_pair(ctx, key, first + (uint64_t)k, &u1[k], &u2[k]);
-}
-
 void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, struct ao_vec3 org,
                          struct ao_vec3 dir, const struct ao_hit *hit, struct ao_surface *s)
 {
@@ -96,13 +68,14 @@ void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, 
 }
 
 /* Occlusion rays waiting for a full batch, each remembering its weight and whose sum the weight
- * joins when the ray is open. Rays from `drawn` on hold their origins only, with their numbers and
- * normals in the pending arrays: their directions are drawn 16 at a time, so that the sampler runs
- * across lanes even at one sample a pixel. */
+ * joins when the ray is open. Rays from `drawn` on hold their origins only, with their streams,
+ * sample numbers and normals in the pending arrays: their numbers and directions are drawn 16 at a
+ * time, so that the generator and the sampler run across lanes even at one sample a pixel. */
 struct queue {
     const struct ao_context *ctx;
     struct ao_batch rays;
     int drawn;                     /* rays whose directions are drawn; fewer than 16 pending */
+    uint64_t key[AO_PACKET_SIZE], index[AO_PACKET_SIZE];               /* streams, sample numbers */
     float u1[AO_PACKET_SIZE], u2[AO_PACKET_SIZE];
     float nx[AO_PACKET_SIZE], ny[AO_PACKET_SIZE], nz[AO_PACKET_SIZE];  /* shading normals */
     float gx[AO_PACKET_SIZE], gy[AO_PACKET_SIZE], gz[AO_PACKET_SIZE];  /* geometric normals */
@@ -161,6 +134,7 @@ static void draw_directions(struct queue *q)
 {
     struct ao_batch *r = &q->rays;
     int first = q->drawn, n = r->count - first;
+    ao_rng_pairs(q->ctx->sequence, q->key, q->index, n, q->u1, q->u2);
     ao_sample_directions(q->ctx->sampling, n, q->nx, q->ny, q->nz, q->u1, q->u2, r->dir_x + first,
                          r->dir_y + first, r->dir_z + first, q->weight + first);
     if (q->ctx->below == AO_BELOW_REFLECT)
@@ -214,8 +188,8 @@ static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t 
         int lane = r->count - q->drawn, n = count - done;
         n = n < AO_PACKET_SIZE - lane ? n : AO_PACKET_SIZE - lane;
         n = n < AO_BATCH_RAYS - r->count ? n : AO_BATCH_RAYS - r->count;
-        draw_pairs(q->ctx, key, first_sample + (uint64_t)done, n, q->u1 + lane, q->u2 + lane);
         for (int k = lane; k < lane + n; k++) {
+            q->key[k] = key, q->index[k] = first_sample + (uint64_t)(done + k - lane);
             q->nx[k] = s->ns.x, q->ny[k] = s->ns.y, q->nz[k] = s->ns.z;
             q->gx[k] = s->ng.x, q->gy[k] = s->ng.y, q->gz[k] = s->ng.z;
         }
@@ -255,12 +229,12 @@ static void make_eye_rays(const struct ao_context *ctx, uint64_t stream, uint64_
     if (!ctx->aa)
         for (int k = 0; k < eye->count; k++)
             du[k] = dv[k] = 0.5f;
-    else if (ctx->sequence == AO_SEQUENCE_RANDOM) /* the common case, in a loop that vectorizes */
+    else { /* pair `ray` of each pixel's eye stream */
+        uint64_t key[AO_PACKET_SIZE], sample[AO_PACKET_SIZE];
         for (int k = 0; k < eye->count; k++)
-            ao_rng_pair(ao_rng_key(ctx->seed, index[k], stream), ray, &du[k], &dv[k]);
-    else
-        for (int k = 0; k < eye->count; k++)
-            draw_pair(ctx, ao_rng_key(ctx->seed, index[k], stream), ray, &du[k], &dv[k]);
+            key[k] = ao_rng_key(ctx->seed, index[k], stream), sample[k] = ray;
+        ao_rng_pairs(ctx->sequence, key, sample, eye->count, du, dv);
+    }
     const struct ao_view *view = &ctx->view;
     for (int k = 0; k < eye->count; k++) {
         struct ao_vec3 d = ao_camera_ray(view, (float)column[k] + du[k], (float)row[k] + dv[k]);

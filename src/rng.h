@@ -5,6 +5,8 @@
 
 #include <stdint.h>
 
+#include "simd.h"
+
 /* A 64-bit finalizer with full avalanche (the splitmix64 output function). */
 static inline uint64_t ao_rng_mix(uint64_t z)
 {
@@ -47,40 +49,75 @@ static inline uint32_t ao_rng_reverse(uint32_t x)
     return ((x & 0x55555555u) << 1) | ((x >> 1) & 0x55555555u);
 }
 
-/* A nested uniform (Owen) scramble of x keyed by seed: each bit is flipped by a hash of the bits
- * above it. On reversed bits, additions and multiplications carry only upwards, so the hash of
- * Laine and Karras has that property (Burley, "Practical hash-based Owen scrambling", JCGT 2020). */
-static inline uint32_t ao_rng_owen(uint32_t x, uint32_t seed)
+/* The bits of x in reverse order, 64 of them: the low half's reversed bits land in the high half. */
+static inline uint64_t ao_rng_reverse64(uint64_t x)
 {
-    x = ao_rng_reverse(x);
+    x = (x << 32) | (x >> 32);
+    x = ((x & 0x0000ffff0000ffffULL) << 16) | ((x >> 16) & 0x0000ffff0000ffffULL);
+    x = ((x & 0x00ff00ff00ff00ffULL) << 8) | ((x >> 8) & 0x00ff00ff00ff00ffULL);
+    x = ((x & 0x0f0f0f0f0f0f0f0fULL) << 4) | ((x >> 4) & 0x0f0f0f0f0f0f0f0fULL);
+    x = ((x & 0x3333333333333333ULL) << 2) | ((x >> 2) & 0x3333333333333333ULL);
+    return ((x & 0x5555555555555555ULL) << 1) | ((x >> 1) & 0x5555555555555555ULL);
+}
+
+/* The hash of Laine and Karras, a nested uniform (Owen) scramble of bits given in reverse order:
+ * each bit is flipped by a hash of the bits below it, since additions and multiplications carry only
+ * upwards (Burley, "Practical hash-based Owen scrambling", JCGT 2020). */
+static inline uint32_t ao_rng_laine_karras(uint32_t x, uint32_t seed)
+{
     x += seed;
     x ^= x * 0x6c50b47cu;
     x ^= x * 0xb82f1e52u;
     x ^= x * 0xc7afe638u;
     x ^= x * 0x8d22f6e6u;
-    return ao_rng_reverse(x);
+    return x;
 }
 
-/* The first two dimensions of the Sobol sequence at index: the van der Corput radical inverse,
- * and the dimension whose direction numbers are v_0 = 2^31, v_k = v_(k-1) ^ (v_(k-1) >> 1). */
-static inline void ao_rng_sobol(uint32_t index, uint32_t *d0, uint32_t *d1)
+/* Sobol's second dimension, bit-reversed: bit j of the result is the parity of the bits i >= j of x
+ * with binomial(i, j) odd (x times Pascal's matrix mod 2). Reversed, the dimension's direction
+ * numbers v_0 = 2^31, v_k = v_(k-1) ^ (v_(k-1) >> 1) are the polynomials (1 + t)^k over GF(2), and
+ * (1 + t)^i is the product of (1 + t^(2^b)) over the set bits b of i: step b applies that factor to
+ * all bits i with bit b set at once. Five steps, with no branch and no dependence on x. */
+static inline uint32_t ao_rng_pascal(uint32_t x)
 {
-    uint32_t v = 1u << 31, y = 0;
-    for (uint32_t i = index; i; i >>= 1, v ^= v >> 1)
-        y ^= (i & 1) ? v : 0;
-    *d0 = ao_rng_reverse(index);
-    *d1 = y;
+    x ^= (x & 0xaaaaaaaau) >> 1;
+    x ^= (x & 0xccccccccu) >> 2;
+    x ^= (x & 0xf0f0f0f0u) >> 4;
+    x ^= (x & 0xff00ff00u) >> 8;
+    return x ^ ((x & 0xffff0000u) >> 16);
 }
 
-/* The stream's sample-th pair from a Sobol sequence whose order and both dimensions are Owen
- * scrambled with seeds derived from key (24 bits each, in [0, 1)). */
+/* The stream's sample-th pair (24 bits each, in [0, 1)) from the first two dimensions of a Sobol
+ * sequence, the van der Corput radical inverse and the dimension of ao_rng_pascal, at the sample
+ * number's low 32 bits Owen scrambled by the key's; each dimension then Owen scrambled with its own
+ * seed derived from key. Owen scrambling a dimension reverses its bits first, which undoes the
+ * reversal of the radical inverse and leaves ao_rng_pascal's result as it is. Free of branches, so
+ * that loops over samples or over keys vectorize. */
 static inline void ao_rng_sobol_pair(uint64_t key, uint64_t sample, float *u1, float *u2)
 {
     uint64_t seeds = ao_rng_mix(key ^ 0x5851f42d4c957f2dULL);
-    uint32_t d0, d1;
-    ao_rng_sobol(ao_rng_owen((uint32_t)sample, (uint32_t)key), &d0, &d1);
-    *u1 = (float)(ao_rng_owen(d0, (uint32_t)seeds) >> 8) * 0x1.0p-24f;
-    *u2 = (float)(ao_rng_owen(d1, (uint32_t)(seeds >> 32)) >> 8) * 0x1.0p-24f;
+    /* The Owen scramble of the sample number's low half, whose reversal is taken from the whole
+     * number's: a loop over lanes then loads whole numbers, where for the low halves alone GCC
+     * loads every other word and leaves the last vector's lanes, all 16 of a packet, scalar. */
+    uint32_t index = ao_rng_reverse(ao_rng_laine_karras((uint32_t)(ao_rng_reverse64(sample) >> 32), (uint32_t)key));
+    uint32_t d0 = ao_rng_reverse(ao_rng_laine_karras(index, (uint32_t)seeds));
+    uint32_t d1 = ao_rng_reverse(ao_rng_laine_karras(ao_rng_pascal(index), (uint32_t)(seeds >> 32)));
+    *u1 = (float)(d0 >> 8) * 0x1.0p-24f;
+    *u2 = (float)(d1 >> 8) * 0x1.0p-24f;
+}
+
+/* Pair index[k] of the stream key[k] from `sequence` into u1[k]/u2[k], for k below n: loops
+ * that vectorize across lanes, whatever their streams and indices. */
+AO_VECTOR_CLONES
+static inline void ao_rng_pairs(enum ao_sequence sequence, const uint64_t *restrict key, const uint64_t *restrict index,
+                                int n, float *restrict u1, float *restrict u2)
+{
+    if (sequence == AO_SEQUENCE_SOBOL)
+        for (int k = 0; k < n; k++)
+            ao_rng_sobol_pair(key[k], index[k], &u1[k], &u2[k]);
+    else
+        for (int k = 0; k < n; k++)
+            ao_rng_pair(key[k], index[k], &u1[k], &u2[k]);
 }
 
 #endif

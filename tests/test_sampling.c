@@ -196,6 +196,79 @@ static void test_sobol_pairs_stratify(void **state)
                 }
 }
 
+/* A nested uniform (Owen) scramble of x keyed by seed: each bit flipped by a hash of the bits above
+ * it, the hash of Laine and Karras applied to the reversed bits. */
+static uint32_t owen(uint32_t x, uint32_t seed)
+{
+    return ao_rng_reverse(ao_rng_laine_karras(ao_rng_reverse(x), seed));
+}
+
+/* The definition the vectorized Sobol pairs must equal bit for bit, as the textbook states it: the
+ * index Owen scrambled, the second dimension as the XOR of the direction numbers (v_0 = 2^31,
+ * v_k = v_(k-1) ^ (v_(k-1) >> 1)) of the index's set bits, in a loop as long as the index, and each
+ * dimension Owen scrambled as drawn. rng.h reaches the same bits with no branch and no loop. */
+static void reference_sobol_pair(uint64_t key, uint64_t sample, float *u1, float *u2)
+{
+    uint64_t seeds = ao_rng_mix(key ^ 0x5851f42d4c957f2dULL);
+    uint32_t index = owen((uint32_t)sample, (uint32_t)key), v = 1u << 31, d1 = 0;
+    for (uint32_t i = index; i; i >>= 1, v ^= v >> 1)
+        d1 ^= (i & 1) ? v : 0;
+    *u1 = (float)(owen(ao_rng_reverse(index), (uint32_t)seeds) >> 8) * 0x1.0p-24f;
+    *u2 = (float)(owen(d1, (uint32_t)(seeds >> 32)) >> 8) * 0x1.0p-24f;
+}
+
+/* Fails naming the first of the n pairs u1/u2 (pair index[k] of stream key[k]) that differs from the
+ * reference in any bit. */
+static void assert_reference_pairs(const uint64_t *key, const uint64_t *index, int n, const float *u1, const float *u2)
+{
+    for (int k = 0; k < n; k++) {
+        float r1, r2;
+        reference_sobol_pair(key[k], index[k], &r1, &r2);
+        if (memcmp(&r1, &u1[k], sizeof r1) != 0 || memcmp(&r2, &u2[k], sizeof r2) != 0)
+            fail_msg("key %#llx index %#llx: (%a, %a), the reference gives (%a, %a)", (unsigned long long)key[k],
+                     (unsigned long long)index[k], (double)u1[k], (double)u2[k], (double)r1, (double)r2);
+    }
+}
+
+static void test_vector_sobol_equals_reference(void **state)
+{
+    (void)state;
+    /* Keys: 0, all ones, and pseudo-random ones (fixed seed); indices from 0, and around 2^31 (the
+     * top bit of the scrambled index), 2^32 (where the sample number is truncated), 2^40 and the
+     * top of the range. Drawn as the AO samples are (one stream, consecutive indices) and as the
+     * eye jitter is (one index, a stream per lane), in calls of every length up to 40, so
+     * that the vector loops (16 lanes at most) run at every length and leave every remainder. */
+    enum { KEYS = 66, SPAN = 4096, LANES = 40 };
+    static const uint64_t STARTS[] = {0, (1ULL << 31) - SPAN / 2, (1ULL << 32) - SPAN / 2, (1ULL << 40) - SPAN / 2,
+                                      UINT64_MAX - SPAN + 1};
+    enum { START_COUNT = sizeof STARTS / sizeof STARTS[0] };
+    uint64_t keys[KEYS] = {0, UINT64_MAX};
+    for (int j = 2; j < KEYS; j++)
+        keys[j] = ao_rng_mix(0x243f6a8885a308d3ULL + (uint64_t)j);
+    uint64_t key[LANES], index[LANES];
+    float u1[LANES], u2[LANES];
+    for (int j = 0; j < KEYS; j++)
+        for (int s = 0; s < START_COUNT; s++)
+            for (int done = 0, c = j; done < SPAN; c++) {
+                int n = 1 + c % LANES < SPAN - done ? 1 + c % LANES : SPAN - done;
+                for (int k = 0; k < n; k++)
+                    key[k] = keys[j], index[k] = STARTS[s] + (uint64_t)(done + k);
+                ao_rng_pairs(AO_SEQUENCE_SOBOL, key, index, n, u1, u2);
+                assert_reference_pairs(key, index, n, u1, u2);
+                done += n;
+            }
+    for (int s = 0; s < START_COUNT; s++)
+        for (uint64_t i = STARTS[s]; i != STARTS[s] + 64; i++)
+            for (int j = 0, c = (int)(i % LANES); j < KEYS; c++) {
+                int n = 1 + c % LANES < KEYS - j ? 1 + c % LANES : KEYS - j;
+                for (int k = 0; k < n; k++)
+                    key[k] = keys[j + k], index[k] = i;
+                ao_rng_pairs(AO_SEQUENCE_SOBOL, key, index, n, u1, u2);
+                assert_reference_pairs(key, index, n, u1, u2);
+                j += n;
+            }
+}
+
 static void test_names_round_trip(void **state)
 {
     (void)state;
@@ -217,6 +290,7 @@ int main(void)
         cmocka_unit_test(test_pdfs_integrate_to_one),
         cmocka_unit_test(test_histograms_match_pdfs),
         cmocka_unit_test(test_sobol_pairs_stratify),
+        cmocka_unit_test(test_vector_sobol_equals_reference),
         cmocka_unit_test(test_names_round_trip),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
