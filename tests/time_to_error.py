@@ -151,7 +151,7 @@ def write_outputs(out, blocks, runs, header, started):
 
 
 def main():
-    parser = argparse.ArgumentParser(usage=__doc__)
+    parser = argparse.ArgumentParser(usage=__doc__.replace('%', '%%'))
     parser.add_argument('--aoview', default=os.path.join(ROOT, 'build', 'aoview'))
     parser.add_argument('--exact')
     parser.add_argument('--sizes', default='160x120,640x480')
