@@ -17,6 +17,7 @@ import csv
 import math
 import os
 import platform
+import resource
 import shlex
 import signal
 import statistics
@@ -97,14 +98,14 @@ def render(aoview, scene, size, seed, args, ref, lowest, cap, work):
         return parse_rows(f.read())
 
 
-def reaches(rows, targets):
+def reaches(rows, targets, cap):
     """Per target: (seconds, spp) where the RMSE first falls to it, each interpolated log-log
-    between the two rows around the crossing; None when it never does."""
+    between the two rows around the crossing; None when it does not within cap seconds."""
     spp, seconds, rmse = [r[0] for r in rows], [r[1] for r in rows], [r[2] for r in rows]
     result = []
     for t in targets:
         s = crossing(seconds, rmse, t)
-        result.append(None if s is None else (s, crossing(spp, rmse, t)))
+        result.append(None if s is None or s > cap else (s, crossing(spp, rmse, t)))
     return result
 
 
@@ -118,6 +119,12 @@ def cell(seconds, spp, base, cap):
         return '> %g s%s' % (cap, ', ×< %.3g' % (base / cap) if math.isfinite(base) else '')
     ratio = '×%.3g' % (base / seconds) if math.isfinite(base) else '×> %.3g' % (cap / seconds)
     return '%.3g s · %.0f spp · %s' % (seconds, spp, ratio)
+
+
+def child_cpu():
+    """CPU seconds used so far by finished child processes."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
 
 
 def machine():
@@ -209,20 +216,20 @@ def main():
             name = os.path.splitext(os.path.basename(scene))[0]
             ref = os.path.join(a.work, 'reference-%s-%s.pfm' % (name, size))
             spp = a.ref_spp or reference_spp(size)
-            made = time.monotonic()
+            made, cpu = time.monotonic(), child_cpu()
             kind, pair = reference(a.aoview, a.exact, scene, size, spp // 2, EXACT_SPP, a.work, REFERENCE_ARGS, ref)
-            made = time.monotonic() - made
+            made, cpu = time.monotonic() - made, child_cpu() - cpu
             values = read_pfm(ref)[2]
             mean = sum(values) / len(values)
             noise = pair_noise(pair) if pair else 0.0
             targets = [v * mean for v in LEVELS]
-            print('time_to_error.py: %s %s: reference %s (%.0f s), mean %.4f, own RMS error %.2g (%.3g %% of the '
-                  'mean)' % (name, size, kind, made, mean, noise, 100 * noise / mean), file=sys.stderr, flush=True)
+            print('time_to_error.py: %s %s: reference %s (%.0f s, %.0f CPU-s), mean %.4f, own RMS error %.2g (%.3g %% of the '
+                  'mean)' % (name, size, kind, made, cpu, mean, noise, 100 * noise / mean), file=sys.stderr, flush=True)
             results = {c[0]: [] for c in configs}
             for seed in range(1, seeds + 1):
                 for label, args in configs:
                     rows = render(a.aoview, scene, size, seed, args, ref, targets[-1], a.cap, a.work)
-                    reached = reaches(rows, targets)
+                    reached = reaches(rows, targets, a.cap)
                     results[label].append(reached)
                     for level, t, r in zip(LEVELS, targets, reached):
                         runs.append([name, size, label, shlex.join(args), seed, level, '%.6g' % t,
@@ -236,9 +243,9 @@ def main():
             medians = {label: [(median([s[k] and s[k][0] for s in per_seed]),
                                 median([s[k] and s[k][1] for s in per_seed])) for k in range(len(LEVELS))]
                        for label, per_seed in results.items()}
-            lines = ['## %s, %s\n\n' % (name, size),
-                     'Reference: %s (time spent on it in this run, 0 when cached: %.0f s). Mean %.4f; its own '
-                     'RMS error %s.\n\n' % (kind, made, mean,
+            lines = ['### %s, %s\n\n' % (name, size),
+                     'Reference: %s; made in this run in %.0f s, %.0f CPU-seconds (0 when cached). Mean %.4f; '
+                     'its own RMS error %s.\n\n' % (kind, made, cpu, mean,
                          '%.2g (%.3g %% of the mean)' % (noise, 100 * noise / mean) if pair else 'none (exact)'),
                      '| config | aoview args | %s |\n' % ' | '.join('%s (%.3g)' % (level_text(v), t)
                                                                    for v, t in zip(LEVELS, targets)),
