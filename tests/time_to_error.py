@@ -206,7 +206,8 @@ def main():
               '- Command: `%s`\n- Date: %s\n- Machine: %s (shared with other jobs: load average %s at the '
               'start)\n- Binary: %s (sha256 %s…)\n- Wall-clock cap per run: %g s of render time\n\n' % (
                   ', '.join(level_text(v) for v in LEVELS), seeds, '' if seeds == 1 else 's', seeds, THREADS, base,
-                  shlex.join(os.path.relpath(v, ROOT) if v.startswith(ROOT + os.sep) else v for v in sys.argv),
+                  shlex.join(os.path.relpath(v, ROOT) if v.startswith(ROOT + os.sep) else v
+                             for v in [os.path.abspath(sys.argv[0])] + sys.argv[1:]),
                   time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime()), machine(), load_start, version,
                   checksum(a.aoview), a.cap))
     blocks, runs = [], []
