@@ -95,7 +95,10 @@ def render(aoview, scene, size, seed, args, ref, lowest, cap, work):
             sys.exit('time_to_error.py: %s failed (exit %d): %s' % (shlex.join(command), proc.returncode,
                                                                      f.read().strip()))
     with open(stats) as f:
-        return parse_rows(f.read())
+        rows = parse_rows(f.read())
+    if not rows:
+        sys.exit('time_to_error.py: %s: no pass finished within %g s' % (shlex.join(command), 2 * cap + 30))
+    return rows
 
 
 def reaches(rows, targets, cap):
@@ -203,8 +206,8 @@ def main():
               'to %s of the reference\'s mean (over all pixels and channels, as `--stats` computes it); per '
               'configuration the median over %d seed%s (seeds 1 to %d), `--threads %d`; each cell `seconds · '
               'spp · ratio`, the ratio being %s\'s median time over this one\'s.\n\n'
-              '- Command: `%s`\n- Date: %s\n- Machine: %s (shared with other jobs: load average %s at the '
-              'start)\n- Binary: %s (sha256 %s…)\n- Wall-clock cap per run: %g s of render time\n\n' % (
+              '- Command: `%s`\n- Date: %s\n- Machine: %s (load average %s at the '
+              'start)\n- Binary: %s (sha256 %s…)\n- Cap per run: %g render seconds\n\n' % (
                   ', '.join(level_text(v) for v in LEVELS), seeds, '' if seeds == 1 else 's', seeds, THREADS, base,
                   shlex.join(os.path.relpath(v, ROOT) if v.startswith(ROOT + os.sep) else v
                              for v in [os.path.abspath(sys.argv[0])] + sys.argv[1:]),
