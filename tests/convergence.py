@@ -1,7 +1,6 @@
 #!/usr/bin/env python3
 """Analysis half of tests/convergence.sh (plain python3, no third-party modules).
 
-  convergence.py mean A.pfm B.pfm OUT.pfm     the per-value mean of two PFMs (a two-run reference)
   convergence.py report --name N --runs DIR --out DIR --methods L... [--reference-pair A B] ...
 
 report reads DIR/reference.pfm and, per method label L and seed S, DIR/L-S.csv (aoview --stats
@@ -19,33 +18,14 @@ import argparse
 import csv
 import math
 import os
-import struct
 import subprocess
 import sys
+
+from benchlib import crossing, pair_noise, read_pfm
 
 ROWS_PER_DECADE = 20
 COLOURS = {'uniform': '#d62728', 'hemisphere': '#1f77b4', 'cosine': '#2ca02c'}
 EXTRA_COLOURS = ['#9467bd', '#ff7f0e', '#8c564b', '#e377c2', '#17becf']
-
-
-def read_pfm(path):
-    """Values of a colour PFM as a flat list (file order; only pixel-wise statistics use it)."""
-    with open(path, 'rb') as f:
-        header = []
-        while len(header) < 4:
-            header += f.readline().split()
-        if header[0] != b'PF':
-            sys.exit('convergence.py: %s: not a colour PFM' % path)
-        width, height, scale = int(header[1]), int(header[2]), float(header[3])
-        count = 3 * width * height
-        return width, height, list(struct.unpack(('<' if scale < 0 else '>') + '%df' % count, f.read(4 * count)))
-
-
-def write_pfm(path, width, height, values):
-    with open(path + '.tmp', 'wb') as f:
-        f.write(b'PF\n%d %d\n-1.0\n' % (width, height))
-        f.write(struct.pack('<%df' % len(values), *values))
-    os.replace(path + '.tmp', path)
 
 
 def pixel_means(values):
@@ -74,17 +54,6 @@ def interpolate(xs, ys, x):
             t = (math.log(x) - math.log(xs[k - 1])) / (math.log(xs[k]) - math.log(xs[k - 1]))
             return math.exp(math.log(ys[k - 1]) + t * (math.log(ys[k]) - math.log(ys[k - 1])))
     return ys[-1]
-
-
-def crossing(xs, ys, target):
-    """First x where ys falls to target, interpolated in log-log; None when it never does."""
-    for k, y in enumerate(ys):
-        if y <= target:
-            if k == 0:
-                return xs[0]
-            t = (math.log(target) - math.log(ys[k - 1])) / (math.log(y) - math.log(ys[k - 1]))
-            return math.exp(math.log(xs[k - 1]) + t * (math.log(xs[k]) - math.log(xs[k - 1])))
-    return None
 
 
 def reach(xs, ys, target, unit):
@@ -163,8 +132,7 @@ def report(args):
     ref_pair = [read_pfm(p)[2] for p in args.reference_pair] if args.reference_pair else None
     mean_ref = sum(reference) / len(reference)
     target = 0.01 * mean_ref
-    # Noise of a two-run reference: each run's per-value error has variance E(a-b)^2 / 2, the mean's half that.
-    floor = math.sqrt(sum((a - b) ** 2 for a, b in zip(*ref_pair)) / len(reference)) / 2.0 if ref_pair else 0.0
+    floor = pair_noise(args.reference_pair) if ref_pair else 0.0
 
     # The CSV of all runs' kept rows, and the curves.
     curves, runs_rows = {}, {}
@@ -236,10 +204,6 @@ def report(args):
 
 
 def main():
-    if len(sys.argv) == 5 and sys.argv[1] == 'mean':
-        (w, h, a), (_, _, b) = read_pfm(sys.argv[2]), read_pfm(sys.argv[3])
-        write_pfm(sys.argv[4], w, h, [(x + y) / 2.0 for x, y in zip(a, b)])
-        return
     parser = argparse.ArgumentParser(usage=__doc__)
     parser.add_argument('command', choices=['report'])
     parser.add_argument('--name', required=True)

@@ -58,7 +58,6 @@ for tool in "$aoview" "$exact"; do
 done
 command -v gnuplot >/dev/null || { echo "convergence.sh: gnuplot is missing (apt-get install gnuplot-nox)" >&2; exit 1; }
 mkdir -p "$work" "$out"
-checksum=$(sha256sum "$aoview" | cut -c1-12)
 
 # last_seconds_per_spp CSV: seconds / spp of a stats file's last row.
 last_seconds_per_spp() { tail -n 1 "$1" | awk -F, '{ printf "%.9f", $3 / $2 }'; }
@@ -69,27 +68,12 @@ for scene in "${scenes[@]}"; do
   rm -rf "$runs" && mkdir -p "$runs"
 
   # Reference: exact, or two cached high-spp runs whose difference measures their noise.
-  ref_args=()
-  if "$exact" -q --size "$size" --spp 4096 -o "$runs/reference.pfm" "$scene" 2>"$runs/exact.log"; then
-    ref_args=(--reference-kind 'exact (aoview-exact --spp 4096, a 64x64 sub-pixel grid)')
-  elif grep -q 'no closed form' "$runs/exact.log"; then
-    echo "convergence.sh: $name: $(cat "$runs/exact.log")" >&2
-    pair=()
-    for seed in 1001 1002; do
-      cached=$work/reference-$name-$size-$ref_spp-$seed-$checksum.pfm
-      if [ ! -f "$cached" ]; then
-        echo "convergence.sh: $name: reference run, seed $seed, $ref_spp spp (cached as $cached)" >&2
-        "$aoview" --headless -q --threads 2 --size "$size" --sampling cosine --spp "$ref_spp" \
-          --spppp 1 --sampler random --adaptive off --seed "$seed" -o "$cached" "$scene"
-      fi
-      pair+=("$cached")
-    done
-    python3 "$root/tests/convergence.py" mean "${pair[@]}" "$runs/reference.pfm"
-    ref_args=(--reference-kind "the mean of two cosine runs of $ref_spp spp (seeds 1001, 1002)" --reference-pair "${pair[@]}")
-  else
-    cat "$runs/exact.log" >&2
-    exit 1
-  fi
+  mapfile -t ref < <(python3 "$root/tests/benchlib.py" reference --aoview "$aoview" --exact "$exact" \
+    --size "$size" --spp "$ref_spp" --exact-spp 4096 --work "$work" --args '--sampling cosine --spppp 1 --sampler random --adaptive off' \
+    --out "$runs/reference.pfm" "$scene")
+  [ ${#ref[@]} -gt 0 ] || exit 1
+  ref_args=(--reference-kind "${ref[0]}")
+  [ ${#ref[@]} -eq 1 ] || ref_args+=(--reference-pair "${ref[@]:1}")
 
   # Every method: calibrate its speed, then run each seed for about the budget.
   labels=()
