@@ -8,41 +8,19 @@ error-estimate.csv in --work.
   tests/error_estimate.py [--aoview BIN] [--exact BIN] [--size WxH] [--spp N] [--work DIR]
                           [--out DIR] SCENE...
 
-Reference: aoview-exact's image where the scene has a closed form, else one aoview run of
-16384 Sobol samples per pixel (seed 1001, no adaptive sampling), cached in --work under the
-binary's checksum. Its own error (about 0.03 % on the bunny at 160x120) is far below the
-errors compared here."""
-import argparse, csv, hashlib, math, os, struct, subprocess, sys
+References are tests/benchlib.py's, as tests/time_to_error.py makes them (and shares through the
+default --work): aoview-exact's image where the scene has a closed form, else the mean of two
+16384-spp Sobol runs, whose own error (about 0.04 % of the mean) is far below the errors
+compared here."""
+import argparse, csv, math, os, subprocess, sys
+
+from benchlib import read_pfm, reference
 
 CONFIGS = [('defaults', []), ('adaptive off', ['--adaptive', 'off']),
            ('random, spppp 1, adaptive off', ['--sampler', 'random', '--spppp', '1', '--adaptive', 'off'])]
-
-
-def mean_of(path):
-    parts = open(path, 'rb').read().split(b'\n', 3)
-    w, h = map(int, parts[1].split())
-    values = struct.unpack('<%df' % (3 * w * h), parts[3][:12 * w * h])
-    return sum(values) / len(values)
-
-
-def reference(args, scene, name, checksum):
-    """The reference image's path and what it is, made once per binary (its kind in a side file)."""
-    path = os.path.join(args.work, 'reference-%s-%s-%s.pfm' % (name, args.size, checksum))
-    if os.path.exists(path) and os.path.exists(path + '.kind'):
-        return path, open(path + '.kind').read()
-    exact = subprocess.run([args.exact, '-q', '--size', args.size, '--spp', '4096', '-o', path, scene],
-                           stderr=subprocess.PIPE, text=True)
-    kind = 'exact'
-    if exact.returncode != 0:
-        if 'no closed form' not in exact.stderr:
-            sys.exit(exact.stderr.strip())
-        print('error_estimate.py: %s: 16384-spp reference' % name, file=sys.stderr)
-        subprocess.run([args.aoview, '--headless', '-q', '--threads', '2', '--size', args.size, '--spp', '16384',
-                        '--sampler', 'sobol', '--spppp', 'auto', '--adaptive', 'off', '--seed', '1001', '-o', path,
-                        scene], check=True)
-        kind = '16384 spp'
-    open(path + '.kind', 'w').write(kind)
-    return path, kind
+# The references of tests/time_to_error.py at 160x120 (shared through the same work directory).
+REFERENCE_ARGS = ['--sampler', 'sobol', '--spppp', '1', '--adaptive', 'off']
+REFERENCE_SPP, EXACT_SPP = 16384, 4096
 
 
 def main():
@@ -57,15 +35,17 @@ def main():
     p.add_argument('scenes', nargs='+')
     args = p.parse_args()
     args.exact = args.exact or os.path.join(os.path.dirname(args.aoview), 'aoview-exact')
-    args.work = args.work or os.path.join(os.path.dirname(args.aoview), 'error-estimate')
+    args.work = args.work or os.path.join(os.path.dirname(args.aoview), 'time-to-error')
     os.makedirs(args.work, exist_ok=True)
     os.makedirs(args.out, exist_ok=True)
-    checksum = hashlib.sha256(open(args.aoview, 'rb').read()).hexdigest()[:12]
     rows, table = [], []
     for scene in args.scenes:
         name = os.path.splitext(os.path.basename(scene))[0]
-        ref, kind = reference(args, scene, name, checksum)
-        mean = mean_of(ref)
+        ref = os.path.join(args.work, 'reference-%s.pfm' % name)
+        kind = reference(args.aoview, args.exact, scene, args.size, REFERENCE_SPP, EXACT_SPP, args.work,
+                         REFERENCE_ARGS, ref)[0]
+        values = read_pfm(ref)[2]
+        mean = sum(values) / len(values)
         for label, extra in CONFIGS:
             stats = os.path.join(args.work, 'stats.csv')
             subprocess.run([args.aoview, '--headless', '-q', '--threads', '2', '--size', args.size, '--spp',
