@@ -27,9 +27,9 @@ enum { MIN_PASSES = 4, MIN_SPP = 16, RECHECK = 8 };
 static const double SKIP_BELOW = 0.25, ROUNDING = 1e-6;
 
 /* --spppp auto: the first pass after a restart takes one sample per pixel, so that the first
- * frame comes at once; each next pass doubles, up to about AUTO_SAMPLES samples over the pixels
- * it traces (a few display frames' worth on two cores: 4 spp a pass at 640x480, 64 at 160x120),
- * in rounds of one eye ray with AUTO_PER_RAY AO samples. Both were chosen by time to 1 % and
+ * frame comes at once; then each pass of a half (even, odd) doubles that half (tile_work), up to
+ * about AUTO_SAMPLES samples over the pixels it traces (a few display frames' worth on two cores:
+ * 4 spp a pass at 640x480, 64 at 160x120), in rounds of one eye ray with AUTO_PER_RAY AO samples. Both were chosen by time to 1 % and
  * 0.5 % RMSE (docs/time-to-error.md). The schedule depends on samples, not on seconds, so that
  * the image stays a function of the seed and settings alone. */
 enum { AUTO_SAMPLES = 1 << 21, AUTO_PER_RAY = 8 };
@@ -120,10 +120,14 @@ static struct ao_tile_work tile_work(const struct ao_render *r, const struct til
     int samples = (uint32_t)r->samples < left ? r->samples : (int)left;
     struct ao_tile_work w = {.half = half, .rounds = 1, .count = samples};
     if (r->per_ray) {
-        /* Auto passes: a tile at most doubles its samples in a pass, so that a tile rejoining late
-         * does not put nearly all its samples into one half; and it takes whole rounds of
-         * per_ray samples (the rest in a later pass), or its eye rays would be too few for AA. */
-        samples = (uint32_t)samples <= spp + 1 ? samples : (int)spp + 1;
+        /* Auto passes: a tile's pass takes as many samples as its half already has (one at first),
+         * so that each pass of a half starts at a multiple of its size, and with Sobol numbers the
+         * pass, and each eye ray's per_ray samples within it, is an aligned block of the half's
+         * sequence: a stratified net of directions. A tile rejoining late grows by doubling, its
+         * halves balanced. Whole rounds of per_ray samples (the rest in a later pass), or its eye
+         * rays would be too few for AA. */
+        uint32_t grow = ts->spp[half] ? ts->spp[half] : 1;
+        samples = (uint32_t)samples <= grow ? samples : (int)grow;
         if (samples > r->per_ray)
             w.rounds = samples / r->per_ray, w.count = r->per_ray;
         else
@@ -331,18 +335,28 @@ static void survey(struct ao_render *r, struct ao_frame_info *info, bool adaptiv
     info->done = next == 0 || error_reached || time_up;
 }
 
-/* The AO samples per pixel of the next pass: the setting, or with auto the schedule's next step
- * for `pixels` pixels after a pass of `last` samples (0 after a restart). */
-static int pass_samples(const struct ao_settings *s, int last, size_t pixels)
+/* The AO samples per pixel of the next pass: the setting, or with auto the most a tile may take
+ * in a pass of `pixels` pixels (tile_work takes fewer while a tile grows). */
+static int pass_samples(const struct ao_settings *s, size_t pixels)
 {
     if (s->spppp > 0)
         return s->spppp;
-    if (last == 0)
-        return 1;
     int cap = 1;
     while ((size_t)cap * 2 * pixels <= AUTO_SAMPLES)
         cap *= 2;
-    return 2 * last < cap ? 2 * last : cap;
+    return cap;
+}
+
+/* The most samples per pixel any tile of the work list takes in this pass. */
+static uint32_t largest_share(const struct ao_render *r)
+{
+    uint32_t most = 0;
+    for (int n = 0; n < r->shares[r->config.threads - 1].end; n++) {
+        struct ao_tile_work w = tile_work(r, &r->tiles[r->work[n]]);
+        uint32_t samples = (uint32_t)(w.rounds * w.count);
+        most = samples > most ? samples : most;
+    }
+    return most;
 }
 
 /* ---- publishing ---- */
@@ -413,8 +427,9 @@ static void *render_main(void *arg)
 
         /* Plan the pass: its tiles, its samples. */
         size_t pixels = select_tiles(r, s.adaptive);
-        r->samples = pass_samples(&s, info.pass ? (int)info.spppp : 0, pixels);
+        r->samples = pass_samples(&s, pixels);
         r->per_ray = s.spppp > 0 ? 0 : AUTO_PER_RAY;
+        uint32_t spppp = largest_share(r);
 
         /* Run it, unless nothing is left to sample (adaptive sampling was just turned on). */
         bool complete = false;
@@ -441,7 +456,7 @@ static void *render_main(void *arg)
         /* Publish it. */
         if (complete) {
             info.pass++;
-            info.spppp = (uint32_t)r->samples;
+            info.spppp = spppp;
             survey(r, &info, s.adaptive);
             publish(r, &info);
             if (r->config.on_pass)

@@ -235,7 +235,7 @@ static void test_adaptive_auto_image_does_not_depend_on_threads(void **state)
     }
 }
 
-static void test_auto_passes_start_at_one_and_double(void **state)
+static void test_auto_passes_start_at_one_and_double_each_half(void **state)
 {
     (void)state;
     struct counter counter = {0};
@@ -243,10 +243,10 @@ static void test_auto_passes_start_at_one_and_double(void **state)
     struct ao_render_config config = {.width = 37, .height = 29, .threads = 2, .seed = 5, .target_spp = 100};
     struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 0};
     free(render_scene(SCENE, config, settings, &info, &counter));
-    /* 1 + 2 + 4 + 8 + 16 + 32 = 63 (37x29 pixels are far below the cap), then of the 37 left of
-     * 100 the whole rounds of 8 AO samples per eye ray, 32, and the last 5 in a pass of their own. */
-    static const uint32_t expected[] = {1, 2, 4, 8, 16, 32, 64};
-    assert_int_equal(counter.calls, 8);
+    /* Each pass doubles its half (even, odd), from one sample: 1, 1, 1, 1, 2, 2, 4, 4, ..., 32, 32
+     * make 96 (37x29 pixels are far below the cap); the last 4 of 100 come in a 14th pass. */
+    static const uint32_t expected[] = {1, 1, 1, 1, 2, 2, 4, 4};
+    assert_int_equal(counter.calls, 14);
     assert_memory_equal(counter.spppp, expected, sizeof expected);
     assert_int_equal(info.spp, 100);
     assert_true(info.mean_spp == 100.0);
@@ -460,7 +460,7 @@ int main(void)
         cmocka_unit_test(test_restart_resets_and_settings_apply),
         cmocka_unit_test(test_stop_ends_an_unfinished_render),
         cmocka_unit_test(test_adaptive_auto_image_does_not_depend_on_threads),
-        cmocka_unit_test(test_auto_passes_start_at_one_and_double),
+        cmocka_unit_test(test_auto_passes_start_at_one_and_double_each_half),
         cmocka_unit_test(test_adaptive_stops_an_open_plane_after_the_minimum),
         cmocka_unit_test(test_target_error_stops_the_run),
         cmocka_unit_test(test_time_limit_stops_the_run),
