@@ -79,7 +79,7 @@ static const char usage[] =
     "                        default aoview.png with --headless\n"
     "  --spp N               total AO samples per pixel (default 256)\n"
     "  --spppp N|auto        AO samples per pixel per pass; auto: from 1, doubling up\n"
-    "                        to about 2^21 samples a pass, 8 per eye ray (default auto)\n"
+    "                        to about 2^22 samples a pass, 8 per eye ray (default auto)\n"
     "  --adaptive on|off     samples go where the estimated error is (default on)\n"
     "  --target-error E      stop once the estimated RMSE is at most E times the\n"
     "                        image mean, e.g. 0.01 (default: run to --spp)\n"
