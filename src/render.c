@@ -28,10 +28,10 @@ static const double SKIP_BELOW = 0.25, ROUNDING = 1e-6;
 
 /* --spppp auto: the first pass after a restart takes one sample per pixel, so that the first
  * frame comes at once; then each pass of a half (even, odd) doubles that half (tile_work), up to
- * about AUTO_SAMPLES samples over the pixels it traces (a few display frames' worth on two cores:
- * 8 spp a pass at 640x480, 128 at 160x120), in rounds of one eye ray with AUTO_PER_RAY AO samples. Both were chosen by time to 1 % and
- * 0.5 % RMSE (docs/time-to-error.md). The schedule depends on samples, not on seconds, so that
- * the image stays a function of the seed and settings alone. */
+ * about AUTO_SAMPLES samples over the pixels it traces (8 spp a pass at 640x480, 128 at 160x120),
+ * in rounds of one eye ray with AUTO_PER_RAY AO samples; both chosen by time to 1 % and 0.5 % RMSE
+ * (docs/adaptive.md). The schedule depends on samples, not on seconds, so that the image stays a
+ * function of the seed and settings alone. */
 enum { AUTO_SAMPLES = 1 << 22, AUTO_PER_RAY = 8 };
 
 /* What a tile has taken since the last restart; written by the thread that traces it. */
