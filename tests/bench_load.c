@@ -7,22 +7,10 @@
 #include <string.h>
 #include <time.h>
 
+#include "bench_util.h"
 #include "mesh.h"
 
 enum { MAX_FILES = 16, MAX_ROUNDS = 99 };
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int by_value(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 
 int main(int argc, char **argv)
 {
@@ -42,10 +30,10 @@ int main(int argc, char **argv)
     for (int r = 0; r < rounds; r++) {
         for (int f = 0; f < files; f++) {
             struct ao_mesh mesh;
-            double start = now();
+            double start = bench_now();
             if (!ao_mesh_load(&mesh, argv[first + f]))
                 return 1;
-            seconds[f][r] = now() - start;
+            seconds[f][r] = bench_now() - start;
             triangles[f] = mesh.triangle_count;
             ao_mesh_finish(&mesh);
         }
@@ -53,8 +41,7 @@ int main(int argc, char **argv)
     double base = 0.0;
     printf("%-40s %12s %10s %8s\n", "file", "triangles", "median s", "ratio");
     for (int f = 0; f < files; f++) {
-        qsort(seconds[f], (size_t)rounds, sizeof seconds[f][0], by_value);
-        double median = seconds[f][rounds / 2];
+        double median = bench_median(seconds[f], rounds);
         if (f == 0)
             base = median;
         printf("%-40s %12zu %10.3f %8.2f\n", argv[first + f], triangles[f], median, median / base);

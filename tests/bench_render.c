@@ -14,6 +14,7 @@
 #include <sys/resource.h>
 #include <time.h>
 
+#include "bench_util.h"
 #include "mesh.h"
 #include "render.h"
 #include "scene.h"
@@ -23,25 +24,6 @@ enum { SIZE = 512, REPEATS = 5, RECORDED = 1 << 16 };
 
 /* The ceiling is always Embree's: for a scene aoview traces with its direct back end, the ratio
  * then says how much that back end beats Embree by. */
-
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int by_value(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
-
-static double median(double *v, int n)
-{
-    qsort(v, (size_t)n, sizeof *v, by_value);
-    return v[n / 2];
-}
 
 static double peak_rss_mib(void)
 {
@@ -210,7 +192,7 @@ static struct row median_row(const struct row *rows, int n)
         double v[REPEATS];
         for (int k = 0; k < n; k++)
             memcpy(&v[k], (const char *)&rows[k] + f * sizeof(double), sizeof(double));
-        out[f] = median(v, n);
+        out[f] = bench_median(v, n);
     }
     struct row r;
     memcpy(&r, out, sizeof r);
@@ -257,9 +239,9 @@ static void measure(struct ao_scene *scene, struct ao_tracer *tracer, const stru
  * 2-thread, spppp-16 Mrays/s in *rate_2x16 when it is not NULL. */
 static void bench_scene(struct ao_scene *scene, double *rate_2x16)
 {
-    double t0 = now();
+    double t0 = bench_now();
     struct ao_tracer *embree = ao_tracer_create_with(scene, AO_BACKEND_EMBREE);
-    double build_ms = 1e3 * (now() - t0);
+    double build_ms = 1e3 * (bench_now() - t0);
     struct ao_tracer *tracer = ao_tracer_create(scene);
     if (!tracer || !embree)
         exit(1);
@@ -319,7 +301,7 @@ static void log_pass(const struct ao_frame_info *info, void *user)
     pthread_mutex_lock(&log->lock);
     log->restarts = info->restarts;
     log->pass = info->pass;
-    log->at = now();
+    log->at = bench_now();
     pthread_cond_signal(&log->changed);
     pthread_mutex_unlock(&log->lock);
 }
@@ -356,13 +338,13 @@ static void bench_interactivity(const struct ao_scene *scene)
         double t0 = wait_pass(&log, (uint64_t)k, 2);
         pass_ms[k] = 1e3 * (wait_pass(&log, (uint64_t)k, PASSES + 2) - t0) / PASSES;
         settings.sampling = k % 2 ? AO_SAMPLING_COSINE : AO_SAMPLING_UNIFORM;
-        double changed = now();
+        double changed = bench_now();
         ao_render_set_settings(r, &settings);
         latency[k] = 1e3 * (wait_pass(&log, (uint64_t)k + 1, 1) - changed);
     }
     printf("\ninteractivity, %s at 640x480, 2 threads, 1 spp per pass: %.1f ms per pass; a settings change "
-           "publishes its first frame after %.1f ms (medians of %d)\n", scene->name, median(pass_ms, TRIALS),
-           median(latency, TRIALS), TRIALS);
+           "publishes its first frame after %.1f ms (medians of %d)\n", scene->name, bench_median(pass_ms, TRIALS),
+           bench_median(latency, TRIALS), TRIALS);
     ao_render_destroy(r);
     ao_tracer_destroy(tracer);
 }
