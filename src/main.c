@@ -284,7 +284,7 @@ static bool write_compare(const char *path, const struct app *app, const struct 
         ao_cli_side_name(&opts->sides[k], name, sizeof name);
         if (!isnan(info[k].rmse))
             snprintf(rmse, sizeof rmse, "\nRMSE %.4g", info[k].rmse);
-        snprintf(text[k], sizeof text[k], "%s: %s\n%u spp  %.2f s%s", side_names[k], name, info[k].spp,
+        snprintf(text[k], sizeof text[k], "%s: %s\n%u spp  %.3g s%s", side_names[k], name, info[k].spp,
                  info[k].seconds, rmse);
         labels[k] = (struct ao_headless_label){.text = text[k], .x = k * width + 4, .y = 4};
     }
