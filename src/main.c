@@ -246,11 +246,15 @@ static void copy_rows(float *to, size_t to_row, const float *from, size_t from_r
         memcpy(to + 3 * y * to_row, from + 3 * y * from_row, 3 * sizeof *to * (size_t)width);
 }
 
-/* --compare's output: path with "-A" or "-B" before its extension (which cli.c made 4 bytes). */
-static void side_path(const char *path, const char *side, char *out, size_t size)
+/* --compare's output: path with "-A" or "-B" before its extension (which cli.c made 4 bytes);
+ * false with one message when that does not fit in size. */
+static bool side_path(const char *path, const char *side, char *out, size_t size)
 {
     size_t stem = strlen(path) - 4;
-    snprintf(out, size, "%.*s-%s%s", (int)stem, path, side, path + stem);
+    if ((size_t)snprintf(out, size, "%.*s-%s%s", (int)stem, path, side, path + stem) < size)
+        return true;
+    fprintf(stderr, "--output: %s: too long a name for --compare's -%s file\n", path, side);
+    return false;
 }
 
 /* Writes both sides: one PNG twice the width with each side's label at its top, or a linear file
@@ -268,9 +272,9 @@ static bool write_compare(const char *path, const struct app *app, const struct 
             }
             copy_rows(rgb, (size_t)width, app->sides + 3 * (size_t)k * (size_t)width, row, width, height);
             char file[4096];
-            side_path(path, side_names[k], file, sizeof file);
             struct ao_frame frame = {.info = info[k], .width = width, .height = height, .rgb = rgb};
-            bool ok = write_output(file, &frame, app->scene.name, opts->seed, NULL);
+            bool ok = side_path(path, side_names[k], file, sizeof file) &&
+                      write_output(file, &frame, app->scene.name, opts->seed, NULL);
             free(rgb);
             if (!ok)
                 return false;
@@ -342,10 +346,9 @@ static int run_compare(struct app *app, const struct ao_options *opts, const str
     if (!opts->quiet && ao_image_has_extension(output, ".png")) {
         fprintf(stderr, "aoview: wrote %s\n", output);
     } else if (!opts->quiet) {
-        char a[4096], b[4096];
-        side_path(output, side_names[0], a, sizeof a);
-        side_path(output, side_names[1], b, sizeof b);
-        fprintf(stderr, "aoview: wrote %s and %s\n", a, b);
+        size_t stem = strlen(output) - 4;
+        fprintf(stderr, "aoview: wrote %.*s-A%s and %.*s-B%s\n", (int)stem, output, output + stem, (int)stem, output,
+                output + stem);
     }
     return 0;
 }
