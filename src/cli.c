@@ -17,11 +17,15 @@ enum option_id {
     OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
     OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
     OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR, OPT_SAVE_FORMAT, OPT_TIME,
-    OPT_VIEW, OPT_SHADING,
+    OPT_VIEW, OPT_SHADING, OPT_COMPARE,
 };
 
 /* The longest --time: a year, far beyond any render, short of overflowing anything. */
 static const double MAX_SECONDS = 365.0 * 24 * 3600;
+/* --spp and --time when not given: the usual 256 spp without a time limit; with --compare, ten
+ * seconds a side, long enough to tell estimators apart, with no spp limit to end a side early. */
+enum { DEFAULT_SPP = 256 };
+static const double COMPARE_SECONDS = 10.0;
 
 /* Names of the --sampler and --below-surface values, in their enums' order. */
 static const char *const sequences[] = {[AO_SEQUENCE_RANDOM] = "random", [AO_SEQUENCE_SOBOL] = "sobol", NULL};
@@ -67,6 +71,7 @@ static const struct option_spec specs[] = {
     {"--time", 0, true, OPT_TIME},
     {"--view", 0, true, OPT_VIEW},
     {"--shading", 0, true, OPT_SHADING},
+    {"--compare", 0, true, OPT_COMPARE},
 };
 
 static const char usage[] =
@@ -88,6 +93,11 @@ static const char usage[] =
     "                        difference (|AO - reference|, needs --reference)\n"
     "                        (default ao)\n"
     "  --shading S           phong | flat mesh normals (default phong)\n"
+    "  --compare A,B         with --headless: render two configurations for --time\n"
+    "                        seconds each (default 10), side by side in one PNG, or\n"
+    "                        FILE-A and FILE-B for .pfm/.exr; a configuration is\n"
+    "                        a sampling mode with optional +random|+sobol, +aa|+noaa,\n"
+    "                        e.g. uniform,cosine or cosine+random,cosine+sobol\n"
     "  --sampling M          uniform | hemisphere | cosine (default cosine)\n"
     "  --sampler S           random | sobol (Owen-scrambled) numbers for jitter and\n"
     "                        directions (default sobol)\n"
@@ -228,7 +238,8 @@ static bool parse_sampling(const char *name, const char *value, enum ao_sampling
     return false;
 }
 
-/* Finds value among the NULL-terminated choices and stores its index; else a message listing them. */
+/* Finds value among the NULL-terminated choices and stores its index; else a message listing them
+ * (none when msg is NULL). */
 static bool parse_choice(const char *name, const char *value, const char *const *choices, int *out,
                          char *msg, size_t msg_size)
 {
@@ -239,6 +250,8 @@ static bool parse_choice(const char *name, const char *value, const char *const 
             return true;
         }
     }
+    if (!msg)
+        return false;
     size_t used = (size_t)snprintf(msg, msg_size, "%s: expected ", name);
     for (int k = 0; k < n && used < msg_size; k++)
         used += (size_t)snprintf(msg + used, msg_size - used, "%s%s", choices[k],
@@ -246,6 +259,57 @@ static bool parse_choice(const char *name, const char *value, const char *const 
     if (used < msg_size)
         snprintf(msg + used, msg_size - used, ", got '%s'", value);
     return false;
+}
+
+/* Parses one --compare configuration in [s, end): a sampling mode, then each of +random|+sobol
+ * and +aa|+noaa at most once; what it leaves out is --sampler's and --aa's. */
+static bool parse_side(const char *s, const char *end, const struct ao_options *opts, struct ao_compare_side *side)
+{
+    char part[16];
+    int sequence = -1, aa = -1;
+    for (bool first = true; s <= end; first = false) {
+        const char *plus = memchr(s, '+', (size_t)(end - s));
+        const char *stop = plus ? plus : end;
+        if ((size_t)(stop - s) >= sizeof part)
+            return false;
+        memcpy(part, s, (size_t)(stop - s));
+        part[stop - s] = '\0';
+        int choice;
+        if (first) {
+            if (!ao_sampling_parse(part, &side->sampling))
+                return false;
+        } else if (sequence < 0 && parse_choice("", part, sequences, &choice, NULL, 0)) {
+            sequence = choice;
+        } else if (aa < 0 && (strcmp(part, "aa") == 0 || strcmp(part, "noaa") == 0)) {
+            aa = strcmp(part, "aa") == 0;
+        } else {
+            return false;
+        }
+        s = stop + 1;
+    }
+    side->sequence = sequence < 0 ? opts->sequence : (enum ao_sequence)sequence;
+    side->aa = aa < 0 ? opts->aa : aa;
+    return true;
+}
+
+/* --compare A,B into opts->sides, after the other options (which fill in what A and B leave out). */
+static bool parse_compare(const char *name, const char *value, struct ao_options *opts, char *msg, size_t msg_size)
+{
+    const char *comma = strchr(value, ',');
+    const char *end = value + strlen(value);
+    if (comma && !strchr(comma + 1, ',') && parse_side(value, comma, opts, &opts->sides[0]) &&
+        parse_side(comma + 1, end, opts, &opts->sides[1]))
+        return true;
+    snprintf(msg, msg_size,
+             "%s: expected two configurations A,B, each a sampling mode with optional +random|+sobol and "
+             "+aa|+noaa (e.g. uniform,cosine), got '%s'", name, value);
+    return false;
+}
+
+void ao_cli_side_name(const struct ao_compare_side *side, char *out, size_t size)
+{
+    snprintf(out, size, "%s+%s+%s", ao_sampling_name(side->sampling), sequences[side->sequence],
+             side->aa ? "aa" : "noaa");
 }
 
 /* Applies one option (value is NULL for flags) to opts. */
@@ -320,6 +384,7 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
             return false;
         opts->shading = (enum ao_shading)choice;
         return true;
+    case OPT_COMPARE: opts->compare = value; return true;
     }
     return false;
 }
@@ -367,7 +432,7 @@ static bool parse_option(int argc, char **argv, int *i, struct ao_options *opts,
 bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, size_t msg_size)
 {
     *opts = (struct ao_options){
-        .spp = 256, .spppp = 0, .adaptive = true, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
+        .spp = 0, .spppp = 0, .adaptive = true, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
         .sequence = AO_SEQUENCE_SOBOL, .below = AO_BELOW_REFLECT,
         .ao_distance = NAN,
     };
@@ -388,5 +453,19 @@ bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, siz
         snprintf(msg, msg_size, "--view difference: needs --reference FILE to compare against");
         return false;
     }
+    if (opts->compare && !parse_compare("--compare", opts->compare, opts, msg, msg_size))
+        return false;
+    if (opts->compare && !opts->headless) {
+        snprintf(msg, msg_size, "--compare: headless only for now, add --headless");
+        return false;
+    }
+    if (opts->compare && opts->view == AO_VIEW_MODE_DIFFERENCE) {
+        snprintf(msg, msg_size, "--compare: shows the ao or normals view, not --view difference");
+        return false;
+    }
+    if (!opts->spp)
+        opts->spp = opts->compare ? MAX_SPP : DEFAULT_SPP;
+    if (opts->compare && opts->time_limit == 0.0)
+        opts->time_limit = COMPARE_SECONDS;
     return true;
 }

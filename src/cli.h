@@ -18,16 +18,26 @@ enum ao_view_mode {
     AO_VIEW_MODE_DIFFERENCE,
 };
 
+/* One side of --compare: a sampling mode with the sampler and AA it names, the rest from the
+ * other options. */
+struct ao_compare_side {
+    enum ao_sampling sampling;
+    enum ao_sequence sequence;
+    bool aa;
+};
+
 /* Everything SPEC.md's command line can say; strings point into argv. */
 struct ao_options {
     const char *scene_path;   /* NULL: the built-in default scene */
     bool headless;
     const char *output;       /* NULL: aoview.png when headless */
-    uint32_t spp;             /* default 256 */
+    uint32_t spp;             /* default 256; with --compare, unlimited (--time decides) */
     uint32_t spppp;           /* 0: auto, the default */
     bool adaptive;            /* --adaptive: default on */
     double target_error;      /* --target-error: 0 (none) by default */
-    double time_limit;        /* --time: seconds, 0 (none) by default */
+    double time_limit;        /* --time: seconds, 0 (none) by default; with --compare, 10 */
+    const char *compare;      /* --compare A,B as given, NULL: none; parsed into sides */
+    struct ao_compare_side sides[2];
     enum ao_view_mode view;   /* --view: default ao */
     enum ao_shading shading;  /* --shading: default phong */
     enum ao_sampling sampling;/* default cosine */
@@ -45,9 +55,12 @@ struct ao_options {
 };
 
 /* Parses argv into *opts (defaults first); --size obeys image.h's AO_IMAGE_MAX_SIDE/_PIXELS;
- * --view difference needs --reference. On a usage error writes one line naming the option into
+ * --view difference needs --reference; --compare needs --headless and the AO view. On a usage error writes one line naming the option into
  * msg and returns false. */
 bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, size_t msg_size);
+
+/* Writes side's name ("cosine+sobol+aa", the form --compare takes) into out, truncated to size. */
+void ao_cli_side_name(const struct ao_compare_side *side, char *out, size_t size);
 
 /* The --help text. */
 const char *ao_cli_usage(void);

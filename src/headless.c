@@ -78,28 +78,33 @@ static void load(void)
         dlclose(library);
 }
 
-/* A heat map's colour bar, drawn over the image by the display before read-back. */
-struct bar {
+/* What the display draws over the image before read-back: a heat map's colour bar, or labels. */
+struct overlay {
     const struct ao_glapi *gl;
-    const struct ao_heatmap_scale *range;
+    const struct ao_heatmap_scale *range;   /* the colour bar's, or NULL */
     const char *title;
+    const struct ao_headless_label *labels;
+    int count;
     bool failed;
 };
 
-static void draw_bar(void *user, int width, int height)
+static void draw_overlay(void *user, int width, int height)
 {
-    struct bar *b = user;
-    struct ao_hud *hud = ao_hud_create(b->gl);
+    struct overlay *o = user;
+    struct ao_hud *hud = ao_hud_create(o->gl);
     if (!hud) {
-        b->failed = true;
+        o->failed = true;
         return;
     }
-    ao_heatmap_draw_bar(hud, b->range, b->title, width - 8, 8, 1.0f, width, height);
+    if (o->range)
+        ao_heatmap_draw_bar(hud, o->range, o->title, width - 8, 8, 1.0f, width, height);
+    for (int k = 0; k < o->count; k++)
+        ao_hud_draw(hud, o->labels[k].text, o->labels[k].x, o->labels[k].y, 1.0f, width, height);
     ao_hud_destroy(hud);
 }
 
-/* Writes rgb as ao_headless_write_png does, with bar's colour bar over it unless bar is NULL. */
-static bool write_png(const char *path, const float *rgb, int width, int height, struct bar *bar)
+/* Writes rgb as ao_headless_write_png does, with overlay drawn over it unless overlay is NULL. */
+static bool write_png(const char *path, const float *rgb, int width, int height, struct overlay *overlay)
 {
     pthread_once(&osmesa_once, load);
     if (osmesa.error[0]) {
@@ -131,10 +136,11 @@ static bool write_png(const char *path, const float *rgb, int width, int height,
     struct ao_glapi gl;
     struct ao_display *display = NULL;
     ok = ok && ao_glapi_load(&gl, osmesa.get_proc_address) && (display = ao_display_create(&gl));
-    if (bar)
-        bar->gl = &gl;
+    if (overlay)
+        overlay->gl = &gl;
     ok = ok && ao_display_upload(display, rgb, width, height) &&
-         ao_display_write_png_with(display, path, bar ? draw_bar : NULL, bar) && !(bar && bar->failed);
+         ao_display_write_png_with(display, path, overlay ? draw_overlay : NULL, overlay) &&
+         !(overlay && overlay->failed);
     ao_display_destroy(display);
     osmesa.destroy_context(context);
     return ok;
@@ -148,7 +154,14 @@ bool ao_headless_write_png(const char *path, const float *rgb, int width, int he
 bool ao_headless_write_heatmap(const char *path, const float *heat, int width, int height,
                                const struct ao_heatmap_scale *range, const char *title)
 {
-    struct bar bar = {.range = range, .title = title};
+    struct overlay bar = {.range = range, .title = title};
     bool room = width >= AO_HEADLESS_BAR_WIDTH && height >= AO_HEADLESS_BAR_HEIGHT;
     return write_png(path, heat, width, height, room ? &bar : NULL);
+}
+
+bool ao_headless_write_labelled(const char *path, const float *rgb, int width, int height,
+                                const struct ao_headless_label *labels, int count)
+{
+    struct overlay overlay = {.labels = labels, .count = count};
+    return write_png(path, rgb, width, height, &overlay);
 }

@@ -19,6 +19,16 @@ bool ao_headless_write_png(const char *path, const float *rgb, int width, int he
 bool ao_headless_write_heatmap(const char *path, const float *heat, int width, int height,
                                const struct ao_heatmap_scale *range, const char *title);
 
+/* Text burnt into a headless PNG in the overlay's box, its top left x, y pixels from the image's. */
+struct ao_headless_label {
+    const char *text;
+    int x, y;
+};
+
+/* As ao_headless_write_png, with count labels drawn over the image by the window's overlay text. */
+bool ao_headless_write_labelled(const char *path, const float *rgb, int width, int height,
+                                const struct ao_headless_label *labels, int count);
+
 /* The smallest image that ao_headless_write_heatmap draws the colour bar on. */
 #define AO_HEADLESS_BAR_WIDTH 320
 #define AO_HEADLESS_BAR_HEIGHT 200

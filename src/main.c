@@ -37,6 +37,10 @@ static const double BAR_SECONDS = 0.1;
 struct reporter {
     FILE *stats;
     const char *stats_path;
+    const char *side;      /* --compare's "A" or "B": the stats rows' first column; NULL: none */
+    struct ao_render *_Atomic render;   /* --compare: the side's renderer, stopped at stop_at */
+    double stop_at;        /* --compare: seconds whose nearest pass end ends the side; 0: none */
+    double pass_end;       /* seconds at the end of the previous pass */
     bool progress;         /* a progress bar on stderr (a terminal, not --quiet) */
     bool stats_failed;
     struct ao_progress eta;   /* the bar's time-left estimate */
@@ -77,6 +81,8 @@ static void on_pass(const struct ao_frame_info *info, void *user)
 {
     struct reporter *rep = user;
     if (rep->stats && !rep->stats_failed) {
+        if (rep->side)
+            fprintf(rep->stats, "%s,", rep->side);
         fprintf(rep->stats, "%u,%u,%.6f,%llu,%llu,%.3f", info->pass, info->spp, info->seconds,
                 (unsigned long long)info->eye_rays, (unsigned long long)info->shadow_rays,
                 mrays_per_second(info));
@@ -90,6 +96,13 @@ static void on_pass(const struct ao_frame_info *info, void *user)
     }
     if (rep->progress)
         draw_bar(rep, info);
+    /* Equal time: end the side at the pass end nearest stop_at, taking the next pass to last as
+     * long as this one (time_limit ends it at the first end past stop_at otherwise). */
+    struct ao_render *render = atomic_load(&rep->render);
+    if (render && rep->stop_at > 0.0 && !info->done &&
+        info->seconds + 0.5 * (info->seconds - rep->pass_end) >= rep->stop_at)
+        ao_render_stop(render);
+    rep->pass_end = info->seconds;
     ao_window_notify();
 }
 
@@ -220,7 +233,125 @@ struct app {
     float *reference;
     struct reporter reporter;
     struct interrupt interrupt;
+    float *sides;            /* --compare: both sides' final images, side by side, 2W x H */
 };
+
+/* --compare's sides, as the stats rows, labels and file names call them. */
+static const char *const side_names[2] = {"A", "B"};
+
+/* Copies height rows of width RGB pixels between images whose rows are the given pixels apart. */
+static void copy_rows(float *to, size_t to_row, const float *from, size_t from_row, int width, int height)
+{
+    for (size_t y = 0; y < (size_t)height; y++)
+        memcpy(to + 3 * y * to_row, from + 3 * y * from_row, 3 * sizeof *to * (size_t)width);
+}
+
+/* --compare's output: path with "-A" or "-B" before its extension (which cli.c made 4 bytes);
+ * false with one message when that does not fit in size. */
+static bool side_path(const char *path, const char *side, char *out, size_t size)
+{
+    size_t stem = strlen(path) - 4;
+    if ((size_t)snprintf(out, size, "%.*s-%s%s", (int)stem, path, side, path + stem) < size)
+        return true;
+    fprintf(stderr, "--output: %s: too long a name for --compare's -%s file\n", path, side);
+    return false;
+}
+
+/* Writes both sides: one PNG twice the width with each side's label at its top, or a linear file
+ * per side. */
+static bool write_compare(const char *path, const struct app *app, const struct ao_options *opts,
+                          const struct ao_frame_info info[2], int width, int height)
+{
+    size_t row = 2 * (size_t)width;
+    if (!ao_image_has_extension(path, ".png")) {
+        for (int k = 0; k < 2; k++) {
+            float *rgb = malloc(3 * sizeof *rgb * (size_t)width * (size_t)height);
+            if (!rgb) {
+                fprintf(stderr, "aoview: %s: out of memory\n", path);
+                return false;
+            }
+            copy_rows(rgb, (size_t)width, app->sides + 3 * (size_t)k * (size_t)width, row, width, height);
+            char file[4096];
+            struct ao_frame frame = {.info = info[k], .width = width, .height = height, .rgb = rgb};
+            bool ok = side_path(path, side_names[k], file, sizeof file) &&
+                      write_output(file, &frame, app->scene.name, opts->seed, NULL);
+            free(rgb);
+            if (!ok)
+                return false;
+        }
+        return true;
+    }
+    char text[2][160];
+    struct ao_headless_label labels[2];
+    for (int k = 0; k < 2; k++) {
+        char name[64], rmse[32] = "";
+        ao_cli_side_name(&opts->sides[k], name, sizeof name);
+        if (!isnan(info[k].rmse))
+            snprintf(rmse, sizeof rmse, "\nRMSE %.4g", info[k].rmse);
+        snprintf(text[k], sizeof text[k], "%s: %s\n%u spp  %.3g s%s", side_names[k], name, info[k].spp,
+                 info[k].seconds, rmse);
+        labels[k] = (struct ao_headless_label){.text = text[k], .x = k * width + 4, .y = 4};
+    }
+    return ao_headless_write_labelled(path, app->sides, (int)row, height, labels, 2);
+}
+
+/* --compare: renders each side in turn with all the threads (so that they do not compete for
+ * cores) for --time seconds, ending at the pass end nearest it (on_pass), copies its image into
+ * app->sides, and writes them. A signal exits at once: there is no half-compared image to write. */
+static int run_compare(struct app *app, const struct ao_options *opts, const struct ao_render_config *config,
+                       const struct ao_settings *settings)
+{
+    const char *output = opts->output ? opts->output : "aoview.png";
+    int width = config->width, height = config->height;
+    if (!(app->sides = malloc(6 * sizeof *app->sides * (size_t)width * (size_t)height))) {
+        fprintf(stderr, "aoview: out of memory for --compare's images\n");
+        return EXIT_RUNTIME;
+    }
+    struct ao_frame_info info[2];
+    for (int k = 0; k < 2; k++) {
+        struct ao_render_config side_config = *config;
+        struct ao_settings side_settings = *settings;
+        side_config.sequence = opts->sides[k].sequence;
+        side_settings.sampling = opts->sides[k].sampling;
+        side_settings.aa = opts->sides[k].aa;
+        app->reporter.side = side_names[k];
+        app->reporter.drawn_at = 0.0;
+        app->reporter.eta = (struct ao_progress){0};
+        app->reporter.stop_at = config->time_limit;
+        app->reporter.pass_end = 0.0;
+        if (!(app->render = ao_render_create(&side_config, &side_settings)))
+            return EXIT_RUNTIME;
+        atomic_store(&app->reporter.render, app->render);
+        bool done = ao_render_wait(app->render);
+        atomic_store(&app->reporter.render, NULL);
+        if (app->reporter.progress && !done)
+            fputc('\n', stderr);
+        const struct ao_frame *frame = ao_render_take_frame(app->render);
+        if (!frame)
+            return EXIT_RUNTIME;
+        info[k] = frame->info;
+        copy_rows(app->sides + 3 * (size_t)k * (size_t)width, 2 * (size_t)width, frame->rgb, (size_t)width, width,
+                  height);
+        ao_render_destroy(app->render);
+        app->render = NULL;
+        if (!opts->quiet) {
+            char name[64];
+            ao_cli_side_name(&opts->sides[k], name, sizeof name);
+            fprintf(stderr, "aoview: %s %s: %u spp, %.2f s, %.1f Mrays/s\n", side_names[k], name, info[k].spp,
+                    info[k].seconds, mrays_per_second(&info[k]));
+        }
+    }
+    if (!write_compare(output, app, opts, info, width, height))
+        return EXIT_RUNTIME;
+    if (!opts->quiet && ao_image_has_extension(output, ".png")) {
+        fprintf(stderr, "aoview: wrote %s\n", output);
+    } else if (!opts->quiet) {
+        size_t stem = strlen(output) - 4;
+        fprintf(stderr, "aoview: wrote %.*s-A%s and %.*s-B%s\n", (int)stem, output, output + stem, (int)stem, output,
+                output + stem);
+    }
+    return 0;
+}
 
 static int run(struct app *app, const struct ao_options *opts)
 {
@@ -252,8 +383,8 @@ static int run(struct app *app, const struct ao_options *opts)
             fprintf(stderr, "--stats: cannot write %s: %s\n", opts->stats_path, strerror(errno));
             return EXIT_RUNTIME;
         }
-        fprintf(app->reporter.stats, "pass,spp,seconds,eye_rays,shadow_rays,mrays_per_s%s,mean_spp,error,converged\n",
-                app->reference ? ",rmse" : "");
+        fprintf(app->reporter.stats, "%spass,spp,seconds,eye_rays,shadow_rays,mrays_per_s%s,mean_spp,error,converged\n",
+                opts->compare ? "side," : "", app->reference ? ",rmse" : "");
     }
 
     /* Renderer. */
@@ -277,6 +408,8 @@ static int run(struct app *app, const struct ao_options *opts)
     }
     bool window = !opts->headless;
     app->reporter.progress = !opts->quiet && !window && isatty(STDERR_FILENO);
+    if (opts->compare)
+        return start_watcher(&app->interrupt, NULL) ? run_compare(app, opts, &config, &settings) : EXIT_RUNTIME;
     if (!(app->render = ao_render_create(&config, &settings)) || !start_watcher(&app->interrupt, app->render))
         return EXIT_RUNTIME;
 
@@ -321,5 +454,6 @@ int main(int argc, char **argv)
     ao_tracer_destroy(app.tracer);
     ao_scene_finish(&app.scene);
     free(app.reference);
+    free(app.sides);
     return status;
 }

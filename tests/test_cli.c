@@ -243,6 +243,51 @@ static void test_view_options(void **state)
     REJECT("--view", "missing value", "--view");
 }
 
+/* --compare: each side's parts, what the other options fill in, its defaults for --spp and
+ * --time, and every malformed or unsupported use. */
+static void test_compare_options(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE_NONE(&o));
+    assert_null(o.compare);
+    assert_true(PARSE(&o, "--headless", "--compare", "uniform,cosine"));
+    assert_non_null(o.compare);
+    assert_int_equal(o.sides[0].sampling, AO_SAMPLING_UNIFORM);
+    assert_int_equal(o.sides[1].sampling, AO_SAMPLING_COSINE);
+    assert_int_equal(o.sides[0].sequence, AO_SEQUENCE_SOBOL);
+    assert_true(o.sides[0].aa && o.sides[1].aa);
+    assert_true(o.time_limit == 10.0);          /* time decides, not spp */
+    assert_int_equal(o.spp, 1 << 30);
+    /* The other options fill in what a side leaves out, wherever they stand. */
+    assert_true(PARSE(&o, "--compare=cosine+noaa,hemisphere+sobol", "--headless", "--sampler", "random",
+                      "--time", "3", "--spp", "64"));
+    assert_int_equal(o.sides[0].sampling, AO_SAMPLING_COSINE);
+    assert_false(o.sides[0].aa);
+    assert_int_equal(o.sides[0].sequence, AO_SEQUENCE_RANDOM);
+    assert_int_equal(o.sides[1].sampling, AO_SAMPLING_HEMISPHERE);
+    assert_true(o.sides[1].aa);
+    assert_int_equal(o.sides[1].sequence, AO_SEQUENCE_SOBOL);
+    assert_true(o.time_limit == 3.0);
+    assert_int_equal(o.spp, 64);
+    assert_true(PARSE(&o, "--headless", "--no-aa", "--compare", "cosine+aa+random,cosine"));
+    assert_true(o.sides[0].aa);
+    assert_false(o.sides[1].aa);
+    char name[64];
+    ao_cli_side_name(&o.sides[0], name, sizeof name);
+    assert_string_equal(name, "cosine+random+aa");
+    const char *bad[] = {"uniform", "a,b,c", "uniform,cosine,cosine", "foo,cosine", "cosine+foo,cosine",
+                         "cosine,", ",cosine", "cosine+,cosine", "cosine+aa+noaa,cosine",
+                         "cosine+sobol+random,cosine", "Cosine,uniform", "cosine+sobol+aa+aa,cosine",
+                         "cosine+averyveryverylongpart,cosine", ""};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+        REJECT("--compare: expected two configurations", bad[i], "--headless", "--compare", (char *)bad[i]);
+    REJECT("--compare: headless only", "--headless", "--compare", "uniform,cosine");
+    REJECT("--compare", "--view difference", "--headless", "--compare", "uniform,cosine", "--reference", "r.pfm",
+           "--view", "difference");
+    REJECT("--compare", "missing value", "--headless", "--compare");
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -250,7 +295,7 @@ static void test_usage_lists_every_option(void **state)
     const char *names[] = {"--headless", "-o, --output", "--spp", "--spppp", "--sampling",
                            "--aa", "--no-aa", "--size", "--threads", "--seed", "--ao-distance",
                            "--stats", "--reference", "-q, --quiet", "-h, --help", "--version",
-                           "--time", "--view", "--shading", "N normals", "F flat/Phong", "D difference",
+                           "--time", "--view", "--shading", "--compare A,B", "N normals", "F flat/Phong", "D difference",
                            "default 256", "default cosine", "640x480", "Esc"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         assert_non_null(strstr(u, names[i]));
@@ -270,6 +315,7 @@ int main(void)
         cmocka_unit_test(test_adaptive_options),
         cmocka_unit_test(test_exr_and_save_format),
         cmocka_unit_test(test_view_options),
+        cmocka_unit_test(test_compare_options),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
