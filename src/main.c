@@ -233,7 +233,7 @@ struct app {
     float *reference;
     struct reporter reporter;
     struct interrupt interrupt;
-    float *sides;            /* --compare: both sides' final images, side by side, 2W x H */
+    float *sides[2];         /* --compare: each side's final image */
 };
 
 /* --compare's sides, as the stats rows, labels and file names call them. */
@@ -262,28 +262,26 @@ static bool side_path(const char *path, const char *side, char *out, size_t size
 static bool write_compare(const char *path, const struct app *app, const struct ao_options *opts,
                           const struct ao_frame_info info[2], int width, int height)
 {
-    size_t row = 2 * (size_t)width;
     if (!ao_image_has_extension(path, ".png")) {
         for (int k = 0; k < 2; k++) {
-            float *rgb = malloc(3 * sizeof *rgb * (size_t)width * (size_t)height);
-            if (!rgb) {
-                fprintf(stderr, "aoview: %s: out of memory\n", path);
-                return false;
-            }
-            copy_rows(rgb, (size_t)width, app->sides + 3 * (size_t)k * (size_t)width, row, width, height);
             char file[4096];
-            struct ao_frame frame = {.info = info[k], .width = width, .height = height, .rgb = rgb};
-            bool ok = side_path(path, side_names[k], file, sizeof file) &&
-                      write_output(file, &frame, app->scene.name, opts->seed, NULL);
-            free(rgb);
-            if (!ok)
+            struct ao_frame frame = {.info = info[k], .width = width, .height = height, .rgb = app->sides[k]};
+            if (!side_path(path, side_names[k], file, sizeof file) ||
+                !write_output(file, &frame, app->scene.name, opts->seed, NULL))
                 return false;
         }
         return true;
     }
+    size_t row = 2 * (size_t)width;
+    float *both = malloc(3 * sizeof *both * row * (size_t)height);
+    if (!both) {
+        fprintf(stderr, "aoview: %s: out of memory\n", path);
+        return false;
+    }
     char text[2][160];
     struct ao_headless_label labels[2];
     for (int k = 0; k < 2; k++) {
+        copy_rows(both + 3 * (size_t)k * (size_t)width, row, app->sides[k], (size_t)width, width, height);
         char name[64], rmse[32] = "";
         ao_cli_side_name(&opts->sides[k], name, sizeof name);
         if (!isnan(info[k].rmse))
@@ -292,7 +290,9 @@ static bool write_compare(const char *path, const struct app *app, const struct 
                  info[k].seconds, rmse);
         labels[k] = (struct ao_headless_label){.text = text[k], .x = k * width + 4, .y = 4};
     }
-    return ao_headless_write_labelled(path, app->sides, (int)row, height, labels, 2);
+    bool ok = ao_headless_write_labelled(path, both, (int)row, height, labels, 2);
+    free(both);
+    return ok;
 }
 
 /* --compare: renders each side in turn with all the threads (so that they do not compete for
@@ -303,7 +303,8 @@ static int run_compare(struct app *app, const struct ao_options *opts, const str
 {
     const char *output = opts->output ? opts->output : "aoview.png";
     int width = config->width, height = config->height;
-    if (!(app->sides = malloc(6 * sizeof *app->sides * (size_t)width * (size_t)height))) {
+    size_t floats = 3 * (size_t)width * (size_t)height;
+    if (!(app->sides[0] = malloc(floats * sizeof(float))) || !(app->sides[1] = malloc(floats * sizeof(float)))) {
         fprintf(stderr, "aoview: out of memory for --compare's images\n");
         return EXIT_RUNTIME;
     }
@@ -330,8 +331,7 @@ static int run_compare(struct app *app, const struct ao_options *opts, const str
         if (!frame)
             return EXIT_RUNTIME;
         info[k] = frame->info;
-        copy_rows(app->sides + 3 * (size_t)k * (size_t)width, 2 * (size_t)width, frame->rgb, (size_t)width, width,
-                  height);
+        memcpy(app->sides[k], frame->rgb, floats * sizeof(float));
         ao_render_destroy(app->render);
         app->render = NULL;
         if (!opts->quiet) {
@@ -343,13 +343,11 @@ static int run_compare(struct app *app, const struct ao_options *opts, const str
     }
     if (!write_compare(output, app, opts, info, width, height))
         return EXIT_RUNTIME;
-    if (!opts->quiet && ao_image_has_extension(output, ".png")) {
+    char a[4096], b[4096];
+    if (!opts->quiet && ao_image_has_extension(output, ".png"))
         fprintf(stderr, "aoview: wrote %s\n", output);
-    } else if (!opts->quiet) {
-        size_t stem = strlen(output) - 4;
-        fprintf(stderr, "aoview: wrote %.*s-A%s and %.*s-B%s\n", (int)stem, output, output + stem, (int)stem, output,
-                output + stem);
-    }
+    else if (!opts->quiet && side_path(output, side_names[0], a, sizeof a) && side_path(output, side_names[1], b, sizeof b))
+        fprintf(stderr, "aoview: wrote %s and %s\n", a, b);
     return 0;
 }
 
@@ -454,6 +452,7 @@ int main(int argc, char **argv)
     ao_tracer_destroy(app.tracer);
     ao_scene_finish(&app.scene);
     free(app.reference);
-    free(app.sides);
+    free(app.sides[0]);
+    free(app.sides[1]);
     return status;
 }
