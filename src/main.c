@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "compare.h"
 #include "config.h"
 #include "headless.h"
 #include "heatmap.h"
@@ -239,13 +240,6 @@ struct app {
 /* --compare's sides, as the stats rows, labels and file names call them. */
 static const char *const side_names[2] = {"A", "B"};
 
-/* Copies height rows of width RGB pixels between images whose rows are the given pixels apart. */
-static void copy_rows(float *to, size_t to_row, const float *from, size_t from_row, int width, int height)
-{
-    for (size_t y = 0; y < (size_t)height; y++)
-        memcpy(to + 3 * y * to_row, from + 3 * y * from_row, 3 * sizeof *to * (size_t)width);
-}
-
 /* --compare's output: path with "-A" or "-B" before its extension (which cli.c made 4 bytes);
  * false with one message when that does not fit in size. */
 static bool side_path(const char *path, const char *side, char *out, size_t size)
@@ -280,14 +274,9 @@ static bool write_compare(const char *path, const struct app *app, const struct 
     }
     char text[2][160];
     struct ao_headless_label labels[2];
+    ao_compare_compose(AO_COMPARE_SIDE_BY_SIDE, 0, app->sides[0], app->sides[1], width, height, both);
     for (int k = 0; k < 2; k++) {
-        copy_rows(both + 3 * (size_t)k * (size_t)width, row, app->sides[k], (size_t)width, width, height);
-        char name[64], rmse[32] = "";
-        ao_cli_side_name(&opts->sides[k], name, sizeof name);
-        if (!isnan(info[k].rmse))
-            snprintf(rmse, sizeof rmse, "\nRMSE %.4g", info[k].rmse);
-        snprintf(text[k], sizeof text[k], "%s: %s\n%u spp  %.3g s%s", side_names[k], name, info[k].spp,
-                 info[k].seconds, rmse);
+        ao_compare_label(side_names[k], &opts->sides[k], &info[k], "\n", text[k], sizeof text[k]);
         labels[k] = (struct ao_headless_label){.text = text[k], .x = k * width + 4, .y = 4};
     }
     bool ok = ao_headless_write_labelled(path, both, (int)row, height, labels, 2);
