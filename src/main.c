@@ -233,6 +233,8 @@ struct app {
     struct ao_render *render;
     float *reference;
     struct reporter reporter;
+    struct reporter side_reporters[2];   /* the window's comparison: each side's stats rows */
+    struct reporter mute;    /* the window's renderer under --compare, whose rows are the sides' */
     struct interrupt interrupt;
     float *sides[2];         /* --compare: each side's final image */
 };
@@ -395,9 +397,30 @@ static int run(struct app *app, const struct ao_options *opts)
     }
     bool window = !opts->headless;
     app->reporter.progress = !opts->quiet && !window && isatty(STDERR_FILENO);
-    if (opts->compare)
+    if (opts->compare && !window)
         return start_watcher(&app->interrupt, NULL) ? run_compare(app, opts, &config, &settings) : EXIT_RUNTIME;
-    if (!(app->render = ao_render_create(&config, &settings)) || !start_watcher(&app->interrupt, app->render))
+
+    /* The window's renderer. With --compare it renders side A, paused while the window compares,
+     * and the stats rows come from the sides; without, V's sides write none (the header has no
+     * side column). */
+    struct ao_render_config single = config;
+    struct ao_settings first = settings;
+    for (int k = 0; k < 2; k++) {
+        app->side_reporters[k] = app->reporter;
+        app->side_reporters[k].side = side_names[k];
+        if (!opts->compare)
+            app->side_reporters[k].stats = NULL;
+    }
+    if (opts->compare && window) {
+        app->mute = app->reporter;
+        app->mute.stats = NULL;
+        single.user = &app->mute;
+        single.sequence = opts->sides[0].sequence;
+        first.sampling = opts->sides[0].sampling;
+        first.aa = opts->sides[0].aa;
+        first.paused = true;
+    }
+    if (!(app->render = ao_render_create(&single, &first)) || !start_watcher(&app->interrupt, app->render))
         return EXIT_RUNTIME;
 
     /* Window, or headless output (also where no window can be opened). */
@@ -405,13 +428,21 @@ static int run(struct app *app, const struct ao_options *opts)
         struct ao_window_info info = {.scene_name = app->scene.name, .quiet = opts->quiet,
                                       .seed = opts->seed, .save_exr = opts->save_exr,
                                       .reference = app->reference,
-                                      .difference = opts->view == AO_VIEW_MODE_DIFFERENCE};
+                                      .difference = opts->view == AO_VIEW_MODE_DIFFERENCE,
+                                      .config = &single, .compare = opts->compare != NULL,
+                                      .sides = {opts->sides[0], opts->sides[1]},
+                                      .users = {&app->side_reporters[0], &app->side_reporters[1]}};
         enum ao_window_result result = ao_window_run(app->render, &info);
         if (result != AO_WINDOW_NO_DISPLAY)
             return result == AO_WINDOW_OK ? 0 : EXIT_RUNTIME;
         fprintf(stderr, "aoview: no display available; rendering headless to %s\n",
                 opts->output ? opts->output : "aoview.png");
         app->reporter.progress = !opts->quiet && isatty(STDERR_FILENO);
+        if (opts->compare) {
+            ao_render_destroy(app->render);
+            app->render = NULL;
+            return run_compare(app, opts, &config, &settings);
+        }
     }
     atomic_store(&app->interrupt.graceful, true);
     return run_headless(app->render, opts, &app->interrupt, &app->reporter, app->scene.name, app->reference);
@@ -432,11 +463,13 @@ int main(int argc, char **argv)
     struct app app = {0};
     int status = run(&app, &opts);
     ao_render_destroy(app.render);
-    if (app.reporter.stats && fclose(app.reporter.stats) != 0 && !app.reporter.stats_failed) {
+    bool stats_failed = app.reporter.stats_failed || app.side_reporters[0].stats_failed ||
+                        app.side_reporters[1].stats_failed;
+    if (app.reporter.stats && fclose(app.reporter.stats) != 0 && !stats_failed) {
         fprintf(stderr, "%s: write failed\n", opts.stats_path);
-        app.reporter.stats_failed = true;
+        stats_failed = true;
     }
-    if (app.reporter.stats_failed && status == 0)
+    if (stats_failed && status == 0)
         status = EXIT_RUNTIME;
     ao_tracer_destroy(app.tracer);
     ao_scene_finish(&app.scene);
