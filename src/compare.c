@@ -33,6 +33,7 @@ struct ao_compare {
     pthread_mutex_t lock;
     struct ao_settings settings;     /* as the user set them: A's sampling and AA, the user's pause */
     void (*on_pass)(const struct ao_frame_info *info, void *user);
+    bool closing;                    /* ao_compare_destroy has begun: passes no longer hand turns on */
     struct side sides[2];
 };
 
@@ -91,7 +92,7 @@ static void on_pass(const struct ao_frame_info *info, void *user)
     } else if (side->stale) {
         counts = false;
     }
-    if (counts) {
+    if (counts && !c->closing) {
         side->pass = info->seconds - side->seconds;
         side->seconds = info->seconds;
         side->done = info->done;
@@ -144,6 +145,11 @@ void ao_compare_destroy(struct ao_compare *c)
 {
     if (!c)
         return;
+    /* A side's pass may hand the turn to the other at any time: no more of that, then neither
+     * renderer is touched by the other's thread while it is taken down. */
+    pthread_mutex_lock(&c->lock);
+    c->closing = true;
+    pthread_mutex_unlock(&c->lock);
     for (int k = 0; k < 2; k++)
         ao_render_destroy(c->sides[k].render);
     pthread_mutex_destroy(&c->lock);
@@ -178,14 +184,6 @@ void ao_compare_restart(struct ao_compare *c)
     ao_render_restart(c->sides[0].render);
     ao_render_restart(c->sides[1].render);
     pthread_mutex_unlock(&c->lock);
-}
-
-struct ao_compare_side ao_compare_side(struct ao_compare *c, int k)
-{
-    pthread_mutex_lock(&c->lock);
-    struct ao_compare_side side = c->sides[k].config;
-    pthread_mutex_unlock(&c->lock);
-    return side;
 }
 
 bool ao_compare_running(struct ao_compare *c)
@@ -240,6 +238,28 @@ void ao_compare_label(const char *name, const struct ao_compare_side *side, cons
     if (!isnan(info->rmse))
         snprintf(rmse, sizeof rmse, "%sRMSE %.4g", separator, info->rmse);
     snprintf(out, size, "%s: %s%s%u spp  %.3g s%s", name, config, separator, info->spp, info->seconds, rmse);
+}
+
+void ao_compare_labels(struct ao_compare *c, const char *separator, char labels[2][AO_COMPARE_LABEL])
+{
+    static const char *const names[2] = {"A", "B"};
+    for (int k = 0; k < 2; k++) {
+        pthread_mutex_lock(&c->lock);
+        struct ao_compare_side side = c->sides[k].config;
+        pthread_mutex_unlock(&c->lock);
+        ao_compare_label(names[k], &side, &c->sides[k].shown->info, separator, labels[k], AO_COMPARE_LABEL);
+    }
+}
+
+void ao_compare_status(struct ao_compare *c, const char *scene, const char *separator, char *out, size_t size)
+{
+    char labels[2][AO_COMPARE_LABEL];
+    ao_compare_labels(c, "  ", labels);
+    pthread_mutex_lock(&c->lock);
+    const char *state = c->settings.paused ? "paused" : turn(c) < 0 ? "finished" : NULL;
+    pthread_mutex_unlock(&c->lock);
+    snprintf(out, size, "%s%scompare%s%s%s%s%s%s", scene, separator, separator, labels[0], separator, labels[1],
+             state ? separator : "", state ? state : "");
 }
 
 int ao_compare_width(enum ao_compare_layout layout, int width)

@@ -41,9 +41,6 @@ void ao_compare_set_settings(struct ao_compare *compare, const struct ao_setting
 /* Restarts both sides. Any thread. */
 void ao_compare_restart(struct ao_compare *compare);
 
-/* Side k's configuration (A's follows the sampling and AA keys). Any thread. */
-struct ao_compare_side ao_compare_side(struct ao_compare *compare, int k);
-
 /* True while a side is rendering: not paused, and neither both done nor the side behind a finished
  * side caught up with it. Any thread. */
 bool ao_compare_running(struct ao_compare *compare);
@@ -66,6 +63,17 @@ struct ao_compare_side ao_compare_partner(struct ao_compare_side current);
  * three joined by separator, into out (truncated to size). Pure. */
 void ao_compare_label(const char *name, const struct ao_compare_side *side, const struct ao_frame_info *info,
                       const char *separator, char *out, size_t size);
+
+/* The size of a side's label as ao_compare_labels writes it. */
+#define AO_COMPARE_LABEL 160
+
+/* Writes the sides' labels, "A" and "B", of their frames on screen (both must have one) into
+ * labels. The window's thread only. */
+void ao_compare_labels(struct ao_compare *compare, const char *separator, char labels[2][AO_COMPARE_LABEL]);
+
+/* Writes the title's status: the scene, "compare", both sides' labels (parts two spaces apart),
+ * then "paused" or "finished" when so, joined by separator. The window's thread only. */
+void ao_compare_status(struct ao_compare *compare, const char *scene, const char *separator, char *out, size_t size);
 
 /* The width of the image the layout shows for two width x height sides. Pure. */
 int ao_compare_width(enum ao_compare_layout layout, int width);

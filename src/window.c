@@ -378,16 +378,6 @@ static void draw_chart(struct viewer *v, const struct ao_chart *chart, const str
                       width, height, scale, look->width, look->height);
 }
 
-/* The labels of the comparison's sides, joined by separator within each. */
-static void compare_labels(const struct viewer *v, const char *separator, char labels[2][160])
-{
-    static const char *const names[2] = {"A", "B"};
-    for (int k = 0; k < 2; k++) {
-        struct ao_compare_side side = ao_compare_side(v->compare, k);
-        ao_compare_label(names[k], &side, &ao_compare_frame(v->compare, k)->info, separator, labels[k], 160);
-    }
-}
-
 /* Draws the image, then the overlay (the status, or while comparing the divider and the sides'
  * labels) and the chart or the help, into the framebuffer look describes. */
 static void draw(struct viewer *v, const struct look *look, const struct ao_hud_status *s)
@@ -398,8 +388,8 @@ static void draw(struct viewer *v, const struct look *look, const struct ao_hud_
     float scale = content_scale * (look->height >= 360 ? 2.0f : 1.0f);
     int bar_top = (int)(8 * scale);
     if (v->compare) {
-        char labels[2][160];
-        compare_labels(v, "\n", labels);
+        char labels[2][AO_COMPARE_LABEL];
+        ao_compare_labels(v->compare, "\n", labels);
         const char *const text[2] = {labels[0], labels[1]};
         struct ao_display_rect image = ao_display_fit(v->image_width, v->image_height, look->width, look->height);
         bar_top = ao_compareview_draw(v->hud, v->layout, v->split, image, look->hud && !look->help ? text : NULL,
@@ -429,16 +419,6 @@ static void draw(struct viewer *v, const struct look *look, const struct ao_hud_
     }
 }
 
-/* The comparison's status for the title: the scene, each side's label, and whether it is paused
- * or finished. */
-static void compare_status(const struct viewer *v, const struct ao_settings *settings, char *out, size_t size)
-{
-    char labels[2][160];
-    compare_labels(v, "  ", labels);
-    snprintf(out, size, "%s \xe2\x80\x94 compare \xe2\x80\x94 %s \xe2\x80\x94 %s%s", v->info->scene_name, labels[0],
-             labels[1], settings->paused ? " \xe2\x80\x94 paused" : !ao_compare_running(v->compare) ? " \xe2\x80\x94 finished" : "");
-}
-
 /* Sets the title when the status changed, and redraws when what the window shows changed (or X
  * asked for it), so that drawing costs nothing while nothing changes. */
 static void update(struct viewer *v, const struct ao_settings *settings)
@@ -449,7 +429,7 @@ static void update(struct viewer *v, const struct ao_settings *settings)
     struct look look = {.hud = v->show_hud, .help = v->show_help};
     glfwGetFramebufferSize(v->window, &look.width, &look.height);
     if (v->compare) {
-        compare_status(v, settings, look.status, sizeof look.status);
+        ao_compare_status(v->compare, v->info->scene_name, " \xe2\x80\x94 ", look.status, sizeof look.status);
     } else {
         s = status(v, settings);
         ao_hud_format(&s, " \xe2\x80\x94 ", look.status, sizeof look.status);

@@ -221,7 +221,10 @@ static void test_restarts_and_pause(void **state)
     wait_for(&f, last, 4);
     assert_int_equal(ao_compare_frame(f.compare, 0)->info.sampling, AO_SAMPLING_HEMISPHERE);
     assert_int_equal(ao_compare_frame(f.compare, 1)->info.sampling, AO_SAMPLING_COSINE);
-    assert_int_equal(ao_compare_side(f.compare, 0).sampling, AO_SAMPLING_HEMISPHERE);
+    char labels[2][AO_COMPARE_LABEL];
+    ao_compare_labels(f.compare, " ", labels);
+    assert_non_null(strstr(labels[0], "A: hemisphere+random+aa "));
+    assert_non_null(strstr(labels[1], "B: cosine+sobol+aa "));
 
     /* Paused: nothing runs, no frame comes; the settings say paused. */
     s.paused = true;
