@@ -396,11 +396,18 @@ static void draw(struct viewer *v, const struct look *look, const struct ao_hud_
                                       scale, look->width, look->height) + (int)(8 * scale);
     }
     if (look->help) {
+        /* At the overlay's scale, or at the content scale where that does not fit the height. */
+        float help_scale = scale;
         int w, h;
-        ao_hud_measure(v->hud, HELP, scale, &w, &h);
-        w += (int)(2 * AO_HUD_PADDING * scale);
-        h += (int)(2 * AO_HUD_PADDING * scale);
-        ao_hud_draw(v->hud, HELP, (look->width - w) / 2, (look->height - h) / 2, scale, look->width,
+        for (;;) {
+            ao_hud_measure(v->hud, HELP, help_scale, &w, &h);
+            w += (int)(2 * AO_HUD_PADDING * help_scale);
+            h += (int)(2 * AO_HUD_PADDING * help_scale);
+            if (h <= look->height || help_scale <= content_scale)
+                break;
+            help_scale = content_scale;
+        }
+        ao_hud_draw(v->hud, HELP, (look->width - w) / 2, (look->height - h) / 2, help_scale, look->width,
                     look->height);
     } else if (look->hud) {
         if (!v->compare) {
