@@ -11,8 +11,9 @@
 #                          F2 hides the chart; D shows the difference heat map
 #   test_window.sh compare V: uniform against cosine, labelled on both sides, both curves in the
 #                          chart, render seconds within 5 %; B, divider drag, S (screenshots of
-#                          both layouts compared), E, D, +, G restart nothing, an orbit restarts
-#                          both; V again; --compare at start with --time and --stats, fair within 5 %
+#                          both layouts compared), E, D, +, G restart nothing, an orbit, a pan and
+#                          a zoom each restart both; V again; --compare at start with --time and
+#                          --stats, fair within 5 %
 # Needs AO_BINARY and AO_SOURCE_ROOT (tests/meson.build sets both); exits 77 when Xvfb or
 # xdotool is missing.
 set -u
@@ -451,17 +452,27 @@ EOF
     sleep 0.5
     read -r after _ _ _ < <(sides)
     [ "$after" -ge "$before" ] || fail "+ or G restarted the comparison ($before spp, then $after)"
-    # A camera move restarts both sides: an orbit away from the divider.
-    sleep 1
-    read -r spp_a _ spp_b _ < <(sides)
-    drag $((3 * WIDTH / 4)) $((HEIGHT / 2)) $((3 * WIDTH / 4 + 40)) $((HEIGHT / 2))
-    for _ in $(seq 100); do
-        read -r new_a _ new_b _ < <(sides)
-        [ "$new_a" -lt $((spp_a / 2)) ] && [ "$new_b" -lt $((spp_b / 2)) ] && break
-        sleep 0.02
+    # Each camera move restarts both sides: an orbit away from the divider, a pan, a wheel step.
+    for move in orbit pan zoom; do
+        sleep 1
+        read -r spp_a _ spp_b _ < <(sides)
+        case $move in
+        orbit) drag $((3 * WIDTH / 4)) $((HEIGHT / 2)) $((3 * WIDTH / 4 + 40)) $((HEIGHT / 2)) ;;
+        pan) xdotool mousemove --window "$wid" $((3 * WIDTH / 4)) $((HEIGHT / 2)) mousedown 3
+             sleep 0.2
+             xdotool mousemove --window "$wid" $((3 * WIDTH / 4)) $((HEIGHT / 2 + 30))
+             sleep 0.2
+             xdotool mouseup 3 ;;
+        zoom) xdotool mousemove --window "$wid" $((3 * WIDTH / 4)) $((HEIGHT / 2)) click 4 ;;
+        esac
+        for _ in $(seq 100); do
+            read -r new_a _ new_b _ < <(sides)
+            [ "$new_a" -lt $((spp_a / 2)) ] && [ "$new_b" -lt $((spp_b / 2)) ] && break
+            sleep 0.02
+        done
+        echo "$move: A $spp_a -> $new_a spp, B $spp_b -> $new_b spp"
+        [ "$new_a" -lt $((spp_a / 2)) ] && [ "$new_b" -lt $((spp_b / 2)) ] || fail "a $move did not restart both sides"
     done
-    echo "orbit: A $spp_a -> $new_a spp, B $spp_b -> $new_b spp"
-    [ "$new_a" -lt $((spp_a / 2)) ] && [ "$new_b" -lt $((spp_b / 2)) ] || fail "an orbit did not restart both sides"
     # V again: the single view, in A's configuration.
     press v
     wait_title "spheres.scene — uniform — AA on — spp [0-9]+ of 1000000 — "
