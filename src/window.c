@@ -571,7 +571,9 @@ static bool upload(struct viewer *v)
     const struct ao_frame *a = ao_compare_frame(v->compare, 0), *b = ao_compare_frame(v->compare, 1);
     const float *view_a = view_of(v, a, &v->heat[0]), *view_b = view_of(v, b, &v->heat[1]);
     size_t floats = 3 * (size_t)ao_compare_width(AO_COMPARE_SIDE_BY_SIDE, a->width) * (size_t)a->height;
-    if (!view_a || !view_b || (!v->composite && !(v->composite = malloc(floats * sizeof *v->composite)))) {
+    if (!view_a || !view_b)
+        return false;
+    if (!v->composite && !(v->composite = malloc(floats * sizeof *v->composite))) {
         fprintf(stderr, "aoview: out of memory for the comparison\n");
         return false;
     }
