@@ -18,8 +18,8 @@ struct side {
 
     /* The turns, under the comparison's lock. */
     uint64_t run;                    /* ao_frame_info.restarts of the last pass counted */
-    bool stale;                      /* the other side started a new run first: until this one's
-                                        passes show a new run too, they are the old run's */
+    bool stale;                      /* both sides were restarted: until this one's passes show a
+                                        new run, they are the old run's */
     double seconds;                  /* render seconds of the current run, as of its last pass */
     double pass;                     /* the last pass's seconds */
     bool done;
@@ -51,22 +51,40 @@ static int turn(const struct ao_compare *c)
     return behind->seconds + 0.5 * behind->pass < finished->seconds ? (int)(behind - c->sides) : -1;
 }
 
-/* Hands side k the user's settings with its own sampling and AA, paused unless it is its turn.
- * Called with the lock held. */
-static void apply(struct ao_compare *c, int k, int running)
+/* Hands side k the user's settings with its own sampling and AA, paused unless it is its turn;
+ * true when that restarted it. Called with the lock held. */
+static bool apply(struct ao_compare *c, int k, int running)
 {
     struct ao_settings s = c->settings;
     s.sampling = c->sides[k].config.sampling;
     s.aa = c->sides[k].config.aa;
     s.paused = running != k;
-    ao_render_set_settings(c->sides[k].render, &s);
+    return ao_render_set_settings(c->sides[k].render, &s);
 }
 
+/* Hands the turn to the side whose turn it is. Called with the lock held. */
 static void apply_turn(struct ao_compare *c)
 {
     int running = turn(c);
     apply(c, 0, running);
     apply(c, 1, running);
+}
+
+/* Restarts both sides (those that the settings did not restart already) and starts their turns
+ * over, A first. Called with the lock held. */
+static void start_over(struct ao_compare *c, bool a_restarted, bool b_restarted)
+{
+    if (!a_restarted)
+        ao_render_restart(c->sides[0].render);
+    if (!b_restarted)
+        ao_render_restart(c->sides[1].render);
+    for (int k = 0; k < 2; k++) {
+        struct side *side = &c->sides[k];
+        side->stale = true;
+        side->seconds = side->pass = 0.0;
+        side->done = false;
+    }
+    apply_turn(c);
 }
 
 /* config.on_pass of each side, on its render thread: counts the pass towards its run, hands the
@@ -75,23 +93,11 @@ static void on_pass(const struct ao_frame_info *info, void *user)
 {
     struct side *side = user;
     struct ao_compare *c = side->compare;
-    struct side *other = &c->sides[side == c->sides ? 1 : 0];
     pthread_mutex_lock(&c->lock);
-    bool counts = true;
-    if (info->restarts != side->run) {
-        /* A new run. Both sides restart together; the first to show it starts the other's run
-         * over too, whose passes until it shows its own new run belong to the old one. */
-        side->run = info->restarts;
-        if (side->stale) {
-            side->stale = false;
-        } else {
-            other->stale = true;
-            other->seconds = other->pass = 0.0;
-            other->done = false;
-        }
-    } else if (side->stale) {
-        counts = false;
-    }
+    /* After a restart, a pass of the old run (finished as the restart came) counts for nothing. */
+    bool counts = info->restarts != side->run || !side->stale;
+    side->run = info->restarts;
+    side->stale = side->stale && !counts;
     if (counts && !c->closing) {
         side->pass = info->seconds - side->seconds;
         side->seconds = info->seconds;
@@ -166,23 +172,20 @@ void ao_compare_get_settings(struct ao_compare *c, struct ao_settings *out)
 void ao_compare_set_settings(struct ao_compare *c, const struct ao_settings *settings)
 {
     pthread_mutex_lock(&c->lock);
-    struct ao_compare_side *a = &c->sides[0].config;
-    /* A's renderer restarts on its own when its sampling or AA changes; B's must follow it. */
-    bool a_changed = settings->sampling != a->sampling || settings->aa != a->aa;
-    a->sampling = settings->sampling;
-    a->aa = settings->aa;
+    c->sides[0].config.sampling = settings->sampling;
+    c->sides[0].config.aa = settings->aa;
     c->settings = *settings;
-    apply_turn(c);
-    if (a_changed)
-        ao_render_restart(c->sides[1].render);
+    int running = turn(c);
+    bool a = apply(c, 0, running), b = apply(c, 1, running);
+    if (a || b)
+        start_over(c, a, b);
     pthread_mutex_unlock(&c->lock);
 }
 
 void ao_compare_restart(struct ao_compare *c)
 {
     pthread_mutex_lock(&c->lock);
-    ao_render_restart(c->sides[0].render);
-    ao_render_restart(c->sides[1].render);
+    start_over(c, false, false);
     pthread_mutex_unlock(&c->lock);
 }
 
