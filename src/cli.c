@@ -93,11 +93,12 @@ static const char usage[] =
     "                        difference (|AO - reference|, needs --reference)\n"
     "                        (default ao)\n"
     "  --shading S           phong | flat mesh normals (default phong)\n"
-    "  --compare A,B         with --headless: render two configurations for --time\n"
-    "                        seconds each (default 10), side by side in one PNG, or\n"
-    "                        FILE-A and FILE-B for .pfm/.exr; a configuration is\n"
-    "                        a sampling mode with optional +random|+sobol, +aa|+noaa,\n"
-    "                        e.g. uniform,cosine or cosine+random,cosine+sobol\n"
+    "  --compare A,B         two configurations for --time seconds each (default\n"
+    "                        10): split live in the window, or with --headless side\n"
+    "                        by side in one PNG, or FILE-A and FILE-B for .pfm/.exr;\n"
+    "                        a configuration is a sampling mode with optional\n"
+    "                        +random|+sobol, +aa|+noaa, e.g. uniform,cosine or\n"
+    "                        cosine+random,cosine+sobol\n"
     "  --sampling M          uniform | hemisphere | cosine (default cosine)\n"
     "  --sampler S           random | sobol (Owen-scrambled) numbers for jitter and\n"
     "                        directions (default sobol)\n"
@@ -455,10 +456,6 @@ bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, siz
     }
     if (opts->compare && !parse_compare("--compare", opts->compare, opts, msg, msg_size))
         return false;
-    if (opts->compare && !opts->headless) {
-        snprintf(msg, msg_size, "--compare: headless only for now, add --headless");
-        return false;
-    }
     if (opts->compare && opts->view == AO_VIEW_MODE_DIFFERENCE) {
         snprintf(msg, msg_size, "--compare: shows the ao or normals view, not --view difference");
         return false;

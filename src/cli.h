@@ -55,7 +55,7 @@ struct ao_options {
 };
 
 /* Parses argv into *opts (defaults first); --size obeys image.h's AO_IMAGE_MAX_SIDE/_PIXELS;
- * --view difference needs --reference; --compare needs --headless and the AO view. On a usage error writes one line naming the option into
+ * --view difference needs --reference; --compare needs the AO or normals view. On a usage error writes one line naming the option into
  * msg and returns false. */
 bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, size_t msg_size);
 

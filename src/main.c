@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "compare.h"
 #include "config.h"
 #include "headless.h"
 #include "heatmap.h"
@@ -232,19 +233,14 @@ struct app {
     struct ao_render *render;
     float *reference;
     struct reporter reporter;
+    struct reporter side_reporters[2];   /* the window's comparison: each side's stats rows */
+    struct reporter mute;    /* the window's renderer under --compare, whose rows are the sides' */
     struct interrupt interrupt;
     float *sides[2];         /* --compare: each side's final image */
 };
 
 /* --compare's sides, as the stats rows, labels and file names call them. */
 static const char *const side_names[2] = {"A", "B"};
-
-/* Copies height rows of width RGB pixels between images whose rows are the given pixels apart. */
-static void copy_rows(float *to, size_t to_row, const float *from, size_t from_row, int width, int height)
-{
-    for (size_t y = 0; y < (size_t)height; y++)
-        memcpy(to + 3 * y * to_row, from + 3 * y * from_row, 3 * sizeof *to * (size_t)width);
-}
 
 /* --compare's output: path with "-A" or "-B" before its extension (which cli.c made 4 bytes);
  * false with one message when that does not fit in size. */
@@ -280,14 +276,9 @@ static bool write_compare(const char *path, const struct app *app, const struct 
     }
     char text[2][160];
     struct ao_headless_label labels[2];
+    ao_compare_compose(AO_COMPARE_SIDE_BY_SIDE, 0, app->sides[0], app->sides[1], width, height, both);
     for (int k = 0; k < 2; k++) {
-        copy_rows(both + 3 * (size_t)k * (size_t)width, row, app->sides[k], (size_t)width, width, height);
-        char name[64], rmse[32] = "";
-        ao_cli_side_name(&opts->sides[k], name, sizeof name);
-        if (!isnan(info[k].rmse))
-            snprintf(rmse, sizeof rmse, "\nRMSE %.4g", info[k].rmse);
-        snprintf(text[k], sizeof text[k], "%s: %s\n%u spp  %.3g s%s", side_names[k], name, info[k].spp,
-                 info[k].seconds, rmse);
+        ao_compare_label(side_names[k], &opts->sides[k], &info[k], "\n", text[k], sizeof text[k]);
         labels[k] = (struct ao_headless_label){.text = text[k], .x = k * width + 4, .y = 4};
     }
     bool ok = ao_headless_write_labelled(path, both, (int)row, height, labels, 2);
@@ -406,9 +397,30 @@ static int run(struct app *app, const struct ao_options *opts)
     }
     bool window = !opts->headless;
     app->reporter.progress = !opts->quiet && !window && isatty(STDERR_FILENO);
-    if (opts->compare)
+    if (opts->compare && !window)
         return start_watcher(&app->interrupt, NULL) ? run_compare(app, opts, &config, &settings) : EXIT_RUNTIME;
-    if (!(app->render = ao_render_create(&config, &settings)) || !start_watcher(&app->interrupt, app->render))
+
+    /* The window's renderer. With --compare it renders side A, paused while the window compares,
+     * and the stats rows come from the sides; without, V's sides write none (the header has no
+     * side column). */
+    struct ao_render_config single = config;
+    struct ao_settings first = settings;
+    for (int k = 0; k < 2; k++) {
+        app->side_reporters[k] = app->reporter;
+        app->side_reporters[k].side = side_names[k];
+        if (!opts->compare)
+            app->side_reporters[k].stats = NULL;
+    }
+    if (opts->compare && window) {
+        app->mute = app->reporter;
+        app->mute.stats = NULL;
+        single.user = &app->mute;
+        single.sequence = opts->sides[0].sequence;
+        first.sampling = opts->sides[0].sampling;
+        first.aa = opts->sides[0].aa;
+        first.paused = true;
+    }
+    if (!(app->render = ao_render_create(&single, &first)) || !start_watcher(&app->interrupt, app->render))
         return EXIT_RUNTIME;
 
     /* Window, or headless output (also where no window can be opened). */
@@ -416,13 +428,21 @@ static int run(struct app *app, const struct ao_options *opts)
         struct ao_window_info info = {.scene_name = app->scene.name, .quiet = opts->quiet,
                                       .seed = opts->seed, .save_exr = opts->save_exr,
                                       .reference = app->reference,
-                                      .difference = opts->view == AO_VIEW_MODE_DIFFERENCE};
+                                      .difference = opts->view == AO_VIEW_MODE_DIFFERENCE,
+                                      .config = &single, .compare = opts->compare != NULL,
+                                      .sides = {opts->sides[0], opts->sides[1]},
+                                      .users = {&app->side_reporters[0], &app->side_reporters[1]}};
         enum ao_window_result result = ao_window_run(app->render, &info);
         if (result != AO_WINDOW_NO_DISPLAY)
             return result == AO_WINDOW_OK ? 0 : EXIT_RUNTIME;
         fprintf(stderr, "aoview: no display available; rendering headless to %s\n",
                 opts->output ? opts->output : "aoview.png");
         app->reporter.progress = !opts->quiet && isatty(STDERR_FILENO);
+        if (opts->compare) {
+            ao_render_destroy(app->render);
+            app->render = NULL;
+            return run_compare(app, opts, &config, &settings);
+        }
     }
     atomic_store(&app->interrupt.graceful, true);
     return run_headless(app->render, opts, &app->interrupt, &app->reporter, app->scene.name, app->reference);
@@ -443,11 +463,13 @@ int main(int argc, char **argv)
     struct app app = {0};
     int status = run(&app, &opts);
     ao_render_destroy(app.render);
-    if (app.reporter.stats && fclose(app.reporter.stats) != 0 && !app.reporter.stats_failed) {
+    bool stats_failed = app.reporter.stats_failed || app.side_reporters[0].stats_failed ||
+                        app.side_reporters[1].stats_failed;
+    if (app.reporter.stats && fclose(app.reporter.stats) != 0 && !stats_failed) {
         fprintf(stderr, "%s: write failed\n", opts.stats_path);
-        app.reporter.stats_failed = true;
+        stats_failed = true;
     }
-    if (app.reporter.stats_failed && status == 0)
+    if (stats_failed && status == 0)
         status = EXIT_RUNTIME;
     ao_tracer_destroy(app.tracer);
     ao_scene_finish(&app.scene);

@@ -621,7 +621,7 @@ static void restart_locked(struct ao_render *render)
     pthread_cond_broadcast(&render->wake);
 }
 
-void ao_render_set_settings(struct ao_render *render, const struct ao_settings *settings)
+bool ao_render_set_settings(struct ao_render *render, const struct ao_settings *settings)
 {
     pthread_mutex_lock(&render->lock);
     const struct ao_settings *old = &render->settings;
@@ -635,6 +635,7 @@ void ao_render_set_settings(struct ao_render *render, const struct ao_settings *
         restart_locked(render);
     pthread_cond_broadcast(&render->wake);
     pthread_mutex_unlock(&render->lock);
+    return changes_estimate;
 }
 
 void ao_render_restart(struct ao_render *render)

@@ -94,8 +94,8 @@ void ao_render_destroy(struct ao_render *render);
 void ao_render_get_settings(struct ao_render *render, struct ao_settings *out);
 
 /* Applies new settings: a change of sampling, AA, output, shading or camera aborts the pass in flight and restarts
- * accumulation; spppp and pause take effect at the next pass boundary. Any thread. */
-void ao_render_set_settings(struct ao_render *render, const struct ao_settings *settings);
+ * accumulation (and returns true); spppp and pause take effect at the next pass boundary. Any thread. */
+bool ao_render_set_settings(struct ao_render *render, const struct ao_settings *settings);
 
 /* Restarts accumulation with the current settings, aborting the pass in flight. Any thread. */
 void ao_render_restart(struct ao_render *render);

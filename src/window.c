@@ -15,6 +15,8 @@
 
 #include "chart.h"
 #include "chartview.h"
+#include "compare.h"
+#include "compareview.h"
 #include "display.h"
 #include "glapi.h"
 #include "heatmap.h"
@@ -40,8 +42,10 @@ static const char HELP[] =
     "D  difference from --reference on/off\n"
     "N  normals view on/off (restarts)\n"
     "F  flat/Phong mesh normals (restarts)\n"
+    "V  compare with a second configuration at equal time\n"
+    "B  split / side-by-side comparison\n"
     "S  save aoview-N.png and aoview-N.pfm (or .exr)\n"
-    "left drag  orbit\n"
+    "left drag  orbit (on the divider: move it)\n"
     "right drag  pan\n"
     "wheel  zoom\n"
     "F1 or ?  this help\n"
@@ -66,8 +70,11 @@ struct look {
     char status[512];                /* ao_hud_format's text, as in the title */
 };
 
+/* viewer.drag while the mouse drags the comparison's divider. */
+#define DRAG_DIVIDER (GLFW_MOUSE_BUTTON_LAST + 1)
+
 struct viewer {
-    struct ao_render *render;
+    struct ao_render *render;        /* the single view's; paused while comparing */
     const struct ao_window_info *info;
     GLFWwindow *window;
     struct ao_glapi gl;
@@ -77,9 +84,15 @@ struct viewer {
     double shown_at;                 /* glfwGetTime() when it was taken */
     bool show_hud, show_help, save;
     enum show show;
-    float *heat;                     /* the heat map's colours, allocated on first use */
+    float *heat[2];                  /* the heat maps' colours (one per side), allocated on first use */
+    struct ao_compare *compare;      /* the comparison while V has it on, else NULL */
+    bool toggle_compare;             /* V was pressed: the loop turns the comparison on or off */
+    enum ao_compare_layout layout;
+    double split;                    /* the divider, as a share of the image's width */
+    float *composite;                /* the comparison's two views as the layout shows them */
+    int image_width, image_height;   /* of the image uploaded; 0 before the first */
     struct ao_progress progress;     /* the time-left estimate, fed the frames taken */
-    int drag;                        /* mouse button held over the window, or -1 */
+    int drag;                        /* mouse button held over the window, DRAG_DIVIDER, or -1 */
     double cursor_x, cursor_y;
     double orbit_x, orbit_y, pan_x, pan_y, wheel;   /* mouse input not yet applied */
     struct ao_chart chart;           /* RMSE against time of the frames taken (with --reference) */
@@ -105,12 +118,44 @@ static void set_glfw_running(bool running)
 
 /* ---- input: callbacks change settings at once; mouse moves and screenshots wait for the loop ---- */
 
+/* The settings of what is on screen: the comparison's while there is one, else the renderer's. */
+static void get_settings(const struct viewer *v, struct ao_settings *s)
+{
+    if (v->compare)
+        ao_compare_get_settings(v->compare, s);
+    else
+        ao_render_get_settings(v->render, s);
+}
+
+static void set_settings(const struct viewer *v, const struct ao_settings *s)
+{
+    if (v->compare)
+        ao_compare_set_settings(v->compare, s);
+    else
+        ao_render_set_settings(v->render, s);
+}
+
+/* The frame whose facts the status and screenshots give: side A's while comparing. */
+static const struct ao_frame *current_frame(const struct viewer *v)
+{
+    return v->compare ? ao_compare_frame(v->compare, 0) : v->shown;
+}
+
+/* Where the image lies in the window, in window coordinates (origin at the bottom left). */
+static struct ao_display_rect image_in_window(const struct viewer *v)
+{
+    int width, height;
+    glfwGetWindowSize(v->window, &width, &height);
+    return ao_display_fit(v->image_width ? v->image_width : 1, v->image_height ? v->image_height : 1, width, height);
+}
+
 /* Doubles (factor 2) or halves (factor 0) the samples per pass within 1..65536; from auto (0),
  * those of the pass on screen, so that the keys switch to manual where auto stood. */
 static int scale_spppp(const struct viewer *v, int spppp, int factor)
 {
+    const struct ao_frame *f = current_frame(v);
     if (spppp == 0)
-        spppp = v->shown && v->shown->info.spppp ? (int)v->shown->info.spppp : 1;
+        spppp = f && f->info.spppp ? (int)f->info.spppp : 1;
     long next = factor ? 2L * spppp : spppp / 2;
     return next < 1 ? 1 : next > 65536 ? 65536 : (int)next;
 }
@@ -123,7 +168,7 @@ static void on_char(GLFWwindow *window, unsigned int codepoint)
     if (codepoint > 127)
         return;
     struct ao_settings s;
-    ao_render_get_settings(v->render, &s);
+    get_settings(v, &s);
     switch (tolower((int)codepoint)) {
     case 'u': s.sampling = AO_SAMPLING_UNIFORM; break;
     case 'h': s.sampling = AO_SAMPLING_HEMISPHERE; break;
@@ -147,13 +192,23 @@ static void on_char(GLFWwindow *window, unsigned int codepoint)
         v->show = v->show == SHOW_DIFFERENCE ? SHOW_IMAGE : SHOW_DIFFERENCE;
         v->reupload = true;
         return;
-    case 'r': ao_render_restart(v->render); return;
+    case 'r':
+        if (v->compare)
+            ao_compare_restart(v->compare);
+        else
+            ao_render_restart(v->render);
+        return;
+    case 'v': v->toggle_compare = true; return;
+    case 'b':
+        v->layout = v->layout == AO_COMPARE_SPLIT ? AO_COMPARE_SIDE_BY_SIDE : AO_COMPARE_SPLIT;
+        v->reupload = true;
+        return;
     case 's': v->save = true; return;
     case '?': v->show_help = !v->show_help; return;
     case 'q': glfwSetWindowShouldClose(window, GLFW_TRUE); return;
     default: return;
     }
-    ao_render_set_settings(v->render, &s);
+    set_settings(v, &s);
 }
 
 /* Keys without a character. */
@@ -180,7 +235,12 @@ static void on_button(GLFWwindow *window, int button, int action, int mods)
         (button == GLFW_MOUSE_BUTTON_LEFT || button == GLFW_MOUSE_BUTTON_RIGHT)) {
         v->drag = button;
         glfwGetCursorPos(window, &v->cursor_x, &v->cursor_y);
-    } else if (action == GLFW_RELEASE && button == v->drag) {
+        /* A left press within 6 pixels of the split view's divider takes the divider. */
+        struct ao_display_rect r = image_in_window(v);
+        if (button == GLFW_MOUSE_BUTTON_LEFT && v->compare && v->layout == AO_COMPARE_SPLIT &&
+            fabs(v->cursor_x - (r.x + v->split * r.width)) <= 6.0)
+            v->drag = DRAG_DIVIDER;
+    } else if (action == GLFW_RELEASE && (button == v->drag || (v->drag == DRAG_DIVIDER && button == GLFW_MOUSE_BUTTON_LEFT))) {
         v->drag = -1;
     }
 }
@@ -190,6 +250,12 @@ static void on_cursor(GLFWwindow *window, double x, double y)
     struct viewer *v = glfwGetWindowUserPointer(window);
     if (v->drag < 0)
         return;
+    if (v->drag == DRAG_DIVIDER) {
+        struct ao_display_rect r = image_in_window(v);
+        v->split = r.width > 0 ? fmin(1.0, fmax(0.0, (x - r.x) / r.width)) : 0.5;
+        v->reupload = true;
+        return;
+    }
     double *dx = v->drag == GLFW_MOUSE_BUTTON_LEFT ? &v->orbit_x : &v->pan_x;
     double *dy = v->drag == GLFW_MOUSE_BUTTON_LEFT ? &v->orbit_y : &v->pan_y;
     *dx += x - v->cursor_x;
@@ -219,26 +285,45 @@ static void apply_mouse(struct viewer *v)
 {
     if (v->orbit_x == 0 && v->orbit_y == 0 && v->pan_x == 0 && v->pan_y == 0 && v->wheel == 0)
         return;
-    int width, height;
-    glfwGetWindowSize(v->window, &width, &height);
-    struct ao_display_rect image = ao_display_fit(v->shown->width, v->shown->height, width, height);
+    struct ao_display_rect image = image_in_window(v);
     double size = image.height > 0 ? image.height : 1;
     struct ao_settings s;
-    ao_render_get_settings(v->render, &s);
+    get_settings(v, &s);
     const double pi = 3.14159265358979323846;
     ao_camera_orbit(&s.camera, (float)(pi * v->orbit_x / size), (float)(pi * v->orbit_y / size));
     ao_camera_pan(&s.camera, (float)(v->pan_x / size), (float)(v->pan_y / size));
     ao_camera_zoom(&s.camera, (float)pow(0.85, v->wheel));
-    ao_render_set_settings(v->render, &s);
+    set_settings(v, &s);
     v->orbit_x = v->orbit_y = v->pan_x = v->pan_y = v->wheel = 0;
 }
 
 /* ---- output ---- */
 
-/* Saves the frame on screen as aoview-N.png (through the display shader at 1:1, without the
- * overlay) and aoview-N.pfm or .exr (linear) in the working directory, N the first free number. */
+/* The comparison's two images, linear, as the layout shows them, in memory the caller frees; NULL
+ * with one message when memory is short. */
+static float *compose_images(const struct viewer *v)
+{
+    const struct ao_frame *a = ao_compare_frame(v->compare, 0), *b = ao_compare_frame(v->compare, 1);
+    float *out = malloc(3 * sizeof *out * (size_t)ao_compare_width(v->layout, a->width) * (size_t)a->height);
+    if (!out) {
+        fprintf(stderr, "aoview: out of memory for the comparison's screenshot\n");
+        return NULL;
+    }
+    ao_compare_compose(v->layout, (int)lround(v->split * a->width), a->rgb, b->rgb, a->width, a->height, out);
+    return out;
+}
+
+/* Saves what is on screen as aoview-N.png (through the display shader at 1:1, without the
+ * overlay) and aoview-N.pfm or .exr (linear; while comparing, both sides as the layout shows
+ * them) in the working directory, N the first free number. */
 static void save(struct viewer *v)
 {
+    const struct ao_frame *f = current_frame(v);
+    if (!f || (v->compare && !ao_compare_frame(v->compare, 1)))
+        return;
+    float *both = v->compare ? compose_images(v) : NULL;
+    if (v->compare && !both)
+        return;
     char png[32], linear[32];
     for (int n = 1;; n++) {
         snprintf(png, sizeof png, "aoview-%d.png", n);
@@ -246,15 +331,16 @@ static void save(struct viewer *v)
         if (access(png, F_OK) != 0 && access(linear, F_OK) != 0)
             break;
     }
-    const struct ao_frame *f = v->shown;
     struct ao_notes notes;
     ao_notes_make(&notes, &f->info, v->info->scene_name, v->info->seed);
     if (ao_display_write_png(v->display, png) &&
-        ao_image_write_linear(linear, f->rgb, f->width, f->height, notes.notes, notes.count) &&
+        ao_image_write_linear(linear, both ? both : f->rgb, v->image_width, v->image_height, notes.notes,
+                              notes.count) &&
         !v->info->quiet) {
         printf("aoview: saved %s and %s (%u spp)\n", png, linear, f->info.spp);
         fflush(stdout);
     }
+    free(both);
 }
 
 /* The status of the frame on screen; elapsed time runs on between frames while passes run. */
@@ -280,7 +366,7 @@ static struct ao_hud_status status(const struct viewer *v, const struct ao_setti
 /* Draws the error chart, when there is one, in the bottom right corner: its text at twice the
  * content scale where the panel then fits into a quarter of the window, else at the content scale
  * with the panel at most half the window wide and tall. */
-static void draw_chart(struct viewer *v, const struct look *look, float content_scale)
+static void draw_chart(struct viewer *v, const struct ao_chart *chart, const struct look *look, float content_scale)
 {
     float scale = content_scale;
     if (2 * CHART_WIDTH * scale <= 0.5f * (float)look->width && 2 * CHART_HEIGHT * scale <= 0.5f * (float)look->height)
@@ -288,34 +374,55 @@ static void draw_chart(struct viewer *v, const struct look *look, float content_
     int margin = (int)(8 * content_scale);
     int width = (int)fminf(CHART_WIDTH * scale, 0.5f * (float)look->width);
     int height = (int)fminf(CHART_HEIGHT * scale, 0.5f * (float)look->height);
-    ao_chartview_draw(v->hud, &v->chart, look->width - margin - width, look->height - margin - height,
+    ao_chartview_draw(v->hud, chart, look->width - margin - width, look->height - margin - height,
                       width, height, scale, look->width, look->height);
 }
 
-/* Draws the image, then the overlay and the chart or the help, into the framebuffer look
- * describes. */
+/* Draws the image, then the overlay (the status, or while comparing the divider and the sides'
+ * labels) and the chart or the help, into the framebuffer look describes. */
 static void draw(struct viewer *v, const struct look *look, const struct ao_hud_status *s)
 {
     ao_display_draw(v->display, look->width, look->height);
     float content_scale;
     glfwGetWindowContentScale(v->window, &content_scale, NULL);
     float scale = content_scale * (look->height >= 360 ? 2.0f : 1.0f);
+    int bar_top = (int)(8 * scale);
+    if (v->compare) {
+        char labels[2][AO_COMPARE_LABEL];
+        ao_compare_labels(v->compare, "\n", labels);
+        const char *const text[2] = {labels[0], labels[1]};
+        struct ao_display_rect image = ao_display_fit(v->image_width, v->image_height, look->width, look->height);
+        bar_top = ao_compareview_draw(v->hud, v->layout, v->split, image, look->hud && !look->help ? text : NULL,
+                                      scale, look->width, look->height) + (int)(8 * scale);
+    }
     if (look->help) {
+        /* At the overlay's scale, or at the content scale where that does not fit the height. */
+        float help_scale = scale;
         int w, h;
-        ao_hud_measure(v->hud, HELP, scale, &w, &h);
-        w += (int)(2 * AO_HUD_PADDING * scale);
-        h += (int)(2 * AO_HUD_PADDING * scale);
-        ao_hud_draw(v->hud, HELP, (look->width - w) / 2, (look->height - h) / 2, scale, look->width,
+        for (;;) {
+            ao_hud_measure(v->hud, HELP, help_scale, &w, &h);
+            w += (int)(2 * AO_HUD_PADDING * help_scale);
+            h += (int)(2 * AO_HUD_PADDING * help_scale);
+            if (h <= look->height || help_scale <= content_scale)
+                break;
+            help_scale = content_scale;
+        }
+        ao_hud_draw(v->hud, HELP, (look->width - w) / 2, (look->height - h) / 2, help_scale, look->width,
                     look->height);
     } else if (look->hud) {
-        char text[sizeof look->status];
-        ao_hud_format(s, "\n", text, sizeof text);
-        ao_hud_draw(v->hud, text, (int)(8 * scale), (int)(8 * scale), scale, look->width, look->height);
+        if (!v->compare) {
+            char text[sizeof look->status];
+            ao_hud_format(s, "\n", text, sizeof text);
+            ao_hud_draw(v->hud, text, (int)(8 * scale), (int)(8 * scale), scale, look->width, look->height);
+        }
         if (v->show != SHOW_IMAGE)
             ao_heatmap_draw_bar(v->hud, v->show == SHOW_ERROR ? &ao_heatmap_error : &ao_heatmap_difference,
                                 v->show == SHOW_ERROR ? "estimated error" : "|image - reference|",
-                                look->width - (int)(8 * scale), (int)(8 * scale), scale, look->width, look->height);
-        draw_chart(v, look, content_scale);
+                                look->width - (int)(8 * scale), bar_top, scale, look->width, look->height);
+        struct ao_chart both;
+        if (v->compare)
+            ao_compare_chart(v->compare, &both);
+        draw_chart(v, v->compare ? &both : &v->chart, look, content_scale);
     }
 }
 
@@ -323,10 +430,17 @@ static void draw(struct viewer *v, const struct look *look, const struct ao_hud_
  * asked for it), so that drawing costs nothing while nothing changes. */
 static void update(struct viewer *v, const struct ao_settings *settings)
 {
-    struct ao_hud_status s = status(v, settings);
+    if (!v->image_width || !(v->compare ? ao_compare_frame(v->compare, 1) != NULL : v->shown != NULL))
+        return;
+    struct ao_hud_status s = {0};
     struct look look = {.hud = v->show_hud, .help = v->show_help};
     glfwGetFramebufferSize(v->window, &look.width, &look.height);
-    ao_hud_format(&s, " \xe2\x80\x94 ", look.status, sizeof look.status);
+    if (v->compare) {
+        ao_compare_status(v->compare, v->info->scene_name, " \xe2\x80\x94 ", look.status, sizeof look.status);
+    } else {
+        s = status(v, settings);
+        ao_hud_format(&s, " \xe2\x80\x94 ", look.status, sizeof look.status);
+    }
 
     const struct look *old = &v->drawn;
     bool same_status = strcmp(look.status, old->status) == 0;
@@ -426,52 +540,124 @@ static enum ao_window_result open_window(struct viewer *v)
     return AO_WINDOW_OK;
 }
 
-/* Uploads the frame on screen as the view shows it: the image, its error map or its difference
- * from the reference; false when the upload failed. */
-static bool upload(struct viewer *v)
+/* The view of frame f as the window shows it: its image, or its error map or its difference from
+ * the reference painted into *heat (allocated on first use); NULL when memory is short. */
+static const float *view_of(const struct viewer *v, const struct ao_frame *f, float **heat)
 {
-    const struct ao_frame *f = v->shown;
-    v->dirty = true;
     if (v->show == SHOW_IMAGE)
-        return ao_display_upload(v->display, f->rgb, f->width, f->height);
-    if (!v->heat && !(v->heat = malloc(3 * sizeof *v->heat * (size_t)f->width * (size_t)f->height))) {
+        return f->rgb;
+    if (!*heat && !(*heat = malloc(3 * sizeof **heat * (size_t)f->width * (size_t)f->height))) {
         fprintf(stderr, "aoview: out of memory for the heat map\n");
-        return false;
+        return NULL;
     }
     if (v->show == SHOW_ERROR)
-        ao_heatmap_tiles(f, v->heat);
+        ao_heatmap_tiles(f, *heat);
     else
-        ao_heatmap_pixels(f->rgb, v->info->reference, f->width, f->height, v->heat);
-    return ao_display_upload(v->display, v->heat, f->width, f->height);
+        ao_heatmap_pixels(f->rgb, v->info->reference, f->width, f->height, *heat);
+    return *heat;
 }
 
-/* Takes the newest frame, if one is new, into the texture; false when the upload failed. */
+/* Uploads what is on screen as the view shows it: the frame, or while comparing the two sides'
+ * views as the layout shows them; false when the upload failed. */
+static bool upload(struct viewer *v)
+{
+    v->dirty = true;
+    if (!v->compare) {
+        const float *image = view_of(v, v->shown, &v->heat[0]);
+        v->image_width = v->shown->width;
+        v->image_height = v->shown->height;
+        return image && ao_display_upload(v->display, image, v->image_width, v->image_height);
+    }
+    const struct ao_frame *a = ao_compare_frame(v->compare, 0), *b = ao_compare_frame(v->compare, 1);
+    const float *view_a = view_of(v, a, &v->heat[0]), *view_b = view_of(v, b, &v->heat[1]);
+    size_t floats = 3 * (size_t)ao_compare_width(AO_COMPARE_SIDE_BY_SIDE, a->width) * (size_t)a->height;
+    if (!view_a || !view_b)
+        return false;
+    if (!v->composite && !(v->composite = malloc(floats * sizeof *v->composite))) {
+        fprintf(stderr, "aoview: out of memory for the comparison\n");
+        return false;
+    }
+    ao_compare_compose(v->layout, (int)lround(v->split * a->width), view_a, view_b, a->width, a->height, v->composite);
+    v->image_width = ao_compare_width(v->layout, a->width);
+    v->image_height = a->height;
+    return ao_display_upload(v->display, v->composite, v->image_width, v->image_height);
+}
+
+/* Takes the newest frame (while comparing, each side's), if one is new, into the texture, or
+ * uploads again when the view changed; false when the upload failed. */
 static bool take_frame(struct viewer *v)
 {
-    const struct ao_frame *f = ao_render_take_frame(v->render);
-    if (!f) {
-        if (!v->shown || !v->reupload)
+    bool fresh;
+    if (v->compare) {
+        fresh = ao_compare_take_frames(v->compare);
+        if (!ao_compare_frame(v->compare, 0) || !ao_compare_frame(v->compare, 1))
             return true;
-        v->reupload = false;
-        return upload(v);
+    } else {
+        const struct ao_frame *f = ao_render_take_frame(v->render);
+        if ((fresh = f != NULL)) {
+            v->shown = f;
+            v->shown_at = glfwGetTime();
+            ao_chart_add(&v->chart, &f->info);
+            ao_progress_add(&v->progress, &f->info);
+        }
+        if (!v->shown)
+            return true;
     }
-    v->shown = f;
-    v->shown_at = glfwGetTime();
+    if (!fresh && !v->reupload)
+        return true;
     v->reupload = false;
-    ao_chart_add(&v->chart, &f->info);
-    ao_progress_add(&v->progress, &f->info);
     return upload(v);
 }
 
-/* Shows the window at the first frame's size (fitted to the screen) once the renderer has one. */
+/* V: compares the current configuration with --compare's B, or else ao_compare_partner's, paused
+ * if asked, the window's renderer paused meanwhile; false when the comparison cannot start. */
+static bool start_compare(struct viewer *v, bool paused)
+{
+    struct ao_settings s, single;
+    ao_render_get_settings(v->render, &s);
+    single = s;
+    single.paused = true;
+    ao_render_set_settings(v->render, &single);
+    s.paused = paused;
+    struct ao_compare_side sides[2] = {{.sampling = s.sampling, .sequence = v->info->config->sequence, .aa = s.aa}};
+    sides[1] = v->info->compare ? v->info->sides[1] : ao_compare_partner(sides[0]);
+    v->reupload = true;
+    return (v->compare = ao_compare_create(v->info->config, &s, sides, v->info->users)) != NULL;
+}
+
+/* V again: ends the comparison, handing the window's renderer its settings (it goes on where it
+ * stopped unless they changed its estimate). */
+static void stop_compare(struct viewer *v)
+{
+    struct ao_settings s;
+    ao_compare_get_settings(v->compare, &s);
+    ao_compare_destroy(v->compare);
+    v->compare = NULL;
+    ao_render_set_settings(v->render, &s);
+    v->reupload = true;
+}
+
+static void toggle_compare(struct viewer *v)
+{
+    if (v->compare) {
+        stop_compare(v);
+        return;
+    }
+    struct ao_settings s;
+    ao_render_get_settings(v->render, &s);
+    if (!start_compare(v, s.paused))
+        ao_render_set_settings(v->render, &s);
+}
+
+/* Shows the window at the first image's size (fitted to the screen) once there is one. */
 static bool show_first_frame(struct viewer *v)
 {
-    while (!v->shown) {
+    while (!v->image_width) {
         glfwWaitEventsTimeout(0.1);   /* woken early by ao_window_notify */
         if (!take_frame(v))
             return false;
     }
-    int width = v->shown->width, height = v->shown->height;
+    int width = v->image_width, height = v->image_height;
     fit_screen(&width, &height);
     glfwSetWindowSize(v->window, width, height);
     glfwShowWindow(v->window);
@@ -486,6 +672,9 @@ static enum ao_window_result loop(struct viewer *v)
         return AO_WINDOW_FAILED;
     while (!glfwWindowShouldClose(v->window)) {
         /* Input first: the screenshot needs the frame on screen, which taking a new one ends. */
+        if (v->toggle_compare)
+            toggle_compare(v);
+        v->toggle_compare = false;
         apply_mouse(v);
         if (v->save)
             save(v);
@@ -494,13 +683,13 @@ static enum ao_window_result loop(struct viewer *v)
             return AO_WINDOW_FAILED;
 
         struct ao_settings s;
-        ao_render_get_settings(v->render, &s);
+        get_settings(v, &s);
         double started = glfwGetTime();
         update(v, &s);
 
         /* Sleep until something happens once the image stops changing; then, and while passes
          * run, handle events until the next frame is due (vsync may have used the time up). */
-        if (s.paused || v->shown->info.done)
+        if (v->compare ? !ao_compare_running(v->compare) : s.paused || (v->shown && v->shown->info.done))
             glfwWaitEvents();
         for (double rest; (rest = started + FRAME_SECONDS - glfwGetTime()) > 0 &&
                           !glfwWindowShouldClose(v->window);)
@@ -518,14 +707,20 @@ enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_wi
         return AO_WINDOW_NO_DISPLAY;
     }
     set_glfw_running(true);
-    struct viewer v = {.render = render, .info = info, .show_hud = true, .drag = -1,
+    struct viewer v = {.render = render, .info = info, .show_hud = true, .drag = -1, .split = 0.5,
                        .show = info->difference && info->reference ? SHOW_DIFFERENCE : SHOW_IMAGE};
     enum ao_window_result result = open_window(&v);
+    /* --compare: main made the renderer paused; the comparison starts unpaused. */
+    if (result == AO_WINDOW_OK && info->compare && !start_compare(&v, false))
+        result = AO_WINDOW_FAILED;
     if (result == AO_WINDOW_OK)
         result = loop(&v);
+    ao_compare_destroy(v.compare);
     ao_hud_destroy(v.hud);
     ao_display_destroy(v.display);
-    free(v.heat);
+    free(v.heat[0]);
+    free(v.heat[1]);
+    free(v.composite);
     set_glfw_running(false);
     glfwTerminate();
     XSetIOErrorHandler(xlib_handler);

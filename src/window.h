@@ -1,11 +1,12 @@
 /* The interactive viewer: a GLFW window on the running renderer, with SPEC.md's keys and mouse,
- * the status overlay and title, and screenshots. */
+ * the status overlay and title, screenshots, and the live comparison of two configurations. */
 #ifndef AO_WINDOW_H
 #define AO_WINDOW_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "cli.h"
 #include "render.h"
 
 /* What the window shows besides the frames; strings owned by the caller for the whole run. */
@@ -16,6 +17,10 @@ struct ao_window_info {
     bool save_exr;           /* S saves aoview-N.exr beside the PNG instead of aoview-N.pfm */
     const float *reference;  /* --reference for the difference view (the frames' size), or NULL */
     bool difference;         /* start in the difference view (needs reference) */
+    const struct ao_render_config *config;   /* the window's renderer's, for V's two renderers */
+    bool compare;            /* --compare: start in the comparison, B being sides[1] */
+    struct ao_compare_side sides[2];
+    void *users[2];          /* config->on_pass's argument for each side of a comparison */
 };
 
 /* How ao_window_run ended. */

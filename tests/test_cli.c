@@ -282,7 +282,10 @@ static void test_compare_options(void **state)
                          "cosine+averyveryverylongpart,cosine", ""};
     for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
         REJECT("--compare: expected two configurations", bad[i], "--headless", "--compare", (char *)bad[i]);
-    REJECT("--compare: headless only", "--headless", "--compare", "uniform,cosine");
+    /* Without --headless the window compares live, with the same defaults. */
+    assert_true(PARSE(&o, "--compare", "uniform,cosine"));
+    assert_false(o.headless);
+    assert_true(o.time_limit == 10.0);
     REJECT("--compare", "--view difference", "--headless", "--compare", "uniform,cosine", "--reference", "r.pfm",
            "--view", "difference");
     REJECT("--compare", "missing value", "--headless", "--compare");

@@ -150,7 +150,7 @@ static void test_restart_resets_and_settings_apply(void **state)
     assert_true(ao_render_wait(r));
     /* A sampling change restarts; the next finished frame says so and carries the new mode. */
     settings.sampling = AO_SAMPLING_UNIFORM;
-    ao_render_set_settings(r, &settings);
+    assert_true(ao_render_set_settings(r, &settings));
     assert_true(ao_render_wait(r));
     const struct ao_frame *frame = ao_render_take_frame(r);
     assert_non_null(frame);
@@ -159,7 +159,7 @@ static void test_restart_resets_and_settings_apply(void **state)
     assert_int_equal(frame->info.spp, 8);
     /* Changing spppp alone does not restart. */
     settings.spppp = 2;
-    ao_render_set_settings(r, &settings);
+    assert_false(ao_render_set_settings(r, &settings));
     struct ao_settings now;
     ao_render_get_settings(r, &now);
     assert_int_equal(now.spppp, 2);
@@ -172,7 +172,7 @@ static void test_restart_resets_and_settings_apply(void **state)
     assert_int_equal(frame->info.pass, 4);
     /* The normals view and flat shading are other estimates: each restarts. */
     settings.output = AO_OUTPUT_NORMALS;
-    ao_render_set_settings(r, &settings);
+    assert_true(ao_render_set_settings(r, &settings));
     assert_true(ao_render_wait(r));
     frame = ao_render_take_frame(r);
     assert_int_equal(frame->info.restarts, 3);

@@ -9,6 +9,11 @@
 #   test_window.sh chart   with --reference: a run in each sampling mode (H, then U, then C) leaves
 #                          a curve in its colour on the screen, read from Xvfb's framebuffer file;
 #                          F2 hides the chart; D shows the difference heat map
+#   test_window.sh compare V: uniform against cosine, labelled on both sides, both curves in the
+#                          chart, render seconds within 5 %; B, divider drag, S (screenshots of
+#                          both layouts compared), E, D, +, G restart nothing, an orbit, a pan and
+#                          a zoom each restart both; V again; --compare at start with --time and
+#                          --stats, fair within 5 %, and an orbit once it has finished
 # Needs AO_BINARY and AO_SOURCE_ROOT (tests/meson.build sets both); exits 77 when Xvfb or
 # xdotool is missing.
 set -u
@@ -63,15 +68,15 @@ press() {
     xdotool windowfocus --sync "$wid" key --delay 20 "$@" 2>/dev/null
 }
 
-# Waits for screenshot number $1 and checks that both files decode: PNG signature and IHDR size,
-# PFM header, size and no NaN or infinity among its floats.
+# Waits for screenshot number $1 and checks that both files decode: PNG signature and IHDR size
+# ($2 wide, else W), PFM header, size and no NaN or infinity among its floats.
 check_screenshot() {
     local png="$work/aoview-$1.png" pfm="$work/aoview-$1.pfm"
     for _ in $(seq 200); do
         [ -s "$png" ] && [ -s "$pfm" ] && break
         sleep 0.05
     done
-    python3 - "$png" "$pfm" "$W" "$H" <<'EOF' || fail "screenshot $1 does not decode"
+    python3 - "$png" "$pfm" "${2:-$W}" "$H" <<'EOF' || fail "screenshot $1 does not decode"
 import math, struct, sys
 png, pfm, w, h = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 data = open(png, 'rb').read()
@@ -142,30 +147,60 @@ print(same, differ, mean)
 EOF
 }
 
-# Counts, in the window's bottom right quarter on the screen, the pixels in each sampling mode's
-# chart colour (chartview.c's MODE_COLOUR, within 8 in each channel): prints the counts for
-# uniform, hemisphere and cosine, "0 0 0" without a chart.
-chart_colours() {
+# Counts, in the part of the window on the screen from LEFT to RIGHT % of its width and TOP to
+# BOTTOM % of its height, the pixels of each colour R,G,B given (within 8 in each channel), read
+# from Xvfb's framebuffer file: screen_colours LEFT TOP RIGHT BOTTOM R,G,B...
+screen_colours() {
     eval "$(xdotool getwindowgeometry --shell "$wid")"
-    python3 - "$AO_FBDIR/Xvfb_screen0" "$X" "$Y" "$WIDTH" "$HEIGHT" <<'EOF'
+    python3 - "$AO_FBDIR/Xvfb_screen0" "$X" "$Y" "$WIDTH" "$HEIGHT" "$@" <<'EOF'
 import struct, sys
-path, x0, y0, w, h = sys.argv[1], *map(int, sys.argv[2:])
+path, x0, y0, w, h, left, top, right, bottom = sys.argv[1], *map(int, sys.argv[2:10])
+colours = [tuple(map(int, c.split(','))) for c in sys.argv[10:]]
 data = open(path, 'rb').read()
 header = struct.unpack('>25I', data[:100])
 size, bits, stride, ncolours = header[0], header[11], header[12], header[19]
 assert bits == 32 and header[7] == 0 and header[14:17] == (0xff0000, 0xff00, 0xff), 'not 24-bit BGRX'
 pixels = size + 12 * ncolours
-colours = [(255, 128, 0), (0, 255, 64), (0, 191, 255)]
-counts = [0, 0, 0]
-for y in range(y0 + h // 2, y0 + h):
+counts = [0] * len(colours)
+for y in range(y0 + h * top // 100, y0 + h * bottom // 100):
     row = pixels + y * stride
-    for x in range(x0 + w // 2, x0 + w):
+    for x in range(x0 + w * left // 100, x0 + w * right // 100):
         b, g, r = data[row + 4 * x:row + 4 * x + 3]
         for i, (cr, cg, cb) in enumerate(colours):
             if abs(r - cr) <= 8 and abs(g - cg) <= 8 and abs(b - cb) <= 8:
                 counts[i] += 1
 print(*counts)
 EOF
+}
+
+# The pixels in each sampling mode's chart colour (chartview.c's MODE_COLOUR) in the window's
+# bottom right quarter: the counts for uniform, hemisphere and cosine, "0 0 0" without a chart.
+chart_colours() { screen_colours 50 50 100 100 255,128,0 0,255,64 0,191,255; }
+
+# The pixels of the overlay's text colour (hud.c's, 1 1 0.85) in the window's top left and top
+# right quarters.
+label_pixels() {
+    echo "$(screen_colours 0 0 50 50 255,255,217) $(screen_colours 50 0 100 50 255,255,217)"
+}
+
+# The numbers of the comparison's title: A's spp and seconds, then B's.
+sides() {
+    local side='[^ ]+  ([0-9]+) spp  ([0-9.e+]+) s'
+    [[ $(title) =~ A:\ $side.*B:\ $side ]] &&
+        echo "${BASH_REMATCH[1]} ${BASH_REMATCH[2]} ${BASH_REMATCH[3]} ${BASH_REMATCH[4]}"
+}
+
+# Drags with the left button from ($1, $2) to ($3, $4) in the window, pausing between the steps as
+# a hand would.
+drag() {
+    xdotool mousemove --window "$wid" "$1" "$2"
+    sleep 0.2
+    xdotool mousedown 1
+    sleep 0.2
+    xdotool mousemove --window "$wid" "$3" "$4"
+    sleep 0.2
+    xdotool mouseup 1
+    sleep 0.3
 }
 
 # Starts the viewer on the small spheres scene with a target it will not reach; for the chart,
@@ -204,9 +239,15 @@ EOF
     { cat "$scene"; echo "mesh octahedron.obj scale 0.4 translate 1.2 0.4 0.8"; } >keys.scene
     scene=$work/keys.scene
 fi
-if [ "$mode" = chart ]; then
+if [ "$mode" = chart ] || [ "$mode" = compare ]; then
     W=320
     H=240
+    # The comparison at 80x60, shown 8 times magnified: passes short enough (a fraction of a
+    # millisecond, a few under ThreadSanitizer) that one pass is a small part of the 5 % bound.
+    if [ "$mode" = compare ]; then
+        W=80
+        H=60
+    fi
     "$AO_BINARY" --headless -q --size ${W}x$H --spp 64 --spppp 16 -o ref.pfm \
         "$scene" || { echo "FAIL: no reference"; exit 1; }
     args=(--reference ref.pfm)
@@ -333,9 +374,137 @@ elif [ "$mode" = chart ]; then
         fail "D did not show the difference heat map"
     read -r _ _ mean < <(pfm_count "$work/aoview-2.pfm" 0 0 0 "$work/ref.pfm")
     python3 -c "import sys; sys.exit(not float('$mean') < 0.05)" || fail "D changed the saved PFM (mean difference $mean)"
+elif [ "$mode" = compare ]; then
+    # The legend alone in uniform's and cosine's colours (the chart has a hemisphere curve only).
+    wait_title " — RMSE [0-9.e-]+"
+    sleep 1
+    read -r u0 _ c0 < <(chart_colours)
+    read -r _ right0 < <(label_pixels)
+    # V after U: uniform against its partner, cosine, each side labelled at its top.
+    press u
+    wait_title " — uniform — AA on — "
+    press v
+    wait_title " — compare — A: uniform\+sobol\+aa  [0-9]+ spp  [0-9.]+ s  RMSE [0-9.e-]+ — B: cosine\+sobol\+aa  [0-9]+ spp  [0-9.]+ s  RMSE "
+    sleep 2
+    read -r left1 right1 < <(label_pixels)
+    read -r u1 _ c1 < <(chart_colours)
+    echo "label text pixels: top right $right0 before V; top left $left1, top right $right1 after"
+    echo "chart pixels after V (uniform, cosine): $u1 $c1, legend alone $u0 $c0"
+    [ "$left1" -ge 100 ] && [ "$right1" -ge 100 ] && [ "$right0" -lt 20 ] || fail "no label on each side"
+    [ $((u1 - u0)) -ge 30 ] && [ $((c1 - c0)) -ge 30 ] || fail "the chart does not show both sides' curves"
+
+    # Fairness: the two sides' render seconds within 5 % of each other (about 2 s each now; the
+    # turns keep them within one pass, a few ms here).
+    read -r spp_a sec_a spp_b sec_b < <(sides)
+    echo "after 2 s: A $spp_a spp $sec_a s, B $spp_b spp $sec_b s"
+    python3 -c "import sys; a, b = $sec_a, $sec_b; sys.exit(not (a >= 1 and abs(a - b) <= 0.05 * max(a, b)))" ||
+        fail "the sides' render times differ by more than 5 % ($sec_a s, $sec_b s)"
+
+    # Paused, nothing runs and nothing restarts: B (side by side), S, B again (split), a divider
+    # drag to a quarter of the width, S, E, D. The screenshots: side by side twice as wide, A left
+    # and B right; split, A's columns left of the divider and B's right of it.
+    press space
+    wait_title " — paused$"
+    sleep 0.5   # the pass in flight ends and shows
+    paused=$(title)
+    press b
+    sleep 0.5
+    press s
+    check_screenshot 1 $((2 * W))
+    press b
+    sleep 0.3
+    eval "$(xdotool getwindowgeometry --shell "$wid")"
+    drag $((WIDTH / 2)) $((HEIGHT / 2)) $((WIDTH / 4)) $((HEIGHT / 2))
+    press s
+    check_screenshot 2
+    press e e d d
+    sleep 0.5
+    [ "$(title)" = "$paused" ] || fail "B, the divider, S, E or D changed the paused comparison: $(title)"
+    python3 - "$work/aoview-1.pfm" "$work/aoview-2.pfm" "$W" <<'EOF' || fail "the screenshots do not show the layouts"
+import struct, sys
+def read(path):
+    header = open(path, 'rb').read().split(b'\n', 3)
+    w, h = map(int, header[1].split())
+    v = struct.unpack('<' + 'f' * (3 * w * h), header[3])
+    return w, h, [[v[3 * (y * w + x):3 * (y * w + x) + 3] for x in range(w)] for y in range(h)]
+W = int(sys.argv[3])
+bw, bh, both = read(sys.argv[1])
+sw, sh, split = read(sys.argv[2])
+a = [row[:W] for row in both]
+b = [row[W:] for row in both]
+assert (bw, sw) == (2 * W, W), (bw, sw)
+differ = sum(a[y][x] != b[y][x] for y in range(sh) for x in range(W))
+assert differ > W * sh // 4, 'sides alike: %d pixels differ' % differ
+# PFM rows run bottom to top; columns are what the divider splits.
+from_a = [all(split[y][x] == a[y][x] for y in range(sh)) for x in range(W)]
+from_b = [all(split[y][x] == b[y][x] for y in range(sh)) for x in range(W)]
+column = next(x for x in range(W + 1) if x == W or not from_a[x])
+assert all(from_b[column:]), 'columns right of %d are not all B' % column
+print('divider at column %d of %d' % (column, W))
+assert 0.2 * W <= column <= 0.3 * W, column
+EOF
+
+    # Running again, + and G change no estimate: the sides go on from their spp.
+    press space
+    sleep 0.5
+    read -r before _ _ _ < <(sides)
+    press plus g
+    sleep 0.5
+    read -r after _ _ _ < <(sides)
+    [ "$after" -ge "$before" ] || fail "+ or G restarted the comparison ($before spp, then $after)"
+    # Each camera move restarts both sides: an orbit away from the divider, a pan, a wheel step.
+    for move in orbit pan zoom; do
+        sleep 1.5
+        read -r spp_a _ spp_b _ < <(sides)
+        case $move in
+        orbit) drag $((3 * WIDTH / 4)) $((HEIGHT / 2)) $((3 * WIDTH / 4 + 40)) $((HEIGHT / 2)) ;;
+        pan) xdotool mousemove --window "$wid" $((3 * WIDTH / 4)) $((HEIGHT / 2)) mousedown 3
+             sleep 0.2
+             xdotool mousemove --window "$wid" $((3 * WIDTH / 4)) $((HEIGHT / 2 + 30))
+             sleep 0.2
+             xdotool mouseup 3 ;;
+        zoom) xdotool mousemove --window "$wid" $((3 * WIDTH / 4)) $((HEIGHT / 2)) click 4 ;;
+        esac
+        sleep 0.3
+        # Restarted, each side is back below the spp it had 1.5 s into its run (the move and the
+        # reading take well under that); else its spp only grows.
+        read -r new_a _ new_b _ < <(sides)
+        echo "$move: A $spp_a -> $new_a spp, B $spp_b -> $new_b spp"
+        [ "$new_a" -lt "$spp_a" ] && [ "$new_b" -lt "$spp_b" ] || fail "a $move did not restart both sides"
+    done
+    # V again: the single view, in A's configuration.
+    press v
+    wait_title "spheres.scene — uniform — AA on — spp [0-9]+ of 1000000 — "
+    press Escape
+    wait "$pid" || fail "exit status $? after Esc"
+
+    # --compare at start, for --time 1.5 s a side: the comparison finishes with both sides' render
+    # seconds, per --stats, within 5 % of each other.
+    "$AO_BINARY" --size ${W}x$H --spppp 1 --threads 2 --adaptive off --compare cosine+random,cosine+sobol \
+        --time 1.5 --stats stats.csv "$scene" >stdout 2>stderr &
+    pid=$!
+    wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window for --compare"
+    wid=${wid%%$'\n'*}
+    wait_title " — compare — A: cosine\+random\+aa  .* — B: cosine\+sobol\+aa  .* — finished$"
+    python3 - <<'EOF' || fail "the sides' render times per --stats differ by more than 5 %"
+import csv
+rows = list(csv.reader(open('stats.csv')))
+assert rows[0][:2] == ['side', 'pass'], rows[0]
+last = {r[0]: r for r in rows[1:]}
+a, b = float(last['A'][3]), float(last['B'][3])
+print('--compare --time 1.5: A %.3f s %s spp, B %.3f s %s spp' % (a, last['A'][2], b, last['B'][2]))
+assert max(a, b) >= 1.5 and abs(a - b) <= 0.05 * max(a, b), (a, b)
+EOF
+    # Finished, an orbit starts both sides over, and they finish again.
+    read -r spp_a _ spp_b _ < <(sides)
+    eval "$(xdotool getwindowgeometry --shell "$wid")"
+    drag $((3 * WIDTH / 4)) $((HEIGHT / 2)) $((3 * WIDTH / 4 + 40)) $((HEIGHT / 2))
+    read -r new_a _ new_b _ < <(sides)
+    [ "$new_a" -lt "$spp_a" ] && [ "$new_b" -lt "$spp_b" ] || fail "an orbit did not restart the finished comparison"
+    wait_title " — finished$"
 else
     # Random keys (no S, Q or Esc), drags, wheel steps and resizes, as fast as xdotool goes.
-    keys=(u h c a n f d e g space r plus minus equal KP_Add KP_Subtract F1 F2 question)
+    keys=(u h c a n f d e g v b space r plus minus equal KP_Add KP_Subtract F1 F2 question)
     RANDOM=1
     for i in $(seq 200); do
         case $((RANDOM % 4)) in
