@@ -12,11 +12,8 @@
 #include "accum.h"
 #include "ao.h"
 
-/* Tiles are TILE x TILE pixels (at most AO_TILE_PIXELS), the unit the threads trace and adaptive
- * sampling decides on: 8 x 8 took 5 % fewer rays to 1 % RMSE on the bunny at 160x120 than 16 x 16,
- * and as many at 640x480; 4 x 4 did no better (docs/adaptive.md). FRESH marks a frame the consumer
- * has not seen. */
-enum { TILE = 8, FRESH = 4 };
+/* Tiles are TILE x TILE pixels (AO_TILE_PIXELS); FRESH marks a frame the consumer has not seen. */
+enum { TILE = 16, FRESH = 4 };
 _Static_assert(TILE * TILE <= AO_TILE_PIXELS, "a tile must fit ao_estimate_tile");
 
 /* Adaptive sampling works on whole tiles. A tile takes MIN_PASSES passes (two in each half) and
