@@ -141,7 +141,8 @@ struct ao_tile {
 /* Which part of its pixels' random streams a tile traces in one pass: `rounds` eye rays per pixel
  * (numbered from first_ray), each with `count` AO samples (numbered on from first_sample). `half`
  * is the pass's half of the accumulation (0 even, 1 odd); with Sobol numbers each half has streams
- * of its own, numbered within the half, so that the halves are independent estimates. */
+ * of its own, numbered within the half, so that the halves are independent estimates (2: streams
+ * of a third sequence, for a sample of the even half outside its own sequence). */
 struct ao_tile_work {
     uint64_t first_ray, first_sample;
     int rounds, count, half;

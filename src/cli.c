@@ -83,7 +83,7 @@ static const char usage[] =
     "  -o, --output FILE     .png (displayed image), .pfm or .exr (linear float);\n"
     "                        default aoview.png with --headless\n"
     "  --spp N               total AO samples per pixel (default 256)\n"
-    "  --spppp N|auto        AO samples per pixel per pass; auto: from 1, doubling up\n"
+    "  --spppp N|auto        AO samples per pixel per pass; auto: 1, 8, then doubling\n"
     "                        to about 2^22 samples a pass, 8 per eye ray (default auto)\n"
     "  --adaptive on|off     samples go where the estimated error is (default on)\n"
     "  --target-error E      stop once the estimated RMSE is at most E times the\n"

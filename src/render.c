@@ -27,8 +27,9 @@ enum { MIN_PASSES = 4, MIN_SPP = 16, RECHECK = 8 };
 static const double SKIP_BELOW = 0.25, ROUNDING = 1e-6;
 
 /* --spppp auto: the first pass after a restart takes one sample per pixel, so that the first
- * frame comes at once; then each pass of a half (even, odd) doubles that half (tile_work), up to
- * about AUTO_SAMPLES samples over the pixels it traces (8 spp a pass at 640x480, 128 at 160x120),
+ * frame comes at once; then each pass of a half (even, odd) takes AUTO_PER_RAY samples, then
+ * doubles what that half's sequence has given (tile_work), up to about AUTO_SAMPLES samples over
+ * the pixels it traces (8 spp a pass at 640x480, 128 at 160x120),
  * in rounds of one eye ray with AUTO_PER_RAY AO samples; both chosen by time to 1 % and 0.5 % RMSE
  * (docs/adaptive.md). The schedule depends on samples, not on seconds, so that the image stays a
  * function of the seed and settings alone. */
@@ -38,6 +39,7 @@ enum { AUTO_SAMPLES = 1 << 22, AUTO_PER_RAY = 8 };
 struct tile_state {
     uint32_t passes;
     uint32_t rays[2], spp[2];            /* eye rays and AO samples per pixel, even and odd passes */
+    uint32_t next[2];                    /* the next sample number of each half (auto passes skip some) */
     double variance;                     /* over its pixels, the sum of their estimated variances */
     double mean;                         /* over its pixels, the sum of their averages */
 };
@@ -112,31 +114,40 @@ static bool aborted(struct ao_render *r)
 
 /* ---- tiles: run by the render thread and every worker ---- */
 
-/* The part of its pixels' streams tile ts traces in this pass. */
-static struct ao_tile_work tile_work(const struct ao_render *r, const struct tile_state *ts)
+/* The part of its pixels' streams tile ts traces in this pass; *next (unless NULL) gets the half's
+ * next sample number after it. */
+static struct ao_tile_work tile_work(const struct ao_render *r, const struct tile_state *ts, uint32_t *next)
 {
     int half = (int)(ts->passes & 1);
     uint32_t spp = ts->spp[0] + ts->spp[1], left = r->config.target_spp - spp;
     int samples = (uint32_t)r->samples < left ? r->samples : (int)left;
+    uint32_t start = ts->next[half]; /* the half's next sample number */
+    bool own = r->ctx.sequence == AO_SEQUENCE_SOBOL, first = r->per_ray && ts->passes == 0;
     struct ao_tile_work w = {.half = half, .rounds = 1, .count = samples};
     if (r->per_ray) {
-        /* Auto passes: a tile's pass takes as many samples as its half already has (one at first),
-         * so that each pass of a half starts at a multiple of its size, and with Sobol numbers the
-         * pass, and each eye ray's per_ray samples within it, is an aligned block of the half's
-         * sequence: a stratified net of directions. A tile rejoining late grows by doubling, its
-         * halves balanced. Whole rounds of per_ray samples (the rest in a later pass), or its eye
-         * rays would be too few for AA. */
-        uint32_t grow = ts->spp[half] ? ts->spp[half] : 1;
+        /* Auto passes: the first pass takes one sample, so that the first frame comes at once;
+         * after it each pass of a half takes as many samples as the half's sequence has given
+         * (per_ray at first): 1, 8, 8, 8, 8, 16, 16, 32, ... With Sobol numbers that first sample
+         * comes from a sequence of its own (half 2 in ao.c), so each later pass of a half, and each
+         * eye ray's per_ray samples within it, is an aligned block of the half's sequence from
+         * its start: a stratified net of directions. (Passes of 1, 1, 1, 1, 2, 2, 4, 4 at first
+         * gave many eye rays few AO samples: docs/adaptive.md.) A tile rejoining late grows by
+         * doubling, its halves balanced. Whole rounds of per_ray samples (the rest in a later
+         * pass), or its eye rays would be too few for AA. */
+        uint32_t grow = first ? 1 : start ? start : (uint32_t)r->per_ray;
         samples = (uint32_t)samples <= grow ? samples : (int)grow;
         if (samples > r->per_ray)
             w.rounds = samples / r->per_ray, w.count = r->per_ray;
         else
             w.count = samples;
+        if (first && own)
+            w.half = 2;
     }
     /* Random streams are numbered since the restart; Sobol ones within the half (see ao.h). */
-    bool own = r->ctx.sequence == AO_SEQUENCE_SOBOL;
-    w.first_ray = own ? ts->rays[half] : ts->rays[0] + ts->rays[1];
-    w.first_sample = own ? ts->spp[half] : spp;
+    w.first_ray = w.half == 2 ? 0 : own ? ts->rays[half] : ts->rays[0] + ts->rays[1];
+    w.first_sample = w.half == 2 ? 0 : own ? start : spp;
+    if (next) /* the first sample is outside the half's sequence (or, random, not counted in it) */
+        *next = first ? start : start + (uint32_t)(w.rounds * w.count);
     return w;
 }
 
@@ -149,20 +160,23 @@ static void render_tile(struct ao_render *r, int t, uint64_t *eye, uint64_t *sha
     struct ao_tile rect = {.x0 = t % r->tiles_x * TILE, .y0 = t / r->tiles_x * TILE};
     rect.x1 = rect.x0 + TILE < width ? rect.x0 + TILE : width;
     rect.y1 = rect.y0 + TILE < height ? rect.y0 + TILE : height;
-    struct ao_tile_work work = tile_work(r, ts);
+    uint32_t next;
+    struct ao_tile_work work = tile_work(r, ts, &next);
     struct ao_vec3 sums[AO_TILE_PIXELS];
     ao_estimate_tile(ctx, &rect, &work, sums, eye, shadow);
     uint32_t samples = (uint32_t)(work.rounds * work.count);
+    int half = work.half & 1; /* half 2 belongs to the even half */
     ts->passes++;
-    ts->rays[work.half] += (uint32_t)work.rounds;
-    ts->spp[work.half] += samples;
+    ts->rays[half] += work.half == 2 ? 0u : (uint32_t)work.rounds;
+    ts->spp[half] += samples;
+    ts->next[half] = next;
     /* Every pixel of a tile has the even and odd sample counts n_a and n_b of the tile. */
     double n_a = ts->spp[0], n_b = ts->spp[1], total = 0.0, squares = 0.0;
     for (int j = rect.y0; j < rect.y1; j++)
         for (int i = rect.x0; i < rect.x1; i++) {
             size_t p = (size_t)j * (size_t)width + (size_t)i;
             ao_accum_add(&r->accum, p, sums[(j - rect.y0) * (rect.x1 - rect.x0) + (i - rect.x0)], samples,
-                         work.half);
+                         half);
             double all = r->accum.sum[3 * p] + r->accum.sum[3 * p + 1] + r->accum.sum[3 * p + 2];
             double odd = r->accum.odd_sum[p], d = (all - odd) * n_b - odd * n_a;
             total += all;
@@ -352,7 +366,7 @@ static uint32_t largest_share(const struct ao_render *r)
 {
     uint32_t most = 0;
     for (int n = 0; n < r->shares[r->config.threads - 1].end; n++) {
-        struct ao_tile_work w = tile_work(r, &r->tiles[r->work[n]]);
+        struct ao_tile_work w = tile_work(r, &r->tiles[r->work[n]], NULL);
         uint32_t samples = (uint32_t)(w.rounds * w.count);
         most = samples > most ? samples : most;
     }
