@@ -1,0 +1,149 @@
+/* aoview-mpi: `mpirun -np N aoview-mpi [aoview's options] SCENE` renders aoview's image on N
+ * ranks: each loads the scene and traces the tiles it claims from rank 0, every pass's sums are
+ * added up over the ranks, and rank 0 writes -o, --stats and the progress bar. Headless only. */
+#include <fcntl.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <unistd.h>
+
+#include "app.h"
+#include "cli.h"
+#include "cluster.h"
+#include "config.h"
+
+/* How long rank 0 waits for the other ranks to answer after an interruption: mpirun sends SIGTERM
+ * to every rank at once and SIGKILL a second later, and a PNG takes about 0.5 s to write. The
+ * other ranks then wait up to LINGER_SECONDS for that SIGKILL: mpirun kills at once what is left
+ * of a job whose other ranks have all ended. */
+static const double ANSWER_SECONDS = 0.2;
+enum { LINGER_SECONDS = 5 };
+
+/* Whether the user watches stderr on a terminal: mpirun hands its ranks a pipe for stderr (and a
+ * terminal for stdout, always), so rank 0 also asks about its parent's, which is mpirun's when
+ * rank 0 runs on mpirun's machine. */
+static bool watched_on_terminal(void)
+{
+    if (isatty(STDERR_FILENO))
+        return true;
+    char path[64];
+    snprintf(path, sizeof path, "/proc/%ld/fd/2", (long)getppid());
+    int fd = open(path, O_WRONLY | O_NOCTTY);
+    bool terminal = fd >= 0 && isatty(fd);
+    if (fd >= 0)
+        close(fd);
+    return terminal;
+}
+
+/* Parses argv on every rank; 0, or the exit status after one message (from rank 0, or from a rank
+ * whose options alone fail). */
+static int parse(int argc, char **argv, int rank, struct ao_options *opts)
+{
+    char message[512];
+    bool parsed = ao_cli_parse(argc, argv, opts, message, sizeof message);
+    if (parsed && opts->compare) {
+        snprintf(message, sizeof message, "--compare: not available in aoview-mpi");
+        parsed = false;
+    }
+    bool first_parsed = ao_cluster_agree(rank == 0 ? parsed : true);
+    if (ao_cluster_agree(parsed))
+        return 0;
+    if (!parsed && (rank == 0 || first_parsed))
+        fprintf(stderr, "aoview-mpi: %s (try --help)\n", message);
+    return AO_EXIT_USAGE;
+}
+
+/* Loads the scene and the rest on rank 0, then (if it could) on the others, so that a file
+ * missing everywhere is reported once; 0 when every rank has it. */
+static int load(struct ao_app *app, const struct ao_options *opts, int rank, struct ao_render_config *config,
+                struct ao_settings *settings)
+{
+    int status = rank == 0 ? ao_app_load(app, opts, config, settings) : 0;
+    if (!ao_cluster_agree(status == 0))
+        return AO_EXIT_RUNTIME;
+    if (rank != 0)
+        status = ao_app_load(app, opts, config, settings);
+    return ao_cluster_agree(status == 0) ? 0 : AO_EXIT_RUNTIME;
+}
+
+/* After an interruption: the other ranks tell rank 0 they are alive; rank 0 names those that did
+ * not answer (lost: killed or crashed, which made mpirun stop the job) and writes the merged image. */
+static int interrupted(struct ao_app *app, struct ao_cluster *cluster, const struct ao_options *opts, int rank,
+                       int sig)
+{
+    if (rank != 0) {
+        ao_cluster_answer(cluster);
+        sleep(LINGER_SECONDS);
+        return 128 + sig;
+    }
+    char missing[256], why[320];
+    ao_cluster_missing(cluster, ANSWER_SECONDS, missing, sizeof missing);
+    if (missing[0])
+        snprintf(why, sizeof why, "rank %s lost (killed or crashed), stopped", missing);
+    else
+        snprintf(why, sizeof why, "interrupted by %s", sig == SIGINT ? "SIGINT" : "SIGTERM");
+    return ao_app_write(app, opts, false, why, missing[0] ? AO_EXIT_RUNTIME : 128 + sig);
+}
+
+/* Renders on every rank; rank 0 writes. Returns the exit status; *clean says whether every rank
+ * got to the end alike (MPI may then be finalized). */
+static int run(struct ao_app *app, const struct ao_options *opts, int rank, int size, bool *clean)
+{
+    struct ao_options mine = *opts;
+    if (rank != 0) /* only rank 0 reports and writes */
+        mine.quiet = true, mine.stats_path = NULL, mine.reference_path = NULL, mine.output = NULL;
+    struct ao_render_config config;
+    struct ao_settings settings;
+    int status = load(app, &mine, rank, &config, &settings);
+    if (status)
+        return status;
+    app->reporter.progress = !mine.quiet && watched_on_terminal();
+    struct ao_cluster *cluster = ao_cluster_create();
+    if (!cluster)
+        return AO_EXIT_RUNTIME;
+    config.share = ao_cluster_share(cluster);
+    app->render = ao_render_create(&config, &settings);
+    if (!ao_cluster_agree(app->render && ao_app_start_watcher(app, app->render))) {
+        ao_cluster_destroy(cluster);
+        return AO_EXIT_RUNTIME;
+    }
+    atomic_store(&app->interrupt.graceful, true);
+    int sig;
+    bool finished = ao_app_wait(app, &sig);
+    if (!finished) {
+        *clean = false;
+        ao_cluster_stop(cluster);
+        return sig ? interrupted(app, cluster, &mine, rank, sig) : AO_EXIT_RUNTIME;
+    }
+    char tiles[1024];
+    ao_cluster_tiles(cluster, tiles, sizeof tiles);
+    ao_cluster_destroy(cluster);
+    if (rank != 0)
+        return 0;
+    if (!mine.quiet)
+        fprintf(stderr, "aoview-mpi: %d ranks; tiles traced by rank %s\n", size, tiles);
+    return ao_app_write(app, &mine, true, NULL, 0);
+}
+
+int main(int argc, char **argv)
+{
+    /* Before MPI starts its threads, so that they all inherit the mask. */
+    struct ao_app app = {0};
+    ao_app_block_signals(&app);
+    int rank, size;
+    if (!ao_cluster_init(&argc, &argv, &rank, &size))
+        return AO_EXIT_RUNTIME;
+    struct ao_options opts;
+    int status = parse(argc, argv, rank, &opts);
+    if (status || opts.help || opts.version) {
+        if (!status && rank == 0)
+            fputs(opts.help ? ao_cli_usage() : "aoview-mpi " AO_VERSION "\n", stdout);
+        ao_cluster_finalize();
+        return status;
+    }
+    bool clean = true;
+    status = ao_app_finish(&app, &opts, run(&app, &opts, rank, size, &clean));
+    if (clean)
+        ao_cluster_finalize();
+    return status;
+}
