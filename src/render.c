@@ -337,7 +337,8 @@ static double gain(const struct ao_render *r, int t)
  * sampling those among them that MIN_PASSES's rule picks. */
 static size_t select_tiles(struct ao_render *r, bool adaptive)
 {
-    int threads = r->config.threads, tiles = r->tiles_x * r->tiles_y;
+    /* With a share, one list in row order, the same in every process whatever its threads. */
+    int threads = r->config.threads, groups = r->config.share ? 1 : threads, tiles = r->tiles_x * r->tiles_y;
     uint32_t target = r->config.target_spp, busiest = 0;
     double fastest = 0.0;
     for (int t = 0; adaptive && t < tiles; t++)
@@ -349,6 +350,10 @@ static size_t select_tiles(struct ao_render *r, bool adaptive)
     int n = 0;
     for (int k = 0; k < threads; k++) {
         r->shares[k].begin = n;
+        if (k >= groups) {
+            r->shares[k].end = n;
+            continue;
+        }
         for (int t = k * r->tiles_x; t < tiles; t++) {
             const struct tile_state *ts = &r->tiles[t];
             uint32_t spp = tile_spp(ts);
@@ -360,7 +365,7 @@ static size_t select_tiles(struct ao_render *r, bool adaptive)
                 pixels += (size_t)tile_pixels(r, t);
             }
             if ((t + 1) % r->tiles_x == 0) /* the end of a row: on to this share's next row */
-                t += (threads - 1) * r->tiles_x;
+                t += (groups - 1) * r->tiles_x;
         }
         r->shares[k].end = n;
     }
