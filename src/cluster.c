@@ -21,8 +21,9 @@ enum { TAG_REQUEST = 1, TAG_GRANT, TAG_ANSWER };
 static const long POLL_FIRST_NS = 10000, POLL_MOST_NS = 200000;
 
 /* Rank 0 grants a rank 1 / (CHUNKS x ranks) of the entries still to hand out (at least one), so
- * that chunks shrink as the pass runs out and a slow rank is left holding little at its end. */
-enum { CHUNKS = 4 };
+ * that chunks shrink as the pass runs out: a rank holds at most two chunks (the one it traces and
+ * the next, asked for ahead), 1/8 of a pass between two ranks however slow one of them is. */
+enum { CHUNKS = 16 };
 
 struct ao_cluster {
     struct ao_render_share share;
@@ -42,6 +43,8 @@ struct ao_cluster {
     uint64_t tiles;          /* entries this rank claimed */
 
     double merge_seconds;    /* the last merge's duration (render thread) */
+    uint64_t merges;         /* merges so far, the bytes of their buffers, the seconds spent */
+    double merge_bytes, waited, moved;  /* waiting for the slowest rank, and moving the sums */
     pthread_t server;
     bool serving;
 
@@ -184,13 +187,19 @@ static bool merge(void *user, struct ao_vec3 *sums, size_t count, uint64_t rays[
     MPI_Iallreduce(MPI_IN_PLACE, &slowest, 1, MPI_DOUBLE, MPI_MAX, c->sums, &requests[0]);
     if (!await(&c->stopping, 1, requests, NULL, false))
         return false;
+    double arrived = now_seconds();
     _Static_assert(sizeof(struct ao_vec3) == 3 * sizeof(float), "pixel sums are 3 packed floats");
     MPI_Iallreduce(MPI_IN_PLACE, sums, (int)(3 * count), MPI_FLOAT, MPI_SUM, c->sums, &requests[0]);
     MPI_Iallreduce(MPI_IN_PLACE, rays, 2, MPI_UINT64_T, MPI_SUM, c->sums, &requests[1]);
     if (!await(&c->stopping, 2, requests, NULL, true))
         return false;
     *seconds = slowest;
-    c->merge_seconds = now_seconds() - start;
+    double end = now_seconds();
+    c->merge_seconds = end - start;
+    c->merges++;
+    c->merge_bytes += (double)count * sizeof *sums;
+    c->waited += arrived - start;
+    c->moved += end - arrived;
     return true;
 }
 
@@ -295,16 +304,18 @@ void ao_cluster_missing(struct ao_cluster *cluster, double seconds, char *out, s
             used += (size_t)snprintf(out + used, size - used, "%s%d", used ? ", " : "", r);
 }
 
-void ao_cluster_tiles(struct ao_cluster *cluster, char *out, size_t size)
+void ao_cluster_summary(struct ao_cluster *cluster, char *out, size_t size)
 {
     unsigned long long mine = cluster->tiles, *all = cluster->tiles_by_rank;
     MPI_Request pending;
     MPI_Igather(&mine, 1, MPI_UNSIGNED_LONG_LONG, all, 1, MPI_UNSIGNED_LONG_LONG, 0, cluster->control, &pending);
     await(NULL, 1, &pending, NULL, false);
-    size_t used = 0;
-    out[0] = '\0';
-    for (int r = 0; all && r < cluster->size && used < size; r++)
-        used += (size_t)snprintf(out + used, size - used, "%s%d: %llu", r ? ", " : "", r, all[r]);
+    int used = snprintf(out, size, "%d ranks, tiles traced by rank", cluster->size);
+    for (int r = 0; all && r < cluster->size && used >= 0 && (size_t)used < size; r++)
+        used += snprintf(out + used, size - (size_t)used, "%s %d: %llu", r ? "," : "", r, all[r]);
+    if (used >= 0 && (size_t)used < size)
+        snprintf(out + used, size - (size_t)used, "; %llu merges of %.1f MB in all took %.3f s, after %.3f s waiting for the slowest rank",
+                 (unsigned long long)cluster->merges, cluster->merge_bytes / 1e6, cluster->moved, cluster->waited);
 }
 
 void ao_cluster_destroy(struct ao_cluster *cluster)

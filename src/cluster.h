@@ -42,9 +42,9 @@ void ao_cluster_answer(struct ao_cluster *cluster);
  * the ranks that did not answer ("2", "1, 3") into out, "" when all did. */
 void ao_cluster_missing(struct ao_cluster *cluster, double seconds, char *out, size_t size);
 
-/* At the end of a finished run (a collective): on rank 0, writes the tiles each rank traced
- * ("0: 812, 1: 388") into out. */
-void ao_cluster_tiles(struct ao_cluster *cluster, char *out, size_t size);
+/* At the end of a finished run (a collective): on rank 0, writes the tiles each rank traced and
+ * the merges' bytes and seconds, this rank's, into out (one line, no newline). */
+void ao_cluster_summary(struct ao_cluster *cluster, char *out, size_t size);
 
 /* Stops the claim server and frees the cluster (not a collective); accepts NULL. */
 void ao_cluster_destroy(struct ao_cluster *cluster);

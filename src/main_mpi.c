@@ -87,7 +87,7 @@ static int interrupted(struct ao_app *app, struct ao_cluster *cluster, const str
 
 /* Renders on every rank; rank 0 writes. Returns the exit status; *clean says whether every rank
  * got to the end alike (MPI may then be finalized). */
-static int run(struct ao_app *app, const struct ao_options *opts, int rank, int size, bool *clean)
+static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool *clean)
 {
     struct ao_options mine = *opts;
     if (rank != 0) /* only rank 0 reports and writes */
@@ -115,13 +115,13 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, int 
         ao_cluster_stop(cluster);
         return sig ? interrupted(app, cluster, &mine, rank, sig) : AO_EXIT_RUNTIME;
     }
-    char tiles[1024];
-    ao_cluster_tiles(cluster, tiles, sizeof tiles);
+    char summary[1024];
+    ao_cluster_summary(cluster, summary, sizeof summary);
     ao_cluster_destroy(cluster);
     if (rank != 0)
         return 0;
     if (!mine.quiet)
-        fprintf(stderr, "aoview-mpi: %d ranks; tiles traced by rank %s\n", size, tiles);
+        fprintf(stderr, "aoview-mpi: %s\n", summary);
     return ao_app_write(app, &mine, true, NULL, 0);
 }
 
@@ -142,7 +142,7 @@ int main(int argc, char **argv)
         return status;
     }
     bool clean = true;
-    status = ao_app_finish(&app, &opts, run(&app, &opts, rank, size, &clean));
+    status = ao_app_finish(&app, &opts, run(&app, &opts, rank, &clean));
     if (clean)
         ao_cluster_finalize();
     return status;
