@@ -226,14 +226,14 @@ bool ao_app_wait(struct ao_app *app, int *sig)
     return finished;
 }
 
-int ao_app_write(struct ao_app *app, const struct ao_options *opts, bool finished, const char *why, int status)
+int ao_app_write(struct ao_app *app, const struct ao_options *opts, const struct ao_frame *frame, const char *why,
+                 bool last_row, int status)
 {
     const char *output = opts->output ? opts->output : "aoview.png";
-    const struct ao_frame *frame = finished ? ao_render_take_frame(app->render)
-                                            : ao_render_resolve_stopped(app->render);
-    if (!finished) {
+    if (why && frame) {
         fprintf(stderr, "\naoview: %s at %u spp\n", why, frame->info.spp);
-        ao_app_on_pass(&frame->info, &app->reporter);
+        if (last_row)
+            ao_app_on_pass(&frame->info, &app->reporter);
     }
     const float *difference = opts->view == AO_VIEW_MODE_DIFFERENCE ? app->reference : NULL;
     if (!frame || !ao_app_write_output(output, frame, app->scene.name, opts->seed, difference))

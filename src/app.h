@@ -83,10 +83,12 @@ bool ao_app_write_output(const char *path, const struct ao_frame *frame, const c
  * stopped otherwise (*sig 0). Main thread. */
 bool ao_app_wait(struct ao_app *app, int *sig);
 
-/* Writes -o from the finished renderer's last frame, or after an interruption (why: what stopped
- * it, printed with the spp reached) from the accumulation as it stands with a last --stats row;
- * returns the exit status, `status` when everything was written. Main thread. */
-int ao_app_write(struct ao_app *app, const struct ao_options *opts, bool finished, const char *why, int status);
+/* Writes -o from frame (NULL: none to write, a failure); after an interruption, `why` (what
+ * stopped the run) is printed with frame's spp first, and with `last_row` the frame is added as a
+ * last --stats row (the render thread must have been joined). Returns the exit status, `status`
+ * when everything was written. Main thread. */
+int ao_app_write(struct ao_app *app, const struct ao_options *opts, const struct ao_frame *frame, const char *why,
+                 bool last_row, int status);
 
 /* Destroys the renderer, closes --stats (a failed write turns a status of 0 into AO_EXIT_RUNTIME),
  * frees the rest; returns the status. */

@@ -193,7 +193,8 @@ static int run(struct app *app, const struct ao_options *opts)
         return AO_EXIT_RUNTIME;
     char why[64];
     snprintf(why, sizeof why, "interrupted by %s", sig == SIGINT ? "SIGINT" : "SIGTERM");
-    return ao_app_write(base, opts, finished, why, finished ? 0 : 128 + sig);
+    const struct ao_frame *frame = finished ? ao_render_take_frame(base->render) : ao_render_resolve_stopped(base->render);
+    return ao_app_write(base, opts, frame, finished ? NULL : why, true, finished ? 0 : 128 + sig);
 }
 
 int main(int argc, char **argv)

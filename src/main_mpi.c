@@ -67,7 +67,9 @@ static int load(struct ao_app *app, const struct ao_options *opts, int rank, str
 }
 
 /* After an interruption: the other ranks tell rank 0 they are alive; rank 0 names those that did
- * not answer (lost: killed or crashed, which made mpirun stop the job) and writes the merged image. */
+ * not answer (lost: killed or crashed, which made mpirun stop the job) and writes the image of
+ * the last merged pass, the newest frame published (the render thread may be in a tile for long:
+ * mpirun's SIGKILL does not wait for it; its --stats row is written). */
 static int interrupted(struct ao_app *app, struct ao_cluster *cluster, const struct ao_options *opts, int rank,
                        int sig)
 {
@@ -82,7 +84,10 @@ static int interrupted(struct ao_app *app, struct ao_cluster *cluster, const str
         snprintf(why, sizeof why, "rank %s lost (killed or crashed), stopped", missing);
     else
         snprintf(why, sizeof why, "interrupted by %s", sig == SIGINT ? "SIGINT" : "SIGTERM");
-    return ao_app_write(app, opts, false, why, missing[0] ? AO_EXIT_RUNTIME : 128 + sig);
+    const struct ao_frame *frame = ao_render_take_frame(app->render);
+    if (!frame)
+        fprintf(stderr, "\naoview: %s before the first pass was merged: nothing written\n", why);
+    return ao_app_write(app, opts, frame, why, false, missing[0] || !frame ? AO_EXIT_RUNTIME : 128 + sig);
 }
 
 /* Renders on every rank; rank 0 writes. Returns the exit status; *clean says whether every rank
@@ -122,7 +127,7 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool
         return 0;
     if (!mine.quiet)
         fprintf(stderr, "aoview-mpi: %s\n", summary);
-    return ao_app_write(app, &mine, true, NULL, 0);
+    return ao_app_write(app, &mine, ao_render_take_frame(app->render), NULL, false, 0);
 }
 
 int main(int argc, char **argv)
