@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Whole runs of the bunny (defaults, 640x480 unless SIZE is set) as one aoview process and as
 # aoview-mpi under mpirun on this machine, interleaved REPS times; prints the median wall seconds
-# of each configuration and its throughput relative to one 2-thread aoview (the images are the same,
-# so the rays are too). Run: bash tests/bench_mpi.sh BUILD_DIR [REPS] (docs/mpi.md).
+# and CPU seconds (user + system, the ranks' and mpirun's) of each configuration and its throughput
+# relative to one 2-thread aoview by both (the images are the same, so the rays are too): on a
+# machine busy with other work, wall time measures the share of the cores a configuration gets,
+# CPU time what it costs. Run: bash tests/bench_mpi.sh BUILD_DIR [REPS] (docs/mpi.md).
 set -eu
 build=${1:?build dir}
 reps=${2:-5}
@@ -14,31 +16,33 @@ trap 'rm -rf "$work"' EXIT
 configs=("aoview --threads 2" "aoview --threads 1" "mpirun -np 1 --threads 2" "mpirun -np 2 --threads 1"
          "mpirun -np 3 --threads 1" "mpirun -np 2 --threads 2")
 run() {
-  local words=($1)
+  local words=($1) timing=(/usr/bin/time -f "%e %U %S" -o "$work/one")
   if [ "${words[0]}" = aoview ]; then
-    "$build/aoview" --headless -q --size "$size" "${words[1]}" "${words[2]}" -o "$work/x.pfm"
+    "${timing[@]}" "$build/aoview" --headless -q --size "$size" "${words[1]}" "${words[2]}" -o "$work/x.pfm"
   else
-    mpirun --oversubscribe -np "${words[2]}" "$build/aoview-mpi" -q --size "$size" "${words[3]}" "${words[4]}" -o "$work/x.pfm"
+    "${timing[@]}" mpirun --oversubscribe -np "${words[2]}" "$build/aoview-mpi" -q --size "$size" "${words[3]}" \
+      "${words[4]}" -o "$work/x.pfm"
   fi
 }
 for ((k = 0; k < reps; k++)); do
   for c in "${!configs[@]}"; do
-    start=$(date +%s%N)
     run "${configs[$c]}"
-    echo "$c $(( ($(date +%s%N) - start) / 1000000 ))" >> "$work/times"
+    echo "$c $(cat "$work/one")" >> "$work/times"
   done
 done
 python3 - "$work/times" "${configs[@]}" <<'PY'
 import statistics, sys
-times = {}
+wall, cpu = {}, {}
 for line in open(sys.argv[1]):
-    c, ms = line.split()
-    times.setdefault(int(c), []).append(int(ms) / 1000.0)
+    c, e, u, s = line.split()
+    wall.setdefault(int(c), []).append(float(e))
+    cpu.setdefault(int(c), []).append(float(u) + float(s))
 names = sys.argv[2:]
-base = statistics.median(times[0])
-print('| configuration | median s | runs (s) | throughput vs one 2-thread aoview |')
-print('|---|---|---|---|')
+w0, c0 = statistics.median(wall[0]), statistics.median(cpu[0])
+print('| configuration | wall s (median) | wall runs | throughput by wall | CPU s (median) | throughput by CPU |')
+print('|---|---|---|---|---|---|')
 for c, name in enumerate(names):
-    m = statistics.median(times[c])
-    print('| `%s` | %.2f | %s | %.0f %% |' % (name, m, ' '.join('%.2f' % t for t in times[c]), 100.0 * base / m))
+    w, u = statistics.median(wall[c]), statistics.median(cpu[c])
+    print('| `%s` | %.2f | %s | %.0f %% | %.2f | %.0f %% |' % (name, w, ' '.join('%.2f' % t for t in wall[c]),
+                                                        100.0 * w0 / w, u, 100.0 * c0 / u))
 PY
