@@ -21,10 +21,14 @@ enum { TAG_REQUEST = 1, TAG_GRANT, TAG_ANSWER };
  * for no shorter waits (docs/mpi.md). */
 static const long POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000;
 
-/* Rank 0 grants a rank 1 / (CHUNKS x ranks) of the entries still to hand out (at least one), so
- * that chunks shrink as the pass runs out: a rank holds at most two chunks (the one it traces and
- * the next, asked for ahead), 1/8 of a pass between two ranks however slow one of them is. */
+/* Rank 0 grants a rank 1 / (CHUNKS x ranks) of the entries still to hand out, so that chunks
+ * shrink as the pass runs out: a rank holds at most two chunks (the one it traces and the next,
+ * asked for ahead), 1/16 of a pass between two ranks however slow one of them is. But at least
+ * what the rank traces in CHUNK_SECONDS, by its own measure, so that the next chunk's round trip
+ * (0.1 ms here, a few ms when the machine is busy) hides behind the one it traces; with single
+ * entries at the ends of passes a rank waited for a fifth of a run (docs/mpi.md). */
 enum { CHUNKS = 16 };
+static const double CHUNK_SECONDS = 2e-3;
 
 struct ao_cluster {
     struct ao_render_share share;
@@ -39,9 +43,13 @@ struct ao_cluster {
     int begin, end;          /* other ranks: what is left of the chunk granted */
     bool exhausted;          /* other ranks: rank 0 has nothing left of this pass */
     bool asked;              /* other ranks: a request for the next chunk is out */
+    double last_claim;       /* other ranks: when an entry was last claimed without waiting */
+    double entry_seconds;    /* other ranks: the time between claims, smoothed; 0: unknown */
     int grant[2];            /* other ranks: its answer, [begin, end) */
     MPI_Request granted;
     uint64_t tiles;          /* entries this rank claimed */
+    uint64_t request[3];     /* rank 0: the request being received (pass, count, least) */
+    MPI_Request incoming;
 
     double merge_seconds;    /* the last merge's duration (render thread) */
     uint64_t merges;         /* merges so far, the bytes of their buffers, the seconds spent */
@@ -87,9 +95,9 @@ static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, MPI
     }
 }
 
-/* Rank 0, lock held: opens pass `pass` of `count` entries when it is new, and hands out up to
- * `most` of what is left: [*begin, *end), empty when nothing is. */
-static void hand_out(struct ao_cluster *c, uint64_t pass, int count, int most, int *begin, int *end)
+/* Rank 0, lock held: opens pass `pass` of `count` entries when it is new, and hands out a chunk of
+ * what is left, at least `least` and at most `most` entries: [*begin, *end), empty when nothing is. */
+static void hand_out(struct ao_cluster *c, uint64_t pass, int count, int least, int most, int *begin, int *end)
 {
     if (pass > c->pass) {
         c->pass = pass;
@@ -98,39 +106,53 @@ static void hand_out(struct ao_cluster *c, uint64_t pass, int count, int most, i
     }
     int left = pass == c->pass ? c->count - c->next : 0;
     int chunk = left / (CHUNKS * c->size);
-    chunk = chunk < 1 ? 1 : chunk > most ? most : chunk;
+    chunk = chunk < least ? least : chunk > most ? most : chunk;
     chunk = chunk < left ? chunk : left;
     *begin = c->next;
     *end = c->next += chunk;
 }
 
-/* Rank 0's server thread: answers each other rank's request for pass entries with a chunk. */
+/* Rank 0, lock held: answers every request that has come with a chunk; true if there was one. */
+static bool serve_pending(struct ao_cluster *c)
+{
+    bool served = false;
+    for (;;) {
+        int done = 0;
+        MPI_Status status;
+        MPI_Test(&c->incoming, &done, &status);
+        if (!done)
+            return served;
+        int grant[2];
+        hand_out(c, c->request[0], (int)c->request[1], (int)c->request[2], INT_MAX, &grant[0], &grant[1]);
+        MPI_Send(grant, 2, MPI_INT, status.MPI_SOURCE, TAG_GRANT, c->claims);
+        MPI_Irecv(c->request, 3, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_REQUEST, c->claims, &c->incoming);
+        served = true;
+    }
+}
+
+/* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (between
+ * passes, at a merge), when a woken thread may take milliseconds to run on a busy machine; during
+ * a pass, each claim of rank 0's answers them first. */
 static void *serve(void *arg)
 {
     struct ao_cluster *c = arg;
-    for (;;) {
-        uint64_t request[2];
-        MPI_Request pending;
-        MPI_Status status;
-        MPI_Irecv(request, 2, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_REQUEST, c->claims, &pending);
-        if (!await(&c->stopping, 1, &pending, &status, false)) {
-            MPI_Cancel(&pending);
-            MPI_Wait(&pending, MPI_STATUS_IGNORE);
-            return NULL;
-        }
-        int grant[2];
+    long pause = POLL_FIRST_NS;
+    while (!atomic_load_explicit(&c->stopping, memory_order_relaxed)) {
         pthread_mutex_lock(&c->lock);
-        hand_out(c, request[0], (int)request[1], INT_MAX, &grant[0], &grant[1]);
+        bool served = serve_pending(c);
         pthread_mutex_unlock(&c->lock);
-        MPI_Send(grant, 2, MPI_INT, status.MPI_SOURCE, TAG_GRANT, c->claims);
+        pause = served ? POLL_FIRST_NS : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
+        sleep_ns(pause);
     }
+    return NULL;
 }
 
 /* Other ranks, lock held: asks rank 0 for the next chunk of the pass. */
 static void ask(struct ao_cluster *c, uint64_t pass, int count)
 {
-    uint64_t request[2] = {pass, (uint64_t)count};
-    MPI_Send(request, 2, MPI_UINT64_T, 0, TAG_REQUEST, c->claims);
+    double least = c->entry_seconds > 0.0 ? CHUNK_SECONDS / c->entry_seconds : 1.0;
+    uint64_t request[3] = {pass, (uint64_t)count, least < 1.0 ? 1 : least > count ? (uint64_t)count : (uint64_t)least};
+    MPI_Send(request, 3, MPI_UINT64_T, 0, TAG_REQUEST, c->claims);
     MPI_Irecv(c->grant, 2, MPI_INT, 0, TAG_GRANT, c->claims, &c->granted);
     c->asked = true;
 }
@@ -140,16 +162,19 @@ static void ask(struct ao_cluster *c, uint64_t pass, int count)
  * trip overlaps tracing. */
 static int claim_remote(struct ao_cluster *c, uint64_t pass, int count)
 {
-    if (c->pass != pass) {
+    if (c->pass != pass) { /* tiles cost more in some passes than in others: measure anew */
         c->pass = pass;
         c->begin = c->end = 0;
         c->exhausted = false;
+        c->last_claim = c->entry_seconds = 0.0;
     }
+    bool waited = false;
     while (!c->exhausted && c->begin == c->end) {
         if (!c->asked)
             ask(c, pass, count);
         if (!await(&c->stopping, 1, &c->granted, NULL, false))
             return -1;
+        waited = true;
         c->asked = false;
         c->begin = c->grant[0];
         c->end = c->grant[1];
@@ -157,7 +182,14 @@ static int claim_remote(struct ao_cluster *c, uint64_t pass, int count)
         if (!c->exhausted)
             ask(c, pass, count);
     }
-    return c->exhausted ? -1 : c->begin++;
+    if (c->exhausted)
+        return -1;
+    double now = now_seconds();
+    if (!waited && c->last_claim > 0.0)
+        c->entry_seconds = c->entry_seconds > 0.0 ? 0.8 * c->entry_seconds + 0.2 * (now - c->last_claim)
+                                                  : now - c->last_claim;
+    c->last_claim = now;
+    return c->begin++;
 }
 
 static int claim(void *user, uint64_t pass, int count)
@@ -166,7 +198,8 @@ static int claim(void *user, uint64_t pass, int count)
     int n = -1, end;
     pthread_mutex_lock(&c->lock);
     if (c->rank == 0) {
-        hand_out(c, pass, count, 1, &n, &end);
+        serve_pending(c);
+        hand_out(c, pass, count, 1, 1, &n, &end);
         n = n < end ? n : -1;
     } else {
         n = claim_remote(c, pass, count);
@@ -179,21 +212,28 @@ static int claim(void *user, uint64_t pass, int count)
 }
 
 /* The pass's seconds are the slowest rank's, the previous merge included; waiting for it doubles
- * as the barrier, with sleeps, before the sums move (spinning, everyone being there). */
+ * as the barrier, with sleeps, before the sums move with blocking calls (everyone being there) of
+ * SEGMENT floats each: here 1 MB buffers reduce at 4-5 GB/s, 64 MB ones at 0.4, and a 100 MB
+ * MPI_Iallreduce tested in a loop took 2 s (docs/mpi.md). The run may stop between segments. */
 static bool merge(void *user, struct ao_vec3 *sums, size_t count, uint64_t rays[2], double *seconds)
 {
+    enum { SEGMENT = 1 << 18 };
     struct ao_cluster *c = user;
     double start = now_seconds(), slowest = *seconds + c->merge_seconds;
-    MPI_Request requests[2];
-    MPI_Iallreduce(MPI_IN_PLACE, &slowest, 1, MPI_DOUBLE, MPI_MAX, c->sums, &requests[0]);
-    if (!await(&c->stopping, 1, requests, NULL, false))
+    MPI_Request pending;
+    MPI_Iallreduce(MPI_IN_PLACE, &slowest, 1, MPI_DOUBLE, MPI_MAX, c->sums, &pending);
+    if (!await(&c->stopping, 1, &pending, NULL, false))
         return false;
     double arrived = now_seconds();
     _Static_assert(sizeof(struct ao_vec3) == 3 * sizeof(float), "pixel sums are 3 packed floats");
-    MPI_Iallreduce(MPI_IN_PLACE, sums, (int)(3 * count), MPI_FLOAT, MPI_SUM, c->sums, &requests[0]);
-    MPI_Iallreduce(MPI_IN_PLACE, rays, 2, MPI_UINT64_T, MPI_SUM, c->sums, &requests[1]);
-    if (!await(&c->stopping, 2, requests, NULL, true))
-        return false;
+    float *floats = &sums->x;
+    for (size_t done = 0, total = 3 * count; done < total; done += SEGMENT) {
+        if (atomic_load_explicit(&c->stopping, memory_order_relaxed))
+            return false;
+        int n = total - done < SEGMENT ? (int)(total - done) : SEGMENT;
+        MPI_Allreduce(MPI_IN_PLACE, floats + done, n, MPI_FLOAT, MPI_SUM, c->sums);
+    }
+    MPI_Allreduce(MPI_IN_PLACE, rays, 2, MPI_UINT64_T, MPI_SUM, c->sums);
     *seconds = slowest;
     double end = now_seconds();
     c->merge_seconds = end - start;
@@ -259,8 +299,11 @@ struct ao_cluster *ao_cluster_create(void)
         c->pending = calloc(ranks, sizeof *c->pending);
         c->answers = calloc(ranks, sizeof *c->answers);
         c->tiles_by_rank = calloc(ranks, sizeof *c->tiles_by_rank);
-        ok = c->pending && c->answers && c->tiles_by_rank &&
-             (c->serving = pthread_create(&c->server, NULL, serve, c) == 0);
+        ok = c->pending && c->answers && c->tiles_by_rank;
+        if (ok) {
+            MPI_Irecv(c->request, 3, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_REQUEST, c->claims, &c->incoming);
+            ok = c->serving = pthread_create(&c->server, NULL, serve, c) == 0;
+        }
         if (!ok)
             fprintf(stderr, "aoview-mpi: out of memory or threads for the cluster\n");
     }
@@ -324,8 +367,11 @@ void ao_cluster_destroy(struct ao_cluster *cluster)
     if (!cluster)
         return;
     ao_cluster_stop(cluster);
-    if (cluster->serving)
+    if (cluster->serving) {
         pthread_join(cluster->server, NULL);
+        MPI_Cancel(&cluster->incoming);
+        MPI_Wait(&cluster->incoming, MPI_STATUS_IGNORE);
+    }
     MPI_Comm_free(&cluster->claims);
     MPI_Comm_free(&cluster->sums);
     MPI_Comm_free(&cluster->control);
