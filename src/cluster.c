@@ -354,7 +354,7 @@ void ao_cluster_summary(struct ao_cluster *cluster, char *out, size_t size)
     MPI_Request pending;
     MPI_Igather(&mine, 1, MPI_UNSIGNED_LONG_LONG, all, 1, MPI_UNSIGNED_LONG_LONG, 0, cluster->control, &pending);
     await(NULL, 1, &pending, NULL, false);
-    int used = snprintf(out, size, "%d ranks, tiles traced by rank", cluster->size);
+    int used = snprintf(out, size, "%d rank%s, tiles traced by rank", cluster->size, cluster->size > 1 ? "s" : "");
     for (int r = 0; all && r < cluster->size && used >= 0 && (size_t)used < size; r++)
         used += snprintf(out + used, size - (size_t)used, "%s %d: %llu", r ? "," : "", r, all[r]);
     if (used >= 0 && (size_t)used < size)
