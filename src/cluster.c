@@ -269,6 +269,15 @@ bool ao_cluster_agree(bool ok)
     return all;
 }
 
+bool ao_cluster_same(uint64_t value)
+{
+    uint64_t range[2] = {value, ~value}; /* the smallest value, and the largest as its complement */
+    MPI_Request pending;
+    MPI_Iallreduce(MPI_IN_PLACE, range, 2, MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD, &pending);
+    await(NULL, 1, &pending, NULL, false);
+    return range[0] == ~range[1];
+}
+
 void ao_cluster_finalize(void)
 {
     MPI_Finalize();

@@ -21,6 +21,9 @@ bool ao_cluster_init(int *argc, char ***argv, int *rank, int *size);
 /* True when every rank passes ok (a collective: every rank calls it alike). */
 bool ao_cluster_agree(bool ok);
 
+/* True when every rank passes the same value (a collective). */
+bool ao_cluster_same(uint64_t value);
+
 /* Ends MPI after a run that every rank finished alike (a collective). */
 void ao_cluster_finalize(void);
 

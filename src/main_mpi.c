@@ -4,6 +4,7 @@
 #include <fcntl.h>
 #include <signal.h>
 #include <stdatomic.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <unistd.h>
 
@@ -53,6 +54,29 @@ static int parse(int argc, char **argv, int rank, struct ao_options *opts)
     return AO_EXIT_USAGE;
 }
 
+/* FNV-1a over size bytes, continuing from hash. */
+static uint64_t fnv(uint64_t hash, const void *data, size_t size)
+{
+    const unsigned char *bytes = data;
+    for (size_t k = 0; k < size; k++)
+        hash = (hash ^ bytes[k]) * 0x100000001b3u;
+    return hash;
+}
+
+/* A fingerprint of what the image depends on: the render config and settings but the threads, and
+ * the scene's geometry, so that ranks given other options or other files are caught. */
+static uint64_t fingerprint(const struct ao_render_config *c, const struct ao_settings *s, const struct ao_scene *scene)
+{
+    double numbers[] = {c->width, c->height, (double)c->seed, c->target_spp, c->target_error, c->time_limit,
+                        c->ao_distance, c->sequence, c->below, s->sampling, s->aa, s->spppp, s->adaptive,
+                        s->output, s->shading, scene->background.x, scene->background.y, scene->background.z,
+                        (double)scene->sphere_count, (double)scene->triangle_count};
+    uint64_t hash = fnv(0xcbf29ce484222325u, numbers, sizeof numbers);
+    hash = fnv(hash, &s->camera, sizeof s->camera);
+    hash = fnv(hash, scene->positions, scene->vertex_count * sizeof *scene->positions);
+    return fnv(hash, scene->indices, 3 * scene->triangle_count * sizeof *scene->indices);
+}
+
 /* Loads the scene and the rest on rank 0, then (if it could) on the others, so that a file
  * missing everywhere is reported once; 0 when every rank has it. */
 static int load(struct ao_app *app, const struct ao_options *opts, int rank, struct ao_render_config *config,
@@ -63,7 +87,14 @@ static int load(struct ao_app *app, const struct ao_options *opts, int rank, str
         return AO_EXIT_RUNTIME;
     if (rank != 0)
         status = ao_app_load(app, opts, config, settings);
-    return ao_cluster_agree(status == 0) ? 0 : AO_EXIT_RUNTIME;
+    if (!ao_cluster_agree(status == 0))
+        return AO_EXIT_RUNTIME;
+    if (ao_cluster_same(fingerprint(config, settings, &app->scene)))
+        return 0;
+    if (rank == 0)
+        fprintf(stderr, "aoview-mpi: the ranks were given different options or scene files (only --threads, -o, "
+                        "--stats, --reference and -q may differ)\n");
+    return AO_EXIT_USAGE;
 }
 
 /* After an interruption: the other ranks tell rank 0 they are alive; rank 0 names those that did

@@ -92,6 +92,11 @@ equal)
   # Ranks with other thread counts (MPMD), a target error, and the textbook estimator.
   same target "--size 160x120 --target-error 0.02" 1 "--threads 1" : -np 2 "$mpi_bin" --threads 2 -q --size 160x120 --target-error 0.02
   same textbook "--size 120x90 --spp 32 --sampler random --spppp 4 --adaptive off --sampling uniform" 3 ""
+  # Ranks given other settings would render another image: refused, once, with status 2.
+  "${mpirun[@]}" -np 1 "$mpi_bin" --size 96x64 --spp 64 -o mismatch.pfm : -np 1 "$mpi_bin" --size 96x64 --spp 32 \
+    2>mismatch.err
+  [ "$(grep -c "ranks were given different options" mismatch.err)" = 1 ] && [ ! -e mismatch.pfm ] ||
+    fail "ranks with other --spp were not refused once: $(cat mismatch.err)"
   ;;
 slow)
   # Rank 1 sleeps 3 ms a tile (AO_MPI_TEST_DELAY_US, read by src/cluster.c for this test only),
