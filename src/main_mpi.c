@@ -6,6 +6,7 @@
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <string.h>
 #include <unistd.h>
 
 #include "app.h"
@@ -42,10 +43,11 @@ static int parse(int argc, char **argv, int rank, struct ao_options *opts)
 {
     char message[512];
     bool parsed = ao_cli_parse(argc, argv, opts, message, sizeof message);
-    if (parsed && opts->compare) {
-        snprintf(message, sizeof message, "--compare: not available in aoview-mpi");
-        parsed = false;
-    }
+    for (int k = 1; k < argc; k++) /* before the parser's own complaints about it */
+        if (strcmp(argv[k], "--compare") == 0) {
+            snprintf(message, sizeof message, "--compare: not available in aoview-mpi");
+            parsed = false;
+        }
     bool first_parsed = ao_cluster_agree(rank == 0 ? parsed : true);
     if (ao_cluster_agree(parsed))
         return 0;
