@@ -89,6 +89,7 @@ struct ao_render {
     double image_mean;                   /* of the running average, as of the last survey */
     int *work;                           /* the pass's tiles, grouped by share */
     struct share *shares;                /* one per thread, the render thread's first */
+    struct ao_vec3 *pass_sums;           /* with a share: TILE x TILE per work-list entry */
     atomic_uint_fast64_t eye_rays, shadow_rays;
 
     pthread_t thread;
@@ -151,30 +152,34 @@ static struct ao_tile_work tile_work(const struct ao_render *r, const struct til
     return w;
 }
 
-/* Traces tile t, adds its sums to the accumulation and brings its state up to date. */
-static void render_tile(struct ao_render *r, int t, uint64_t *eye, uint64_t *shadow)
+/* The pixels of tile t, clipped to the image. */
+static struct ao_tile tile_rect(const struct ao_render *r, int t)
 {
-    const struct ao_context *ctx = &r->ctx;
-    struct tile_state *ts = &r->tiles[t];
-    int width = ctx->view.width, height = ctx->view.height;
     struct ao_tile rect = {.x0 = t % r->tiles_x * TILE, .y0 = t / r->tiles_x * TILE};
-    rect.x1 = rect.x0 + TILE < width ? rect.x0 + TILE : width;
-    rect.y1 = rect.y0 + TILE < height ? rect.y0 + TILE : height;
-    uint32_t next;
-    struct ao_tile_work work = tile_work(r, ts, &next);
-    struct ao_vec3 sums[AO_TILE_PIXELS];
-    ao_estimate_tile(ctx, &rect, &work, sums, eye, shadow);
-    uint32_t samples = (uint32_t)(work.rounds * work.count);
-    int half = work.half & 1; /* half 2 belongs to the even half */
+    rect.x1 = rect.x0 + TILE < r->config.width ? rect.x0 + TILE : r->config.width;
+    rect.y1 = rect.y0 + TILE < r->config.height ? rect.y0 + TILE : r->config.height;
+    return rect;
+}
+
+/* Adds tile t's sums of one pass (the work it was given, after which its half's next sample is
+ * `next`) to the accumulation and brings its state up to date. */
+static void add_tile(struct ao_render *r, int t, const struct ao_tile_work *work, uint32_t next,
+                     const struct ao_vec3 *sums)
+{
+    struct tile_state *ts = &r->tiles[t];
+    struct ao_tile rect = tile_rect(r, t);
+    size_t width = (size_t)r->config.width;
+    uint32_t samples = (uint32_t)(work->rounds * work->count);
+    int half = work->half & 1; /* half 2 belongs to the even half */
     ts->passes++;
-    ts->rays[half] += work.half == 2 ? 0u : (uint32_t)work.rounds;
+    ts->rays[half] += work->half == 2 ? 0u : (uint32_t)work->rounds;
     ts->spp[half] += samples;
     ts->next[half] = next;
     /* Every pixel of a tile has the even and odd sample counts n_a and n_b of the tile. */
     double n_a = ts->spp[0], n_b = ts->spp[1], total = 0.0, squares = 0.0;
     for (int j = rect.y0; j < rect.y1; j++)
         for (int i = rect.x0; i < rect.x1; i++) {
-            size_t p = (size_t)j * (size_t)width + (size_t)i;
+            size_t p = (size_t)j * width + (size_t)i;
             ao_accum_add(&r->accum, p, sums[(j - rect.y0) * (rect.x1 - rect.x0) + (i - rect.x0)], samples,
                          half);
             double all = r->accum.sum[3 * p] + r->accum.sum[3 * p + 1] + r->accum.sum[3 * p + 2];
@@ -196,18 +201,40 @@ static void render_tile(struct ao_render *r, int t, uint64_t *eye, uint64_t *sha
     ts->variance = variance > rounding * rounding * pixels ? variance : 0.0;
 }
 
+/* Traces entry n of the work list: alone, adds its sums at once; with a share, leaves them in the
+ * pass's sums for merge_pass. */
+static void render_tile(struct ao_render *r, int n, uint64_t *eye, uint64_t *shadow)
+{
+    int t = r->work[n];
+    struct ao_tile rect = tile_rect(r, t);
+    uint32_t next;
+    struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
+    struct ao_vec3 own[AO_TILE_PIXELS];
+    struct ao_vec3 *sums = r->config.share ? r->pass_sums + (size_t)n * TILE * TILE : own;
+    ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow);
+    if (!r->config.share)
+        add_tile(r, t, &work, next, sums);
+}
+
 /* Thread `self`'s part of a pass: its own share, then what is left of the others'. */
 static void render_tiles(struct ao_render *r, int self)
 {
     int threads = r->config.threads;
     uint64_t eye = 0, shadow = 0;
-    for (int v = 0; v < threads && !aborted(r); v++) {
+    const struct ao_render_share *share = r->config.share;
+    while (share && !aborted(r)) { /* the entries this process claims, in any order */
+        int n = share->claim(share->user, r->pass_serial, r->shares[threads - 1].end);
+        if (n < 0)
+            break;
+        render_tile(r, n, &eye, &shadow);
+    }
+    for (int v = 0; v < threads && !share && !aborted(r); v++) {
         struct share *sh = &r->shares[(self + v) % threads];
         for (;;) {
             int n = sh->begin + atomic_fetch_add_explicit(&sh->next, 1, memory_order_relaxed);
             if (n >= sh->end || aborted(r))
                 break;
-            render_tile(r, r->work[n], &eye, &shadow);
+            render_tile(r, n, &eye, &shadow);
         }
     }
     atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
@@ -240,6 +267,8 @@ static void *worker_main(void *arg)
 /* Runs one pass on all threads; false when it was aborted by a restart or stop. */
 static bool run_pass(struct ao_render *r)
 {
+    if (r->config.share) /* the entries other processes trace add nothing in the merge */
+        memset(r->pass_sums, 0, (size_t)r->shares[r->config.threads - 1].end * TILE * TILE * sizeof *r->pass_sums);
     pthread_mutex_lock(&r->pass_lock);
     for (int k = 0; k < r->config.threads; k++)
         atomic_store(&r->shares[k].next, 0);
@@ -253,6 +282,24 @@ static bool run_pass(struct ao_render *r)
         pthread_cond_wait(&r->pass_end, &r->pass_lock);
     pthread_mutex_unlock(&r->pass_lock);
     return !aborted(r);
+}
+
+/* With a share: adds up the pass's sums, rays and seconds over the processes, then adds every
+ * tile of the work list to the accumulation, in the order of the list; false when the share
+ * ends the run. */
+static bool merge_pass(struct ao_render *r, uint64_t rays[2], double *seconds)
+{
+    const struct ao_render_share *share = r->config.share;
+    int count = r->shares[r->config.threads - 1].end;
+    if (!share->merge(share->user, r->pass_sums, (size_t)count * TILE * TILE, rays, seconds))
+        return false;
+    for (int n = 0; n < count; n++) {
+        int t = r->work[n];
+        uint32_t next;
+        struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
+        add_tile(r, t, &work, next, r->pass_sums + (size_t)n * TILE * TILE);
+    }
+    return true;
 }
 
 /* ---- planning: run by the render thread between passes ---- */
@@ -290,7 +337,8 @@ static double gain(const struct ao_render *r, int t)
  * sampling those among them that MIN_PASSES's rule picks. */
 static size_t select_tiles(struct ao_render *r, bool adaptive)
 {
-    int threads = r->config.threads, tiles = r->tiles_x * r->tiles_y;
+    /* With a share, one list in row order, the same in every process whatever its threads. */
+    int threads = r->config.threads, groups = r->config.share ? 1 : threads, tiles = r->tiles_x * r->tiles_y;
     uint32_t target = r->config.target_spp, busiest = 0;
     double fastest = 0.0;
     for (int t = 0; adaptive && t < tiles; t++)
@@ -302,6 +350,10 @@ static size_t select_tiles(struct ao_render *r, bool adaptive)
     int n = 0;
     for (int k = 0; k < threads; k++) {
         r->shares[k].begin = n;
+        if (k >= groups) {
+            r->shares[k].end = n;
+            continue;
+        }
         for (int t = k * r->tiles_x; t < tiles; t++) {
             const struct tile_state *ts = &r->tiles[t];
             uint32_t spp = tile_spp(ts);
@@ -313,7 +365,7 @@ static size_t select_tiles(struct ao_render *r, bool adaptive)
                 pixels += (size_t)tile_pixels(r, t);
             }
             if ((t + 1) % r->tiles_x == 0) /* the end of a row: on to this share's next row */
-                t += (threads - 1) * r->tiles_x;
+                t += (groups - 1) * r->tiles_x;
         }
         r->shares[k].end = n;
     }
@@ -458,9 +510,13 @@ static void *render_main(void *arg)
             atomic_store(&r->eye_rays, 0);
             atomic_store(&r->shadow_rays, 0);
             complete = run_pass(r);
-            info.eye_rays += atomic_load(&r->eye_rays);
-            info.shadow_rays += atomic_load(&r->shadow_rays);
-            info.seconds += now_seconds() - start;
+            uint64_t rays[2] = {atomic_load(&r->eye_rays), atomic_load(&r->shadow_rays)};
+            double seconds = now_seconds() - start;
+            if (complete && r->config.share)
+                complete = merge_pass(r, rays, &seconds);
+            info.eye_rays += rays[0];
+            info.shadow_rays += rays[1];
+            info.seconds += seconds;
             info.sampling = s.sampling;
             info.aa = s.aa;
             info.output = s.output;
@@ -512,7 +568,9 @@ static bool allocate(struct ao_render *r)
     r->work = calloc(tiles, sizeof *r->work);
     r->workers = calloc((size_t)r->config.threads, sizeof *r->workers);
     r->shares = aligned_alloc(_Alignof(struct share), (size_t)r->config.threads * sizeof *r->shares);
-    if (!r->tiles || !r->work || !r->workers || !r->shares) {
+    if (r->config.share)
+        r->pass_sums = malloc(tiles * TILE * TILE * sizeof *r->pass_sums);
+    if (!r->tiles || !r->work || !r->workers || !r->shares || (r->config.share && !r->pass_sums)) {
         fprintf(stderr, "aoview: out of memory starting the renderer\n");
         return false;
     }
@@ -615,6 +673,7 @@ void ao_render_destroy(struct ao_render *render)
     free(render->work);
     free(render->workers);
     free(render->shares);
+    free(render->pass_sums);
     ao_accum_finish(&render->accum);
     free(render);
 }

@@ -60,7 +60,21 @@ struct ao_frame {
     float *tile_error;
 };
 
-/* How to render; scene, tracer and reference must outlive the renderer. */
+/* How processes rendering the same image split each pass (aoview-mpi's cluster.c): each traces the
+ * work-list entries it claims, and the pass's sums are added up over all of them before any is
+ * accumulated, so that every process holds the same sums and takes the same decisions. */
+struct ao_render_share {
+    /* The next entry of pass `pass`'s work list of `count` tiles for this process to trace, or -1
+     * when none is left; every process numbers the passes alike. Any render thread. */
+    int (*claim)(void *user, uint64_t pass, int count);
+    /* Replaces sums (count pixel sums, zero where this process traced nothing), rays (eye,
+     * shadow) and seconds by their totals over the processes (seconds: the largest); false when
+     * the run is being stopped (ao_render_stop). Render thread. */
+    bool (*merge)(void *user, struct ao_vec3 *sums, size_t count, uint64_t rays[2], double *seconds);
+    void *user;
+};
+
+/* How to render; scene, tracer, reference and share must outlive the renderer. */
 struct ao_render_config {
     const struct ao_scene *scene;
     const struct ao_tracer *tracer;
@@ -77,6 +91,7 @@ struct ao_render_config {
     /* Called on the render thread after each published pass (stats rows, waking the GL thread). */
     void (*on_pass)(const struct ao_frame_info *info, void *user);
     void *user;
+    const struct ao_render_share *share;   /* NULL: this process traces every tile */
 };
 
 /* The renderer; opaque. */
@@ -108,7 +123,7 @@ const struct ao_frame *ao_render_take_frame(struct ao_render *render);
 bool ao_render_wait(struct ao_render *render);
 
 /* After an interruption: stops and joins the render thread, then resolves the accumulation as it
- * stands, the aborted pass's finished tiles included, into a frame whose info.spp is the smallest
+ * stands, the aborted pass's finished tiles included (with a share, the merged passes only), into a frame whose info.spp is the smallest
  * per-pixel sample count. Main thread, as the frame consumer; call ao_render_destroy afterwards. */
 const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render);
 

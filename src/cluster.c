@@ -1,0 +1,392 @@
+/* The ranks of an aoview-mpi run; see cluster.h. Three communicators keep the kinds of traffic
+ * apart, since they come from different threads: claims (render threads and rank 0's server),
+ * sums (the render thread's merges) and control (main: answers after an interruption, the tile
+ * counts at the end). */
+#include "cluster.h"
+
+#include <limits.h>
+#include <mpi.h>
+#include <pthread.h>
+#include <stdatomic.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+enum { TAG_REQUEST = 1, TAG_GRANT, TAG_ANSWER };
+
+/* A rank waiting for a message or for the slowest rank at a merge tests its request, then sleeps
+ * 50 us, doubling up to 1 ms while nothing comes: it leaves the cores to the render threads, at a
+ * cost of at most 1 ms a wait; 10 to 200 us took 0.55 s of system time in a 5 s run against 0.3 s,
+ * for no shorter waits (docs/mpi.md). */
+static const long POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000;
+
+/* Rank 0 grants a rank 1 / (CHUNKS x ranks) of the entries still to hand out, so that chunks
+ * shrink as the pass runs out: a rank holds at most two chunks (the one it traces and the next,
+ * asked for ahead), 1/16 of a pass between two ranks however slow one of them is. But at least
+ * what the rank traces in CHUNK_SECONDS, by its own measure, so that the next chunk's round trip
+ * (0.1 ms here, a few ms when the machine is busy) hides behind the one it traces; with single
+ * entries at the ends of passes a rank waited for a fifth of a run (docs/mpi.md). */
+enum { CHUNKS = 16 };
+static const double CHUNK_SECONDS = 2e-3;
+
+struct ao_cluster {
+    struct ao_render_share share;
+    int rank, size;
+    MPI_Comm claims, sums, control;
+    atomic_bool stopping;
+    long delay_ns;           /* tests only: AO_MPI_TEST_DELAY_US per tile claimed, a slow rank */
+
+    pthread_mutex_t lock;    /* the claim state below */
+    uint64_t pass;           /* rank 0: the pass being handed out; others: the pass of the chunk */
+    int next, count;         /* rank 0: the next entry to hand out, of count */
+    int begin, end;          /* other ranks: what is left of the chunk granted */
+    bool exhausted;          /* other ranks: rank 0 has nothing left of this pass */
+    bool asked;              /* other ranks: a request for the next chunk is out */
+    double last_claim;       /* other ranks: when an entry was last claimed without waiting */
+    double entry_seconds;    /* other ranks: the time between claims, smoothed; 0: unknown */
+    int grant[2];            /* other ranks: its answer, [begin, end) */
+    MPI_Request granted;
+    uint64_t tiles;          /* entries this rank claimed */
+    uint64_t request[3];     /* rank 0: the request being received (pass, count, least) */
+    MPI_Request incoming;
+
+    double merge_seconds;    /* the last merge's duration (render thread) */
+    uint64_t merges;         /* merges so far, the bytes of their buffers, the seconds spent */
+    double merge_bytes, waited, moved;  /* waiting for the slowest rank, and moving the sums */
+    pthread_t server;
+    bool serving;
+
+    /* Rank 0's buffers for ao_cluster_missing and ao_cluster_tiles, one entry per rank. */
+    MPI_Request *pending;
+    int *answers;
+    unsigned long long *tiles_by_rank;
+};
+
+static double now_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void sleep_ns(long ns)
+{
+    struct timespec ts = {.tv_sec = ns / 1000000000L, .tv_nsec = ns % 1000000000L};
+    nanosleep(&ts, NULL);
+}
+
+/* Tests the n requests until all complete (true) or *stopping is set (false; they are left
+ * pending: the process ends without MPI_Finalize); sleeps between tests unless spin. */
+static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, MPI_Status *statuses, bool spin)
+{
+    long pause = POLL_FIRST_NS;
+    for (;;) {
+        int done = 0;
+        MPI_Testall(n, requests, &done, statuses ? statuses : MPI_STATUSES_IGNORE);
+        if (done)
+            return true;
+        if (stopping && atomic_load_explicit(stopping, memory_order_relaxed))
+            return false;
+        if (!spin) {
+            sleep_ns(pause);
+            pause = pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
+        }
+    }
+}
+
+/* Rank 0, lock held: opens pass `pass` of `count` entries when it is new, and hands out a chunk of
+ * what is left, at least `least` and at most `most` entries: [*begin, *end), empty when nothing is. */
+static void hand_out(struct ao_cluster *c, uint64_t pass, int count, int least, int most, int *begin, int *end)
+{
+    if (pass > c->pass) {
+        c->pass = pass;
+        c->next = 0;
+        c->count = count;
+    }
+    int left = pass == c->pass ? c->count - c->next : 0;
+    int chunk = left / (CHUNKS * c->size);
+    chunk = chunk < least ? least : chunk > most ? most : chunk;
+    chunk = chunk < left ? chunk : left;
+    *begin = c->next;
+    *end = c->next += chunk;
+}
+
+/* Rank 0, lock held: answers every request that has come with a chunk; true if there was one. */
+static bool serve_pending(struct ao_cluster *c)
+{
+    bool served = false;
+    for (;;) {
+        int done = 0;
+        MPI_Status status;
+        MPI_Test(&c->incoming, &done, &status);
+        if (!done)
+            return served;
+        int grant[2];
+        hand_out(c, c->request[0], (int)c->request[1], (int)c->request[2], INT_MAX, &grant[0], &grant[1]);
+        MPI_Send(grant, 2, MPI_INT, status.MPI_SOURCE, TAG_GRANT, c->claims);
+        MPI_Irecv(c->request, 3, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_REQUEST, c->claims, &c->incoming);
+        served = true;
+    }
+}
+
+/* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (between
+ * passes, at a merge), when a woken thread may take milliseconds to run on a busy machine; during
+ * a pass, each claim of rank 0's answers them first. */
+static void *serve(void *arg)
+{
+    struct ao_cluster *c = arg;
+    long pause = POLL_FIRST_NS;
+    while (!atomic_load_explicit(&c->stopping, memory_order_relaxed)) {
+        pthread_mutex_lock(&c->lock);
+        bool served = serve_pending(c);
+        pthread_mutex_unlock(&c->lock);
+        pause = served ? POLL_FIRST_NS : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
+        sleep_ns(pause);
+    }
+    return NULL;
+}
+
+/* Other ranks, lock held: asks rank 0 for the next chunk of the pass. */
+static void ask(struct ao_cluster *c, uint64_t pass, int count)
+{
+    double least = c->entry_seconds > 0.0 ? CHUNK_SECONDS / c->entry_seconds : 1.0;
+    uint64_t request[3] = {pass, (uint64_t)count, least < 1.0 ? 1 : least > count ? (uint64_t)count : (uint64_t)least};
+    MPI_Send(request, 3, MPI_UINT64_T, 0, TAG_REQUEST, c->claims);
+    MPI_Irecv(c->grant, 2, MPI_INT, 0, TAG_GRANT, c->claims, &c->granted);
+    c->asked = true;
+}
+
+/* Other ranks, lock held: the next entry of the pass, or -1 when none is left or the cluster
+ * stops. A chunk is asked for as soon as the one before it arrives, so that the answer's round
+ * trip overlaps tracing. */
+static int claim_remote(struct ao_cluster *c, uint64_t pass, int count)
+{
+    if (c->pass != pass) { /* tiles cost more in some passes than in others: measure anew */
+        c->pass = pass;
+        c->begin = c->end = 0;
+        c->exhausted = false;
+        c->last_claim = c->entry_seconds = 0.0;
+    }
+    bool waited = false;
+    while (!c->exhausted && c->begin == c->end) {
+        if (!c->asked)
+            ask(c, pass, count);
+        if (!await(&c->stopping, 1, &c->granted, NULL, false))
+            return -1;
+        waited = true;
+        c->asked = false;
+        c->begin = c->grant[0];
+        c->end = c->grant[1];
+        c->exhausted = c->begin == c->end;
+        if (!c->exhausted)
+            ask(c, pass, count);
+    }
+    if (c->exhausted)
+        return -1;
+    double now = now_seconds();
+    if (!waited && c->last_claim > 0.0)
+        c->entry_seconds = c->entry_seconds > 0.0 ? 0.8 * c->entry_seconds + 0.2 * (now - c->last_claim)
+                                                  : now - c->last_claim;
+    c->last_claim = now;
+    return c->begin++;
+}
+
+static int claim(void *user, uint64_t pass, int count)
+{
+    struct ao_cluster *c = user;
+    int n = -1, end;
+    pthread_mutex_lock(&c->lock);
+    if (c->rank == 0) {
+        serve_pending(c);
+        hand_out(c, pass, count, 1, 1, &n, &end);
+        n = n < end ? n : -1;
+    } else {
+        n = claim_remote(c, pass, count);
+    }
+    c->tiles += n >= 0;
+    pthread_mutex_unlock(&c->lock);
+    if (n >= 0 && c->delay_ns)
+        sleep_ns(c->delay_ns);
+    return n;
+}
+
+/* The pass's seconds are the slowest rank's, the previous merge included; waiting for it doubles
+ * as the barrier, with sleeps, before the sums move with blocking calls (everyone being there) of
+ * SEGMENT floats each: here 1 MB buffers reduce at 4-5 GB/s, 64 MB ones at 0.4, and a 100 MB
+ * MPI_Iallreduce tested in a loop took 2 s (docs/mpi.md). The run may stop between segments. */
+static bool merge(void *user, struct ao_vec3 *sums, size_t count, uint64_t rays[2], double *seconds)
+{
+    enum { SEGMENT = 1 << 18 };
+    struct ao_cluster *c = user;
+    double start = now_seconds(), slowest = *seconds + c->merge_seconds;
+    MPI_Request pending;
+    MPI_Iallreduce(MPI_IN_PLACE, &slowest, 1, MPI_DOUBLE, MPI_MAX, c->sums, &pending);
+    if (!await(&c->stopping, 1, &pending, NULL, false))
+        return false;
+    double arrived = now_seconds();
+    _Static_assert(sizeof(struct ao_vec3) == 3 * sizeof(float), "pixel sums are 3 packed floats");
+    float *floats = &sums->x;
+    for (size_t done = 0, total = 3 * count; done < total; done += SEGMENT) {
+        if (atomic_load_explicit(&c->stopping, memory_order_relaxed))
+            return false;
+        int n = total - done < SEGMENT ? (int)(total - done) : SEGMENT;
+        MPI_Allreduce(MPI_IN_PLACE, floats + done, n, MPI_FLOAT, MPI_SUM, c->sums);
+    }
+    MPI_Allreduce(MPI_IN_PLACE, rays, 2, MPI_UINT64_T, MPI_SUM, c->sums);
+    *seconds = slowest;
+    double end = now_seconds();
+    c->merge_seconds = end - start;
+    c->merges++;
+    c->merge_bytes += (double)count * sizeof *sums;
+    c->waited += arrived - start;
+    c->moved += end - arrived;
+    return true;
+}
+
+bool ao_cluster_init(int *argc, char ***argv, int *rank, int *size)
+{
+    int provided;
+    if (MPI_Init_thread(argc, argv, MPI_THREAD_MULTIPLE, &provided) != MPI_SUCCESS)
+        return false;
+    MPI_Comm_rank(MPI_COMM_WORLD, rank);
+    MPI_Comm_size(MPI_COMM_WORLD, size);
+    if (provided < MPI_THREAD_MULTIPLE) {
+        if (*rank == 0)
+            fprintf(stderr, "aoview-mpi: this MPI library does not support MPI_THREAD_MULTIPLE\n");
+        MPI_Finalize();
+        return false;
+    }
+    return true;
+}
+
+bool ao_cluster_agree(bool ok)
+{
+    int all = ok;
+    MPI_Request pending;
+    MPI_Iallreduce(MPI_IN_PLACE, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD, &pending);
+    await(NULL, 1, &pending, NULL, false);
+    return all;
+}
+
+bool ao_cluster_same(uint64_t value)
+{
+    uint64_t range[2] = {value, ~value}; /* the smallest value, and the largest as its complement */
+    MPI_Request pending;
+    MPI_Iallreduce(MPI_IN_PLACE, range, 2, MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD, &pending);
+    await(NULL, 1, &pending, NULL, false);
+    return range[0] == ~range[1];
+}
+
+void ao_cluster_finalize(void)
+{
+    MPI_Finalize();
+}
+
+struct ao_cluster *ao_cluster_create(void)
+{
+    struct ao_cluster *c = calloc(1, sizeof *c);
+    if (!ao_cluster_agree(c != NULL)) {
+        if (!c)
+            fprintf(stderr, "aoview-mpi: out of memory for the cluster\n");
+        free(c);
+        return NULL;
+    }
+    MPI_Comm_rank(MPI_COMM_WORLD, &c->rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &c->size);
+    MPI_Comm_dup(MPI_COMM_WORLD, &c->claims);
+    MPI_Comm_dup(MPI_COMM_WORLD, &c->sums);
+    MPI_Comm_dup(MPI_COMM_WORLD, &c->control);
+    pthread_mutex_init(&c->lock, NULL);
+    atomic_init(&c->stopping, false);
+    c->share = (struct ao_render_share){.claim = claim, .merge = merge, .user = c};
+    const char *delay = getenv("AO_MPI_TEST_DELAY_US");
+    c->delay_ns = delay ? 1000L * strtol(delay, NULL, 10) : 0;
+    bool ok = true;
+    if (c->rank == 0) {
+        size_t ranks = (size_t)c->size;
+        c->pending = calloc(ranks, sizeof *c->pending);
+        c->answers = calloc(ranks, sizeof *c->answers);
+        c->tiles_by_rank = calloc(ranks, sizeof *c->tiles_by_rank);
+        ok = c->pending && c->answers && c->tiles_by_rank;
+        if (ok) {
+            MPI_Irecv(c->request, 3, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_REQUEST, c->claims, &c->incoming);
+            ok = c->serving = pthread_create(&c->server, NULL, serve, c) == 0;
+        }
+        if (!ok)
+            fprintf(stderr, "aoview-mpi: out of memory or threads for the cluster\n");
+    }
+    if (!ao_cluster_agree(ok)) {
+        ao_cluster_destroy(c);
+        return NULL;
+    }
+    return c;
+}
+
+const struct ao_render_share *ao_cluster_share(struct ao_cluster *cluster)
+{
+    return &cluster->share;
+}
+
+void ao_cluster_stop(struct ao_cluster *cluster)
+{
+    atomic_store(&cluster->stopping, true);
+}
+
+void ao_cluster_answer(struct ao_cluster *cluster)
+{
+    MPI_Send(&cluster->rank, 1, MPI_INT, 0, TAG_ANSWER, cluster->control);
+}
+
+void ao_cluster_missing(struct ao_cluster *cluster, double seconds, char *out, size_t size)
+{
+    MPI_Request *pending = cluster->pending;
+    int ranks = cluster->size, left = ranks - 1;
+    for (int r = 1; r < ranks; r++)
+        MPI_Irecv(&cluster->answers[r], 1, MPI_INT, r, TAG_ANSWER, cluster->control, &pending[r]);
+    for (double deadline = now_seconds() + seconds; left > 0 && now_seconds() < deadline; sleep_ns(POLL_MOST_NS))
+        for (int r = 1; r < ranks; r++) {
+            int done = 0;
+            if (pending[r] != MPI_REQUEST_NULL && MPI_Test(&pending[r], &done, MPI_STATUS_IGNORE) == MPI_SUCCESS && done)
+                left--;
+        }
+    size_t used = 0;
+    out[0] = '\0';
+    for (int r = 1; r < ranks; r++)
+        if (pending[r] != MPI_REQUEST_NULL && used < size)
+            used += (size_t)snprintf(out + used, size - used, "%s%d", used ? ", " : "", r);
+}
+
+void ao_cluster_summary(struct ao_cluster *cluster, char *out, size_t size)
+{
+    unsigned long long mine = cluster->tiles, *all = cluster->tiles_by_rank;
+    MPI_Request pending;
+    MPI_Igather(&mine, 1, MPI_UNSIGNED_LONG_LONG, all, 1, MPI_UNSIGNED_LONG_LONG, 0, cluster->control, &pending);
+    await(NULL, 1, &pending, NULL, false);
+    int used = snprintf(out, size, "%d rank%s, tiles traced by rank", cluster->size, cluster->size > 1 ? "s" : "");
+    for (int r = 0; all && r < cluster->size && used >= 0 && (size_t)used < size; r++)
+        used += snprintf(out + used, size - (size_t)used, "%s %d: %llu", r ? "," : "", r, all[r]);
+    if (used >= 0 && (size_t)used < size)
+        snprintf(out + used, size - (size_t)used, "; %llu merges of %.1f MB in all took %.3f s, after %.3f s waiting for the slowest rank",
+                 (unsigned long long)cluster->merges, cluster->merge_bytes / 1e6, cluster->moved, cluster->waited);
+}
+
+void ao_cluster_destroy(struct ao_cluster *cluster)
+{
+    if (!cluster)
+        return;
+    ao_cluster_stop(cluster);
+    if (cluster->serving) {
+        pthread_join(cluster->server, NULL);
+        MPI_Cancel(&cluster->incoming);
+        MPI_Wait(&cluster->incoming, MPI_STATUS_IGNORE);
+    }
+    MPI_Comm_free(&cluster->claims);
+    MPI_Comm_free(&cluster->sums);
+    MPI_Comm_free(&cluster->control);
+    pthread_mutex_destroy(&cluster->lock);
+    free(cluster->pending);
+    free(cluster->answers);
+    free(cluster->tiles_by_rank);
+    free(cluster);
+}

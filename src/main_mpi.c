@@ -1,0 +1,187 @@
+/* aoview-mpi: `mpirun -np N aoview-mpi [aoview's options] SCENE` renders aoview's image on N
+ * ranks: each loads the scene and traces the tiles it claims from rank 0, every pass's sums are
+ * added up over the ranks, and rank 0 writes -o, --stats and the progress bar. Headless only. */
+#include <fcntl.h>
+#include <signal.h>
+#include <stdatomic.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "app.h"
+#include "cli.h"
+#include "cluster.h"
+#include "config.h"
+
+/* How long rank 0 waits for the other ranks to answer after an interruption: mpirun sends SIGTERM
+ * to every rank at once and SIGKILL a second later, and a PNG takes about 0.5 s to write. The
+ * other ranks then wait up to LINGER_SECONDS for that SIGKILL: mpirun kills at once what is left
+ * of a job whose other ranks have all ended. */
+static const double ANSWER_SECONDS = 0.2;
+enum { LINGER_SECONDS = 5 };
+
+/* Whether the user watches stderr on a terminal: mpirun hands its ranks a pipe for stderr (and a
+ * terminal for stdout, always), so rank 0 also asks about its parent's, which is mpirun's when
+ * rank 0 runs on mpirun's machine. */
+static bool watched_on_terminal(void)
+{
+    if (isatty(STDERR_FILENO))
+        return true;
+    char path[64];
+    snprintf(path, sizeof path, "/proc/%ld/fd/2", (long)getppid());
+    int fd = open(path, O_WRONLY | O_NOCTTY);
+    bool terminal = fd >= 0 && isatty(fd);
+    if (fd >= 0)
+        close(fd);
+    return terminal;
+}
+
+/* Parses argv on every rank; 0, or the exit status after one message (from rank 0, or from a rank
+ * whose options alone fail). */
+static int parse(int argc, char **argv, int rank, struct ao_options *opts)
+{
+    char message[512];
+    bool parsed = ao_cli_parse(argc, argv, opts, message, sizeof message);
+    for (int k = 1; k < argc; k++) /* before the parser's own complaints about it */
+        if (strcmp(argv[k], "--compare") == 0) {
+            snprintf(message, sizeof message, "--compare: not available in aoview-mpi");
+            parsed = false;
+        }
+    bool first_parsed = ao_cluster_agree(rank == 0 ? parsed : true);
+    if (ao_cluster_agree(parsed))
+        return 0;
+    if (!parsed && (rank == 0 || first_parsed))
+        fprintf(stderr, "aoview-mpi: %s (try --help)\n", message);
+    return AO_EXIT_USAGE;
+}
+
+/* FNV-1a over size bytes, continuing from hash. */
+static uint64_t fnv(uint64_t hash, const void *data, size_t size)
+{
+    const unsigned char *bytes = data;
+    for (size_t k = 0; k < size; k++)
+        hash = (hash ^ bytes[k]) * 0x100000001b3u;
+    return hash;
+}
+
+/* A fingerprint of what the image depends on: the render config and settings but the threads, and
+ * the scene's geometry, so that ranks given other options or other files are caught. */
+static uint64_t fingerprint(const struct ao_render_config *c, const struct ao_settings *s, const struct ao_scene *scene)
+{
+    double numbers[] = {c->width, c->height, (double)c->seed, c->target_spp, c->target_error, c->time_limit,
+                        c->ao_distance, c->sequence, c->below, s->sampling, s->aa, s->spppp, s->adaptive,
+                        s->output, s->shading, scene->background.x, scene->background.y, scene->background.z,
+                        (double)scene->sphere_count, (double)scene->triangle_count};
+    uint64_t hash = fnv(0xcbf29ce484222325u, numbers, sizeof numbers);
+    hash = fnv(hash, &s->camera, sizeof s->camera);
+    hash = fnv(hash, scene->positions, scene->vertex_count * sizeof *scene->positions);
+    return fnv(hash, scene->indices, 3 * scene->triangle_count * sizeof *scene->indices);
+}
+
+/* Loads the scene and the rest on rank 0, then (if it could) on the others, so that a file
+ * missing everywhere is reported once; 0 when every rank has it. */
+static int load(struct ao_app *app, const struct ao_options *opts, int rank, struct ao_render_config *config,
+                struct ao_settings *settings)
+{
+    int status = rank == 0 ? ao_app_load(app, opts, config, settings) : 0;
+    if (!ao_cluster_agree(status == 0))
+        return AO_EXIT_RUNTIME;
+    if (rank != 0)
+        status = ao_app_load(app, opts, config, settings);
+    if (!ao_cluster_agree(status == 0))
+        return AO_EXIT_RUNTIME;
+    if (ao_cluster_same(fingerprint(config, settings, &app->scene)))
+        return 0;
+    if (rank == 0)
+        fprintf(stderr, "aoview-mpi: the ranks were given different options or scene files (only --threads, -o, "
+                        "--stats, --reference and -q may differ)\n");
+    return AO_EXIT_USAGE;
+}
+
+/* After an interruption: the other ranks tell rank 0 they are alive; rank 0 names those that did
+ * not answer (lost: killed or crashed, which made mpirun stop the job) and writes the image of
+ * the last merged pass, the newest frame published (the render thread may be in a tile for long:
+ * mpirun's SIGKILL does not wait for it; its --stats row is written). */
+static int interrupted(struct ao_app *app, struct ao_cluster *cluster, const struct ao_options *opts, int rank,
+                       int sig)
+{
+    if (rank != 0) {
+        ao_cluster_answer(cluster);
+        sleep(LINGER_SECONDS);
+        return 128 + sig;
+    }
+    char missing[256], why[320];
+    ao_cluster_missing(cluster, ANSWER_SECONDS, missing, sizeof missing);
+    if (missing[0])
+        snprintf(why, sizeof why, "rank %s lost (killed or crashed), stopped", missing);
+    else
+        snprintf(why, sizeof why, "interrupted by %s", sig == SIGINT ? "SIGINT" : "SIGTERM");
+    const struct ao_frame *frame = ao_render_take_frame(app->render);
+    if (!frame)
+        fprintf(stderr, "\naoview: %s before the first pass was merged: nothing written\n", why);
+    return ao_app_write(app, opts, frame, why, false, missing[0] || !frame ? AO_EXIT_RUNTIME : 128 + sig);
+}
+
+/* Renders on every rank; rank 0 writes. Returns the exit status; *clean says whether every rank
+ * got to the end alike (MPI may then be finalized). */
+static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool *clean)
+{
+    struct ao_options mine = *opts;
+    if (rank != 0) /* only rank 0 reports and writes */
+        mine.quiet = true, mine.stats_path = NULL, mine.reference_path = NULL, mine.output = NULL;
+    struct ao_render_config config;
+    struct ao_settings settings;
+    int status = load(app, &mine, rank, &config, &settings);
+    if (status)
+        return status;
+    app->reporter.progress = !mine.quiet && watched_on_terminal();
+    struct ao_cluster *cluster = ao_cluster_create();
+    if (!cluster)
+        return AO_EXIT_RUNTIME;
+    config.share = ao_cluster_share(cluster);
+    app->render = ao_render_create(&config, &settings);
+    if (!ao_cluster_agree(app->render && ao_app_start_watcher(app, app->render))) {
+        ao_cluster_destroy(cluster);
+        return AO_EXIT_RUNTIME;
+    }
+    atomic_store(&app->interrupt.graceful, true);
+    int sig;
+    bool finished = ao_app_wait(app, &sig);
+    if (!finished) {
+        *clean = false;
+        ao_cluster_stop(cluster);
+        return sig ? interrupted(app, cluster, &mine, rank, sig) : AO_EXIT_RUNTIME;
+    }
+    char summary[1024];
+    ao_cluster_summary(cluster, summary, sizeof summary);
+    ao_cluster_destroy(cluster);
+    if (rank != 0)
+        return 0;
+    if (!mine.quiet)
+        fprintf(stderr, "aoview-mpi: %s\n", summary);
+    return ao_app_write(app, &mine, ao_render_take_frame(app->render), NULL, false, 0);
+}
+
+int main(int argc, char **argv)
+{
+    /* Before MPI starts its threads, so that they all inherit the mask. */
+    struct ao_app app = {0};
+    ao_app_block_signals(&app);
+    int rank, size;
+    if (!ao_cluster_init(&argc, &argv, &rank, &size))
+        return AO_EXIT_RUNTIME;
+    struct ao_options opts;
+    int status = parse(argc, argv, rank, &opts);
+    if (status || opts.help || opts.version) {
+        if (!status && rank == 0)
+            fputs(opts.help ? ao_cli_usage() : "aoview-mpi " AO_VERSION "\n", stdout);
+        ao_cluster_finalize();
+        return status;
+    }
+    bool clean = true;
+    status = ao_app_finish(&app, &opts, run(&app, &opts, rank, &clean));
+    if (clean)
+        ao_cluster_finalize();
+    return status;
+}

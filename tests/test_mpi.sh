@@ -1,0 +1,139 @@
+#!/usr/bin/env bash
+# aoview-mpi on localhost: the same image and --stats decisions as one aoview process for 2 and 3
+# ranks; a slowed rank takes fewer tiles; a killed rank and SIGINT to mpirun end the run with one
+# line and the image merged so far. Usage: test_mpi.sh equal|slow|killed|sigint
+set -u
+bin=${AO_BINARY:?AO_BINARY not set}
+mpi_bin=${AO_MPI_BINARY:?AO_MPI_BINARY not set}
+command -v mpirun >/dev/null || { echo "SKIP: no mpirun (Debian: openmpi-bin)"; exit 77; }
+[ -x "$mpi_bin" ] || { echo "SKIP: $mpi_bin not built"; exit 77; }
+# OpenMPI refuses root without these; loopback only, never another network address.
+export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
+export OMPI_MCA_btl_tcp_if_include=lo OMPI_MCA_oob_tcp_if_include=lo
+mpirun=(timeout -k 5 120 mpirun --oversubscribe)
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# max_diff A.pfm B.pfm: the largest |a - b| over all channels, or "size" if the images differ in size.
+max_diff() {
+  python3 - "$1" "$2" <<'PY'
+import struct, sys
+def read(path):
+    data = open(path, 'rb').read()
+    parts = data.split(b'\n', 3)
+    w, h = map(int, parts[1].split())
+    return (w, h), struct.unpack('<%df' % (3 * w * h), parts[3][:12 * w * h])
+(sa, a), (sb, b) = read(sys.argv[1]), read(sys.argv[2])
+print('size' if sa != sb else max(abs(x - y) for x, y in zip(a, b)))
+PY
+}
+
+# decisions STATS.csv: the stats rows without the columns that are wall time (seconds, Mrays/s).
+decisions() { cut -d, -f1,2,4,5,7- "$1"; }
+
+# same NAME 'ARGS' NP 'RANK ARGS' [MORE...]: one aoview process with ARGS and NP ranks with ARGS
+# and RANK ARGS (then MORE, mpirun's other app contexts) give the same image (up to
+# the order of double additions, |d| <= 1e-5; in fact bit for bit, as one rank alone traces each
+# pixel of a pass) and the same stats rows (passes, spp, rays, RMSE, error, converged share).
+same() {
+  local name=$1 args=$2 np=$3 rank_args=$4
+  shift 4
+  # shellcheck disable=SC2086 # the arguments are words
+  "$bin" --headless -q $args --threads 2 -o "$name-1.pfm" --stats "$name-1.csv" || { fail "$name: aoview failed"; return; }
+  # shellcheck disable=SC2086
+  "${mpirun[@]}" -np "$np" "$mpi_bin" -q $args $rank_args -o "$name-n.pfm" --stats "$name-n.csv" "$@" 2>"$name.err" \
+    || { fail "$name: aoview-mpi -np $np failed: $(cat "$name.err")"; return; }
+  local d
+  d=$(max_diff "$name-1.pfm" "$name-n.pfm")
+  python3 -c "import sys; sys.exit(0 if '$d' != 'size' and float('$d') <= 1e-5 else 1)" \
+    || fail "$name: -np $np image differs from one process's by $d"
+  diff <(decisions "$name-1.csv") <(decisions "$name-n.csv") >/dev/null \
+    || fail "$name: -np $np took other decisions: $(diff <(decisions "$name-1.csv") <(decisions "$name-n.csv") | head -4)"
+  echo "$name: max |d| = $d over the ranks, $(($(wc -l < "$name-n.csv") - 1)) passes alike"
+}
+
+# tiles_of RANK ERR: the tiles RANK traced, from the "tiles traced by rank" line.
+tiles_of() { sed -n "s/.*tiles traced by rank .*\b$1: \([0-9]*\).*/\1/p" "$2"; }
+
+# rank_pid PID RANK: the pid of that rank among the descendants of PID (timeout, then mpirun).
+rank_pid() {
+  local p
+  for p in $(pgrep -P "$(pgrep -P "$1")"); do
+    if tr '\0' '\n' < "/proc/$p/environ" 2>/dev/null | grep -qx "OMPI_COMM_WORLD_RANK=$2"; then echo "$p"; return; fi
+  done
+}
+
+# A render far too long to finish, started in the background with its --stats; waits for 3 passes.
+# PFM: mpirun kills the ranks a second after its SIGTERM, and a PNG takes half of that to write
+# (OSMesa and LLVM load), too much of it in the sanitizer builds on a busy machine.
+start_long() {
+  rm -f long.pfm long.csv
+  "${mpirun[@]}" -np 3 "$mpi_bin" --spp 1000000 --size 96x64 --threads 1 -o long.pfm --stats long.csv 2>long.err &
+  long_pid=$!
+  for _ in $(seq 200); do [ -f long.csv ] && [ "$(wc -l < long.csv)" -ge 4 ] && break; sleep 0.1; done
+}
+
+# complete_pfm FILE W H: a whole colour PFM of W x H, no temporary file beside it.
+complete_pfm() {
+  local header="PF"$'\n'"$2 $3"$'\n'"-1.0"$'\n'
+  [ -f "$1" ] && [ "$(stat -c %s "$1")" = $(( ${#header} + 12 * $2 * $3 )) ] && [ "$(head -c 2 "$1")" = PF ] &&
+    [ -z "$(ls -A | grep -v -x -e long.pfm -e long.csv -e long.err)" ]
+}
+
+case ${1:?equal, slow, killed or sigint} in
+equal)
+  # The defaults (adaptive sampling, auto passes, Sobol) with a reference for the RMSE column.
+  "$bin" --headless -q --size 160x120 --spp 64 --seed 7 -o ref.pfm || fail "reference failed"
+  same defaults "--size 160x120 --reference ref.pfm" 2 ""
+  same defaults3 "--size 160x120 --reference ref.pfm" 3 ""
+  # Ranks with other thread counts (MPMD), a target error, and the textbook estimator.
+  same target "--size 160x120 --target-error 0.02" 1 "--threads 1" : -np 2 "$mpi_bin" --threads 2 -q --size 160x120 --target-error 0.02
+  same textbook "--size 120x90 --spp 32 --sampler random --spppp 4 --adaptive off --sampling uniform" 3 ""
+  # Ranks given other settings would render another image: refused, once, with status 2.
+  "${mpirun[@]}" -np 1 "$mpi_bin" --size 96x64 --spp 64 -o mismatch.pfm : -np 1 "$mpi_bin" --size 96x64 --spp 32 \
+    2>mismatch.err
+  [ "$(grep -c "ranks were given different options" mismatch.err)" = 1 ] && [ ! -e mismatch.pfm ] ||
+    fail "ranks with other --spp were not refused once: $(cat mismatch.err)"
+  ;;
+slow)
+  # Rank 1 sleeps 3 ms a tile (AO_MPI_TEST_DELAY_US, read by src/cluster.c for this test only),
+  # some 30 times a 16x16 tile's cost at these settings here. Rank 0 then traces most tiles: a rank
+  # holds at most two chunks, 1/32 of what is left of the pass each with two ranks, so rank 1 gets
+  # about 1/16 of a pass plus the little it finishes meanwhile; with equal static shares it would
+  # get 1/2. The bound, rank 1 below 1/4 of the tiles, leaves a wide margin for a busy machine.
+  same slow "--size 160x120 --spp 128" 1 "--threads 1" : -np 1 env AO_MPI_TEST_DELAY_US=3000 "$mpi_bin" -q --size 160x120 --spp 128 --threads 1
+  "${mpirun[@]}" -np 1 "$mpi_bin" --size 160x120 --spp 128 --threads 1 -o slow.pfm : \
+    -np 1 env AO_MPI_TEST_DELAY_US=3000 "$mpi_bin" --size 160x120 --spp 128 --threads 1 -o slow.pfm 2>slow.err
+  fast=$(tiles_of 0 slow.err) slow=$(tiles_of 1 slow.err)
+  echo "tiles: rank 0 $fast, slowed rank 1 $slow"
+  [ -n "$fast" ] && [ -n "$slow" ] && [ $((4 * slow)) -lt $((fast + slow)) ] \
+    || fail "the slowed rank traced $slow of $((fast + slow)) tiles: $(cat slow.err)"
+  ;;
+killed)
+  start_long
+  victim=$(rank_pid "$long_pid" 2)
+  [ -n "$victim" ] || fail "rank 2 not found among mpirun's children"
+  kill -KILL "$victim"
+  wait "$long_pid"
+  status=$?
+  [ "$status" != 0 ] || fail "a killed rank ended the run with status 0"
+  grep -q "^aoview: rank 2 lost (killed or crashed), stopped at [0-9]* spp" long.err \
+    || fail "no line naming rank 2: $(cat long.err)"
+  complete_pfm long.pfm 96 64 || fail "no complete image after the killed rank: $(ls -A)"
+  ;;
+sigint)
+  start_long
+  # To mpirun itself, as Ctrl-C at a terminal does: timeout would pass it on and send it to its
+  # process group as well, and mpirun takes a second SIGINT for "abort now".
+  kill -INT "$(pgrep -P "$long_pid")"
+  wait "$long_pid"
+  grep -q "^aoview: interrupted by SIGTERM at [0-9]* spp" long.err || fail "no interruption line: $(cat long.err)"
+  grep -q "lost" long.err && fail "a rank named lost after SIGINT: $(cat long.err)"
+  complete_pfm long.pfm 96 64 || fail "no complete image after SIGINT: $(ls -A)"
+  ;;
+esac
+[ "$failures" = 0 ] || exit 1
+echo "all passed"
