@@ -19,15 +19,11 @@ fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
 
 # max_diff A.pfm B.pfm: the largest |a - b| over all channels, or "size" if the images differ in size.
 max_diff() {
-  python3 - "$1" "$2" <<'PY'
-import struct, sys
-def read(path):
-    data = open(path, 'rb').read()
-    parts = data.split(b'\n', 3)
-    w, h = map(int, parts[1].split())
-    return (w, h), struct.unpack('<%df' % (3 * w * h), parts[3][:12 * w * h])
-(sa, a), (sb, b) = read(sys.argv[1]), read(sys.argv[2])
-print('size' if sa != sb else max(abs(x - y) for x, y in zip(a, b)))
+  PYTHONPATH=$AO_SOURCE_ROOT/tests python3 - "$1" "$2" <<'PY'
+import sys
+from benchlib import read_pfm
+(wa, ha, a), (wb, hb, b) = read_pfm(sys.argv[1]), read_pfm(sys.argv[2])
+print('size' if (wa, ha) != (wb, hb) else max(abs(x - y) for x, y in zip(a, b)))
 PY
 }
 
