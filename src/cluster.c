@@ -1,6 +1,6 @@
 /* The ranks of an aoview-mpi run; see cluster.h. Three communicators keep the kinds of traffic
  * apart, since they come from different threads: claims (render threads and rank 0's server),
- * sums (the render thread's merges) and control (main: answers after an interruption, the tile
+ * sums (the render thread's starts and merges of passes) and control (main: answers after an interruption, the tile
  * counts at the end). */
 #include "cluster.h"
 
@@ -18,8 +18,9 @@ enum { TAG_REQUEST = 1, TAG_GRANT, TAG_ANSWER };
 /* A rank waiting for a message or for the slowest rank at a merge tests its request, then sleeps
  * 50 us, doubling up to 1 ms while nothing comes: it leaves the cores to the render threads, at a
  * cost of at most 1 ms a wait; 10 to 200 us took 0.55 s of system time in a 5 s run against 0.3 s,
- * for no shorter waits (docs/mpi.md). */
-static const long POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000;
+ * for no shorter waits (docs/mpi.md). A rank waiting for rank 0 to begin a pass sleeps up to
+ * POLL_IDLE_NS: rank 0 may be paused or done, for as long as its window stays open. */
+static const long POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000, POLL_IDLE_NS = 20000000;
 
 /* Rank 0 grants a rank 1 / (CHUNKS x ranks) of the entries still to hand out, so that chunks
  * shrink as the pass runs out: a rank holds at most two chunks (the one it traces and the next,
@@ -35,6 +36,8 @@ struct ao_cluster {
     int rank, size;
     MPI_Comm claims, sums, control;
     atomic_bool stopping;
+    bool closed;             /* rank 0: it gave up the pass (a restart); nothing is handed out until
+                                the next pass begins */
     long delay_ns;           /* tests only: AO_MPI_TEST_DELAY_US per tile claimed, a slow rank */
 
     pthread_mutex_t lock;    /* the claim state below */
@@ -77,21 +80,19 @@ static void sleep_ns(long ns)
 }
 
 /* Tests the n requests until all complete (true) or *stopping is set (false; they are left
- * pending: the process ends without MPI_Finalize); sleeps between tests unless spin. */
-static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, MPI_Status *statuses, bool spin)
+ * pending: the process ends without MPI_Finalize), sleeping between tests up to `most` ns. */
+static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, long most)
 {
     long pause = POLL_FIRST_NS;
     for (;;) {
         int done = 0;
-        MPI_Testall(n, requests, &done, statuses ? statuses : MPI_STATUSES_IGNORE);
+        MPI_Testall(n, requests, &done, MPI_STATUSES_IGNORE);
         if (done)
             return true;
         if (stopping && atomic_load_explicit(stopping, memory_order_relaxed))
             return false;
-        if (!spin) {
-            sleep_ns(pause);
-            pause = pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
-        }
+        sleep_ns(pause);
+        pause = pause * 2 < most ? pause * 2 : most;
     }
 }
 
@@ -104,7 +105,7 @@ static void hand_out(struct ao_cluster *c, uint64_t pass, int count, int least, 
         c->next = 0;
         c->count = count;
     }
-    int left = pass == c->pass ? c->count - c->next : 0;
+    int left = pass == c->pass && !c->closed ? c->count - c->next : 0;
     int chunk = left / (CHUNKS * c->size);
     chunk = chunk < least ? least : chunk > most ? most : chunk;
     chunk = chunk < left ? chunk : left;
@@ -172,7 +173,7 @@ static int claim_remote(struct ao_cluster *c, uint64_t pass, int count)
     while (!c->exhausted && c->begin == c->end) {
         if (!c->asked)
             ask(c, pass, count);
-        if (!await(&c->stopping, 1, &c->granted, NULL, false))
+        if (!await(&c->stopping, 1, &c->granted, POLL_MOST_NS))
             return -1;
         waited = true;
         c->asked = false;
@@ -211,18 +212,71 @@ static int claim(void *user, uint64_t pass, int count)
     return n;
 }
 
+/* What rank 0 sends at the beginning of every pass: the settings and restarts that every rank
+ * renders it with, or (go 0) the end of the run; as bytes, since the ranks run one binary. */
+struct start {
+    struct ao_settings settings;
+    uint64_t restarts;
+    uint64_t go;
+};
+
+/* Broadcasts rank 0's start to every rank; false when the cluster stops first. */
+static bool broadcast_start(struct ao_cluster *c, struct start *start)
+{
+    MPI_Request pending;
+    MPI_Ibcast(start, sizeof *start, MPI_BYTE, 0, c->sums, &pending);
+    return await(&c->stopping, 1, &pending, POLL_IDLE_NS);
+}
+
+static bool begin(void *user, struct ao_settings *settings, uint64_t *restarts)
+{
+    struct ao_cluster *c = user;
+    struct start start;
+    memset(&start, 0, sizeof start);
+    if (c->rank == 0) {
+        pthread_mutex_lock(&c->lock);
+        c->closed = false;
+        pthread_mutex_unlock(&c->lock);
+        start.settings = *settings;
+        start.restarts = *restarts;
+        start.go = 1;
+    }
+    if (!broadcast_start(c, &start) || !start.go)
+        return false;
+    *settings = start.settings;
+    *restarts = start.restarts;
+    return true;
+}
+
+/* Rank 0's render thread ends (the window closed, or the run is over): the others' end too. */
+static void end(void *user)
+{
+    struct ao_cluster *c = user;
+    struct start start;
+    memset(&start, 0, sizeof start);
+    if (c->rank == 0 && !atomic_load(&c->stopping))
+        broadcast_start(c, &start);
+}
+
 /* The pass's seconds are the slowest rank's, the previous merge included; waiting for it doubles
- * as the barrier, with sleeps, before the sums move with blocking calls (everyone being there) of
- * SEGMENT floats each: here 1 MB buffers reduce at 4-5 GB/s, 64 MB ones at 0.4, and a 100 MB
- * MPI_Iallreduce tested in a loop took 2 s (docs/mpi.md). The run may stop between segments. */
-static bool merge(void *user, struct ao_vec3 *sums, size_t count, uint64_t rays[2], double *seconds)
+ * as the barrier, with sleeps, and tells whether a rank gave the pass up (rank 0 then hands out
+ * no more of it, so that the others come soon), before the sums move with blocking calls
+ * (everyone being there) of SEGMENT floats each: here 1 MB buffers reduce at 4-5 GB/s, 64 MB ones
+ * at 0.4, and a 100 MB MPI_Iallreduce tested in a loop took 2 s (docs/mpi.md). The run may stop
+ * between segments. */
+static bool merge(void *user, bool finished, struct ao_vec3 *sums, size_t count, uint64_t rays[2], double *seconds)
 {
     enum { SEGMENT = 1 << 18 };
     struct ao_cluster *c = user;
-    double start = now_seconds(), slowest = *seconds + c->merge_seconds;
+    double start = now_seconds(), slowest[2] = {*seconds + c->merge_seconds, finished ? 0.0 : 1.0};
+    if (!finished && c->rank == 0) {
+        pthread_mutex_lock(&c->lock);
+        c->closed = true;
+        pthread_mutex_unlock(&c->lock);
+    }
     MPI_Request pending;
-    MPI_Iallreduce(MPI_IN_PLACE, &slowest, 1, MPI_DOUBLE, MPI_MAX, c->sums, &pending);
-    if (!await(&c->stopping, 1, &pending, NULL, false))
+    MPI_Iallreduce(MPI_IN_PLACE, slowest, 2, MPI_DOUBLE, MPI_MAX, c->sums, &pending);
+    if (!await(&c->stopping, 1, &pending, POLL_MOST_NS) || slowest[1] > 0.0)
         return false;
     double arrived = now_seconds();
     _Static_assert(sizeof(struct ao_vec3) == 3 * sizeof(float), "pixel sums are 3 packed floats");
@@ -234,13 +288,13 @@ static bool merge(void *user, struct ao_vec3 *sums, size_t count, uint64_t rays[
         MPI_Allreduce(MPI_IN_PLACE, floats + done, n, MPI_FLOAT, MPI_SUM, c->sums);
     }
     MPI_Allreduce(MPI_IN_PLACE, rays, 2, MPI_UINT64_T, MPI_SUM, c->sums);
-    *seconds = slowest;
-    double end = now_seconds();
-    c->merge_seconds = end - start;
+    *seconds = slowest[0];
+    double merged = now_seconds();
+    c->merge_seconds = merged - start;
     c->merges++;
     c->merge_bytes += (double)count * sizeof *sums;
     c->waited += arrived - start;
-    c->moved += end - arrived;
+    c->moved += merged - arrived;
     return true;
 }
 
@@ -265,7 +319,7 @@ bool ao_cluster_agree(bool ok)
     int all = ok;
     MPI_Request pending;
     MPI_Iallreduce(MPI_IN_PLACE, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD, &pending);
-    await(NULL, 1, &pending, NULL, false);
+    await(NULL, 1, &pending, POLL_MOST_NS);
     return all;
 }
 
@@ -274,7 +328,7 @@ bool ao_cluster_same(uint64_t value)
     uint64_t range[2] = {value, ~value}; /* the smallest value, and the largest as its complement */
     MPI_Request pending;
     MPI_Iallreduce(MPI_IN_PLACE, range, 2, MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD, &pending);
-    await(NULL, 1, &pending, NULL, false);
+    await(NULL, 1, &pending, POLL_MOST_NS);
     return range[0] == ~range[1];
 }
 
@@ -299,7 +353,8 @@ struct ao_cluster *ao_cluster_create(void)
     MPI_Comm_dup(MPI_COMM_WORLD, &c->control);
     pthread_mutex_init(&c->lock, NULL);
     atomic_init(&c->stopping, false);
-    c->share = (struct ao_render_share){.claim = claim, .merge = merge, .user = c};
+    c->share = (struct ao_render_share){.begin = begin, .claim = claim, .merge = merge, .end = end,
+                                        .follows = c->rank != 0, .user = c};
     const char *delay = getenv("AO_MPI_TEST_DELAY_US");
     c->delay_ns = delay ? 1000L * strtol(delay, NULL, 10) : 0;
     bool ok = true;
@@ -362,7 +417,7 @@ void ao_cluster_summary(struct ao_cluster *cluster, char *out, size_t size)
     unsigned long long mine = cluster->tiles, *all = cluster->tiles_by_rank;
     MPI_Request pending;
     MPI_Igather(&mine, 1, MPI_UNSIGNED_LONG_LONG, all, 1, MPI_UNSIGNED_LONG_LONG, 0, cluster->control, &pending);
-    await(NULL, 1, &pending, NULL, false);
+    await(NULL, 1, &pending, POLL_IDLE_NS);
     int used = snprintf(out, size, "%d rank%s, tiles traced by rank", cluster->size, cluster->size > 1 ? "s" : "");
     for (int r = 0; all && r < cluster->size && used >= 0 && (size_t)used < size; r++)
         used += snprintf(out + used, size - (size_t)used, "%s %d: %llu", r ? "," : "", r, all[r]);

@@ -145,22 +145,28 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool
         ao_cluster_destroy(cluster);
         return AO_EXIT_RUNTIME;
     }
+
+    /* The other ranks follow rank 0's passes until its render thread ends theirs. */
     atomic_store(&app->interrupt.graceful, true);
     int sig;
     bool finished = ao_app_wait(app, &sig);
-    if (!finished) {
+    if (!finished && (sig || rank == 0)) {
         *clean = false;
         ao_cluster_stop(cluster);
         return sig ? interrupted(app, cluster, &mine, rank, sig) : AO_EXIT_RUNTIME;
     }
+    if (rank == 0)
+        ao_render_stop(app->render);
     char summary[1024];
     ao_cluster_summary(cluster, summary, sizeof summary);
-    ao_cluster_destroy(cluster);
-    if (rank != 0)
-        return 0;
-    if (!mine.quiet)
+    if (rank == 0 && !mine.quiet)
         fprintf(stderr, "aoview-mpi: %s\n", summary);
-    return ao_app_write(app, &mine, ao_render_take_frame(app->render), NULL, false, 0);
+    if (rank == 0)
+        status = ao_app_write(app, &mine, ao_render_take_frame(app->render), NULL, false, 0);
+    ao_render_destroy(app->render);   /* before the cluster, which its render thread may still use */
+    app->render = NULL;
+    ao_cluster_destroy(cluster);
+    return status;
 }
 
 int main(int argc, char **argv)
