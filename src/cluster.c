@@ -38,6 +38,9 @@ struct ao_cluster {
     atomic_bool stopping;
     bool closed;             /* rank 0: it gave up the pass (a restart); nothing is handed out until
                                 the next pass begins */
+    bool open;               /* rank 0: from a pass's first claim (or its giving up) to its merge,
+                                when requests may come: the server thread polls */
+    pthread_cond_t opened;   /* rank 0: signalled when a pass opens, and on stop */
     long delay_ns;           /* tests only: AO_MPI_TEST_DELAY_US per tile claimed, a slow rank */
 
     pthread_mutex_t lock;    /* the claim state below */
@@ -104,6 +107,8 @@ static void hand_out(struct ao_cluster *c, uint64_t pass, int count, int least, 
         c->pass = pass;
         c->next = 0;
         c->count = count;
+        c->open = true;
+        pthread_cond_signal(&c->opened);
     }
     int left = pass == c->pass && !c->closed ? c->count - c->next : 0;
     int chunk = left / (CHUNKS * c->size);
@@ -131,15 +136,18 @@ static bool serve_pending(struct ao_cluster *c)
     }
 }
 
-/* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (between
- * passes, at a merge), when a woken thread may take milliseconds to run on a busy machine; during
- * a pass, each claim of rank 0's answers them first. */
+/* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (at the
+ * end of a pass), when a woken thread may take milliseconds to run on a busy machine; during a
+ * pass, each claim of rank 0's answers them first. Between passes, when no request can come, it
+ * sleeps until the next pass opens. */
 static void *serve(void *arg)
 {
     struct ao_cluster *c = arg;
     long pause = POLL_FIRST_NS;
     while (!atomic_load_explicit(&c->stopping, memory_order_relaxed)) {
         pthread_mutex_lock(&c->lock);
+        while (!c->open && !atomic_load(&c->stopping))
+            pthread_cond_wait(&c->opened, &c->lock);
         bool served = serve_pending(c);
         pthread_mutex_unlock(&c->lock);
         pause = served ? POLL_FIRST_NS : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
@@ -269,14 +277,22 @@ static bool merge(void *user, bool finished, struct ao_vec3 *sums, size_t count,
     enum { SEGMENT = 1 << 18 };
     struct ao_cluster *c = user;
     double start = now_seconds(), slowest[2] = {*seconds + c->merge_seconds, finished ? 0.0 : 1.0};
-    if (!finished && c->rank == 0) {
+    if (!finished && c->rank == 0) { /* the server thread answers the others' requests: none */
         pthread_mutex_lock(&c->lock);
-        c->closed = true;
+        c->closed = c->open = true;
+        pthread_cond_signal(&c->opened);
         pthread_mutex_unlock(&c->lock);
     }
     MPI_Request pending;
     MPI_Iallreduce(MPI_IN_PLACE, slowest, 2, MPI_DOUBLE, MPI_MAX, c->sums, &pending);
-    if (!await(&c->stopping, 1, &pending, POLL_MOST_NS) || slowest[1] > 0.0)
+    if (!await(&c->stopping, 1, &pending, POLL_MOST_NS))
+        return false;
+    if (c->rank == 0) { /* every rank is here: no request is left for the server thread */
+        pthread_mutex_lock(&c->lock);
+        c->open = false;
+        pthread_mutex_unlock(&c->lock);
+    }
+    if (slowest[1] > 0.0)
         return false;
     double arrived = now_seconds();
     _Static_assert(sizeof(struct ao_vec3) == 3 * sizeof(float), "pixel sums are 3 packed floats");
@@ -352,6 +368,7 @@ struct ao_cluster *ao_cluster_create(void)
     MPI_Comm_dup(MPI_COMM_WORLD, &c->sums);
     MPI_Comm_dup(MPI_COMM_WORLD, &c->control);
     pthread_mutex_init(&c->lock, NULL);
+    pthread_cond_init(&c->opened, NULL);
     atomic_init(&c->stopping, false);
     c->share = (struct ao_render_share){.begin = begin, .claim = claim, .merge = merge, .end = end,
                                         .follows = c->rank != 0, .user = c};
@@ -386,6 +403,9 @@ const struct ao_render_share *ao_cluster_share(struct ao_cluster *cluster)
 void ao_cluster_stop(struct ao_cluster *cluster)
 {
     atomic_store(&cluster->stopping, true);
+    pthread_mutex_lock(&cluster->lock);
+    pthread_cond_broadcast(&cluster->opened);
+    pthread_mutex_unlock(&cluster->lock);
 }
 
 void ao_cluster_answer(struct ao_cluster *cluster)
@@ -439,6 +459,7 @@ void ao_cluster_destroy(struct ao_cluster *cluster)
     MPI_Comm_free(&cluster->claims);
     MPI_Comm_free(&cluster->sums);
     MPI_Comm_free(&cluster->control);
+    pthread_cond_destroy(&cluster->opened);
     pthread_mutex_destroy(&cluster->lock);
     free(cluster->pending);
     free(cluster->answers);
