@@ -1,7 +1,7 @@
 /* aoview-mpi: `mpirun -np N aoview-mpi [aoview's options] SCENE` renders aoview's image on N
- * ranks: each loads the scene and traces the tiles it claims from rank 0, every pass's sums are
- * added up over the ranks, and rank 0 shows the window (its keys and mouse set every rank's
- * passes) or, headless, writes -o; and --stats and the progress bar. */
+ * ranks: each loads the scene and traces the tiles it claims from rank 0, which gathers every
+ * pass's sums, and shows the window (its keys and mouse set every rank's passes) or, headless,
+ * writes -o; and --stats and the progress bar. */
 #include <fcntl.h>
 #include <signal.h>
 #include <stdatomic.h>

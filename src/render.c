@@ -267,8 +267,6 @@ static void *worker_main(void *arg)
 /* Runs one pass on all threads; false when it was aborted by a restart or stop. */
 static bool run_pass(struct ao_render *r)
 {
-    if (r->config.share) /* the entries other processes trace add nothing in the merge */
-        memset(r->pass_sums, 0, (size_t)r->shares[r->config.threads - 1].end * TILE * TILE * sizeof *r->pass_sums);
     pthread_mutex_lock(&r->pass_lock);
     for (int k = 0; k < r->config.threads; k++)
         atomic_store(&r->shares[k].next, 0);
@@ -284,22 +282,23 @@ static bool run_pass(struct ao_render *r)
     return !aborted(r);
 }
 
-/* With a share, after a pass this process finished or gave up: adds up the pass's sums, rays and
- * seconds over the processes, then adds every tile of the work list to the accumulation, in the
- * order of the list; false when the pass does not count (given up somewhere, or the run stops). */
+/* With a share, after a pass this process finished or gave up: gathers the pass's sums, rays and
+ * seconds from the processes; the leader adds every tile of the work list to the accumulation,
+ * in the order of the list, and the followers take its tile states; false when the pass does not
+ * count (given up somewhere, or the run stops). */
 static bool merge_pass(struct ao_render *r, bool finished, uint64_t rays[2], double *seconds)
 {
     const struct ao_render_share *share = r->config.share;
     int count = r->shares[r->config.threads - 1].end;
-    if (!share->merge(share->user, finished, r->pass_sums, (size_t)count * TILE * TILE, rays, seconds))
+    if (!share->merge(share->user, finished, r->pass_sums, TILE * TILE, rays, seconds))
         return false;
-    for (int n = 0; n < count; n++) {
+    for (int n = 0; n < count && !share->follows; n++) {
         int t = r->work[n];
         uint32_t next;
         struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
         add_tile(r, t, &work, next, r->pass_sums + (size_t)n * TILE * TILE);
     }
-    return true;
+    return share->states(share->user, r->tiles, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
 }
 
 /* ---- planning: run by the render thread between passes ---- */
@@ -476,10 +475,11 @@ static void *render_main(void *arg)
 {
     struct ao_render *r = arg;
     const struct ao_render_share *share = r->config.share;
+    bool follows = share && share->follows;
     struct ao_frame_info info = {.restarts = UINT64_MAX};
     ao_tracer_thread_init();
     pthread_mutex_lock(&r->lock);
-    while (share && share->follows ? !r->stop : wait_for_work(r, &info)) {
+    while (follows ? !r->stop : wait_for_work(r, &info)) {
         /* Take the settings (with a share, the leader's: `own` counts this process's restarts,
          * which abort its pass, `restarts` the generation of the sums); a restart clears the sums. */
         struct ao_settings s = r->settings;
@@ -491,7 +491,8 @@ static void *render_main(void *arg)
             break;
         }
         if (info.restarts != restarts) {
-            ao_accum_reset(&r->accum);
+            if (!follows) /* a follower keeps no image: its accumulation is never touched */
+                ao_accum_reset(&r->accum);
             memset(r->tiles, 0, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
             info = (struct ao_frame_info){.restarts = restarts, .target_spp = r->config.target_spp,
                                           .target_error = r->config.target_error,
@@ -530,19 +531,21 @@ static void *render_main(void *arg)
             info.shading = s.shading;
         }
 
-        /* Publish it. */
+        /* Publish it (a follower keeps no image). */
         if (complete) {
             info.pass++;
             info.spppp = spppp;
             survey(r, &info, s.adaptive);
-            publish(r, &info);
-            if (r->config.on_pass)
-                r->config.on_pass(&info, r->config.user);
+            if (!follows) {
+                publish(r, &info);
+                if (r->config.on_pass)
+                    r->config.on_pass(&info, r->config.user);
+            }
         }
         /* Done: the image is finished until the settings change; a follower's run goes on until
          * the leader ends it. */
         pthread_mutex_lock(&r->lock);
-        if ((complete ? info.done : !pixels) && own == r->restarts && !(share && share->follows)) {
+        if ((complete ? info.done : !pixels) && own == r->restarts && !follows) {
             r->done = true;
             pthread_cond_broadcast(&r->finished);
         }

@@ -62,8 +62,8 @@ struct ao_frame {
 
 /* How processes rendering the same image split each pass (aoview-mpi's cluster.c): one process
  * leads (its settings, restarts and stop decide), the others follow; each traces the work-list
- * entries it claims, and the pass's sums are added up over all of them before any is accumulated,
- * so that every process holds the same sums and takes the same decisions. */
+ * entries it claims, the leader gathers the pass's sums and accumulates them, and the followers,
+ * which keep no image, take its tile states, so that every process plans the same passes. */
 struct ao_render_share {
     /* Before each pass: replaces *settings and *restarts (this process's own) by those every
      * process renders the pass with, the leader's, which a follower waits here for; false when the
@@ -72,11 +72,16 @@ struct ao_render_share {
     /* The next entry of pass `pass`'s work list of `count` tiles for this process to trace, or -1
      * when none is left; every process numbers the passes alike. Any render thread. */
     int (*claim)(void *user, uint64_t pass, int count);
-    /* At the end of a pass this process finished (or gave up: a restart or stop): replaces sums
-     * (count pixel sums, zero where this process traced nothing), rays (eye, shadow) and seconds
-     * by their totals over the processes (seconds: the largest); true when the pass counts, false
-     * when a process gave it up or the run is being stopped. Render thread. */
-    bool (*merge)(void *user, bool finished, struct ao_vec3 *sums, size_t count, uint64_t rays[2], double *seconds);
+    /* At the end of a pass this process finished (or gave up: a restart or stop), with `pixels`
+     * pixel sums in sums for each work-list entry, of those it traced: fills in, on the leader,
+     * the other processes' entries and adds their rays (eye, shadow) to rays, and sets seconds to
+     * the largest over the processes; true when the pass counts, false when a process gave it up
+     * or the run is being stopped. Render thread. */
+    bool (*merge)(void *user, bool finished, struct ao_vec3 *sums, int pixels, uint64_t rays[2], double *seconds);
+    /* After a pass counted: a follower's tile states (size bytes, what passes are planned from)
+     * become the leader's, as it has accumulated the pass; false when the run is being stopped.
+     * Render thread. */
+    bool (*states)(void *user, void *tiles, size_t size);
     /* The render thread is ending (stopped): the leader tells the followers. Render thread. */
     void (*end)(void *user);
     bool follows;            /* the render thread waits in begin, not for its own settings or pause */
