@@ -49,7 +49,7 @@ same() {
   # shellcheck disable=SC2086 # the arguments are words
   "$bin" --headless -q $args --threads 2 -o "$name-1.pfm" --stats "$name-1.csv" || { fail "$name: aoview failed"; return; }
   # shellcheck disable=SC2086
-  "${mpirun[@]}" -np "$np" "$mpi_bin" -q $args $rank_args -o "$name-n.pfm" --stats "$name-n.csv" "$@" 2>"$name.err" \
+  "${mpirun[@]}" -np "$np" "$mpi_bin" --headless -q $args $rank_args -o "$name-n.pfm" --stats "$name-n.csv" "$@" 2>"$name.err" \
     || { fail "$name: aoview-mpi -np $np failed: $(cat "$name.err")"; return; }
   local d
   d=$(max_diff "$name-1.pfm" "$name-n.pfm")
@@ -76,7 +76,7 @@ rank_pid() {
 # (OSMesa and LLVM load), too much of it in the sanitizer builds on a busy machine.
 start_long() {
   rm -f long.pfm long.csv
-  "${mpirun[@]}" -np 3 "$mpi_bin" --spp 1000000 --size 96x64 --threads 1 -o long.pfm --stats long.csv 2>long.err &
+  "${mpirun[@]}" -np 3 "$mpi_bin" --headless --spp 1000000 --size 96x64 --threads 1 -o long.pfm --stats long.csv 2>long.err &
   long_pid=$!
   for _ in $(seq 200); do [ -f long.csv ] && [ "$(wc -l < long.csv)" -ge 4 ] && break; sleep 0.1; done
 }
@@ -163,7 +163,7 @@ equal)
   same target "--size 160x120 --target-error 0.02" 1 "--threads 1" : -np 2 "$mpi_bin" --threads 2 -q --size 160x120 --target-error 0.02
   same textbook "--size 120x90 --spp 32 --sampler random --spppp 4 --adaptive off --sampling uniform" 3 ""
   # Ranks given other settings would render another image: refused, once, with status 2.
-  "${mpirun[@]}" -np 1 "$mpi_bin" --size 96x64 --spp 64 -o mismatch.pfm : -np 1 "$mpi_bin" --size 96x64 --spp 32 \
+  "${mpirun[@]}" -np 1 "$mpi_bin" --headless --size 96x64 --spp 64 -o mismatch.pfm : -np 1 "$mpi_bin" --size 96x64 --spp 32 \
     2>mismatch.err
   [ "$(grep -c "ranks were given different options" mismatch.err)" = 1 ] && [ ! -e mismatch.pfm ] ||
     fail "ranks with other --spp were not refused once: $(cat mismatch.err)"
@@ -175,7 +175,7 @@ slow)
   # about 1/16 of a pass plus the little it finishes meanwhile; with equal static shares it would
   # get 1/2. The bound, rank 1 below 1/4 of the tiles, leaves a wide margin for a busy machine.
   same slow "--size 160x120 --spp 128" 1 "--threads 1" : -np 1 env AO_MPI_TEST_DELAY_US=3000 "$mpi_bin" -q --size 160x120 --spp 128 --threads 1
-  "${mpirun[@]}" -np 1 "$mpi_bin" --size 160x120 --spp 128 --threads 1 -o slow.pfm : \
+  "${mpirun[@]}" -np 1 "$mpi_bin" --headless --size 160x120 --spp 128 --threads 1 -o slow.pfm : \
     -np 1 env AO_MPI_TEST_DELAY_US=3000 "$mpi_bin" --size 160x120 --spp 128 --threads 1 -o slow.pfm 2>slow.err
   fast=$(tiles_of 0 slow.err) slow=$(tiles_of 1 slow.err)
   echo "tiles: rank 0 $fast, slowed rank 1 $slow"
