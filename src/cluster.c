@@ -22,8 +22,7 @@ enum { TAG_REQUEST = 1, TAG_GRANT, TAG_SUMS, TAG_ANSWER };
  * for no shorter waits (docs/mpi.md). A rank waiting for rank 0 to begin a pass sleeps up to
  * POLL_IDLE_NS once it has waited IDLE_AFTER_NS: rank 0 may be paused or done, for as long as its
  * window stays open. */
-static const long POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000, POLL_IDLE_NS = 20000000, IDLE_AFTER_NS = 50000000,
-                  SERVE_EVERY_NS = 5000000;
+static const long POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000, POLL_IDLE_NS = 20000000, IDLE_AFTER_NS = 50000000;
 
 /* Rank 0 grants a rank 1 / (CHUNKS x ranks) of the entries still to hand out, so that chunks
  * shrink as the pass runs out: a rank holds at most two chunks (the one it traces and the next,
@@ -42,10 +41,8 @@ struct ao_cluster {
     bool closed;             /* rank 0: it gave up the pass (a restart); nothing is handed out until
                                 the next pass begins */
     bool open;               /* rank 0: from a pass's first claim (or its giving up) to its merge,
-                                when requests may come */
-    bool tail;               /* rank 0: from its threads' first claim that found nothing left (or
-                                its giving up) to the merge: only the server thread answers */
-    pthread_cond_t opened;   /* rank 0: signalled when open or tail is set, and on stop */
+                                when requests may come: the server thread polls */
+    pthread_cond_t opened;   /* rank 0: signalled when a pass opens, and on stop */
     long delay_ns;           /* tests only: AO_MPI_TEST_DELAY_US per tile claimed, a slow rank */
 
     pthread_mutex_t lock;    /* the claim state below */
@@ -187,36 +184,22 @@ static bool serve_pending(struct ao_cluster *c)
 }
 
 /* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (at the
- * end of a pass), when a woken thread may take milliseconds to run on a busy machine, polling as
- * await does. During a pass each claim of rank 0's answers them first, and the server only
- * checks every SERVE_EVERY_NS (a tile of rank 0's may be long); between passes, when no request
- * can come, it sleeps until the next pass opens. (Polling at up to 1 ms all along, it woke rank
- * 0 some 2,000 times in a 2.4 s run and took a core from a render thread some 1,600 times.) */
+ * end of a pass), when a woken thread may take milliseconds to run on a busy machine; during a
+ * pass, each claim of rank 0's answers them first. Between passes, when no request can come, it
+ * sleeps until the next pass opens. */
 static void *serve(void *arg)
 {
     struct ao_cluster *c = arg;
     long pause = POLL_FIRST_NS;
-    pthread_mutex_lock(&c->lock);
     while (!atomic_load_explicit(&c->stopping, memory_order_relaxed)) {
-        bool served = serve_pending(c);
-        if (!c->open) {
+        pthread_mutex_lock(&c->lock);
+        while (!c->open && !atomic_load(&c->stopping))
             pthread_cond_wait(&c->opened, &c->lock);
-        } else if (!c->tail) {
-            struct timespec until;
-            clock_gettime(CLOCK_MONOTONIC, &until);
-            until.tv_nsec += SERVE_EVERY_NS;
-            until.tv_sec += until.tv_nsec / 1000000000L;
-            until.tv_nsec %= 1000000000L;
-            pthread_cond_timedwait(&c->opened, &c->lock, &until);
-            pause = POLL_FIRST_NS;
-        } else {
-            pthread_mutex_unlock(&c->lock);
-            pause = served ? POLL_FIRST_NS : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
-            sleep_ns(pause);
-            pthread_mutex_lock(&c->lock);
-        }
+        bool served = serve_pending(c);
+        pthread_mutex_unlock(&c->lock);
+        pause = served ? POLL_FIRST_NS : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
+        sleep_ns(pause);
     }
-    pthread_mutex_unlock(&c->lock);
     return NULL;
 }
 
@@ -276,10 +259,6 @@ static int claim(void *user, uint64_t pass, int count)
         serve_pending(c);
         hand_out(c, pass, count, 1, 1, &n, &end);
         n = n < end ? n : -1;
-        if (n < 0 && !c->tail) { /* the server thread answers from now on */
-            c->tail = true;
-            pthread_cond_signal(&c->opened);
-        }
     } else {
         n = claim_remote(c, pass, count);
     }
@@ -375,7 +354,7 @@ static bool merge(void *user, bool finished, struct ao_vec3 *sums, int pixels, u
     double start = now_seconds(), slowest[2] = {*seconds + c->merge_seconds, finished ? 0.0 : 1.0};
     if (!finished && c->rank == 0) { /* the server thread answers the others' requests: none */
         pthread_mutex_lock(&c->lock);
-        c->closed = c->open = c->tail = true;
+        c->closed = c->open = true;
         pthread_cond_signal(&c->opened);
         pthread_mutex_unlock(&c->lock);
     }
@@ -385,7 +364,7 @@ static bool merge(void *user, bool finished, struct ao_vec3 *sums, int pixels, u
         return false;
     if (c->rank == 0) { /* every rank is here: no request is left for the server thread */
         pthread_mutex_lock(&c->lock);
-        c->open = c->tail = false;
+        c->open = false;
         pthread_mutex_unlock(&c->lock);
     }
     if (slowest[1] > 0.0)
@@ -472,11 +451,7 @@ struct ao_cluster *ao_cluster_create(void)
     MPI_Comm_dup(MPI_COMM_WORLD, &c->sums);
     MPI_Comm_dup(MPI_COMM_WORLD, &c->control);
     pthread_mutex_init(&c->lock, NULL);
-    pthread_condattr_t monotonic;
-    pthread_condattr_init(&monotonic);
-    pthread_condattr_setclock(&monotonic, CLOCK_MONOTONIC);
-    pthread_cond_init(&c->opened, &monotonic);
-    pthread_condattr_destroy(&monotonic);
+    pthread_cond_init(&c->opened, NULL);
     atomic_init(&c->stopping, false);
     c->share = (struct ao_render_share){.begin = begin_pass, .claim = claim, .merge = merge, .states = states,
                                         .end = end_run, .follows = c->rank != 0, .user = c};
