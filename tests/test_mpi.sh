@@ -214,7 +214,7 @@ window)
     -np 1 "$mpi_bin" --threads 1 "${small[@]}" && { drive ranks || end_viewer; }
   d=$(max_diff one.pfm ranks.pfm 2>/dev/null)
   traced=$(tiles_of 1 ranks.err)
-  echo "after C, A and an orbit: max |d| = ${d:-?} from one process, rank 1 traced ${traced:-?} tiles"
+  echo "after C, A and an orbit: max |d| = ${d:-?} from one process; tiles traced by rank 0 $(tiles_of 0 ranks.err), rank 1 ${traced:-?}"
   [ "$d" = 0.0 ] || fail "the ranks' image after C, A and an orbit differs from one process's by ${d:-?}"
   [ "${traced:-0}" -gt 0 ] || fail "rank 1 traced no tile: $(cat ranks.err)"
   "$bin" --headless -q --size 96x64 --spp 64 --adaptive off --sampling cosine --no-aa -o still.pfm "$spheres"
