@@ -38,8 +38,8 @@ struct ao_cluster {
     int rank, size;
     MPI_Comm claims, sums, control;
     atomic_bool stopping;
-    bool closed;             /* rank 0: it gave up the pass (a restart); nothing is handed out until
-                                the next pass begins */
+    bool closed;             /* rank 0: it gave up the pass (a restart or stop); nothing is handed
+                                out until the next pass begins */
     bool open;               /* rank 0: from a pass's first claim (or its giving up) to its merge,
                                 when requests may come: the server thread polls */
     pthread_cond_t opened;   /* rank 0: signalled when a pass opens, and on stop */
@@ -183,10 +183,10 @@ static bool serve_pending(struct ao_cluster *c)
     }
 }
 
-/* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (at the
- * end of a pass), when a woken thread may take milliseconds to run on a busy machine; during a
- * pass, each claim of rank 0's answers them first. Between passes, when no request can come, it
- * sleeps until the next pass opens. */
+/* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (inside
+ * long tiles, or done with the pass), when a woken thread may take milliseconds to run on a busy
+ * machine; each claim of rank 0's answers them first. Between passes, when no request can come,
+ * it sleeps until the next pass opens. */
 static void *serve(void *arg)
 {
     struct ao_cluster *c = arg;
@@ -319,8 +319,9 @@ static void end_run(void *user)
  * rank 0 and the others, entries of `size` floats: rank 0 receives into the granted entries, the
  * others send theirs, each rank's chunks as one message of an indexed datatype; false when the run
  * stops first. */
-static bool move_sums(struct ao_cluster *c, float *sums, int size, MPI_Request *requests)
+static bool move_sums(struct ao_cluster *c, float *sums, int size)
 {
+    MPI_Request *requests = c->requests;
     int n = 0, first = c->rank == 0 ? 1 : c->rank, last = c->rank == 0 ? c->size - 1 : c->rank;
     for (int r = first; r <= last; r++) {
         int blocks = 0;
@@ -371,7 +372,7 @@ static bool merge(void *user, bool finished, struct ao_vec3 *sums, int pixels, u
         return false;
     double arrived = now_seconds();
     _Static_assert(sizeof(struct ao_vec3) == 3 * sizeof(float), "pixel sums are 3 packed floats");
-    if (!move_sums(c, &sums->x, 3 * pixels, c->requests))
+    if (!move_sums(c, &sums->x, 3 * pixels))
         return false;
     MPI_Reduce(c->rank == 0 ? MPI_IN_PLACE : rays, rays, 2, MPI_UINT64_T, MPI_SUM, 0, c->sums);
     *seconds = slowest[0];

@@ -84,7 +84,8 @@ struct ao_render_share {
     bool (*states)(void *user, void *tiles, size_t size);
     /* The render thread is ending (stopped): the leader tells the followers. Render thread. */
     void (*end)(void *user);
-    bool follows;            /* the render thread waits in begin, not for its own settings or pause */
+    bool follows;            /* a follower: waits in begin, not for its own settings or pause; keeps
+                                no image (publishes no frame) and is never done by itself */
     void *user;
 };
 
