@@ -1,9 +1,10 @@
 /* The ranks of an aoview-mpi run; see cluster.h. Three communicators keep the kinds of traffic
  * apart, since they come from different threads: claims (render threads and rank 0's server),
- * sums (the render thread's merges) and control (main: answers after an interruption, the tile
- * counts at the end). */
+ * sums (the render thread's starts and merges of passes) and control (main: answers after an
+ * interruption, the tile counts at the end). */
 #include "cluster.h"
 
+#include <assert.h>
 #include <limits.h>
 #include <mpi.h>
 #include <pthread.h>
@@ -13,13 +14,15 @@
 #include <string.h>
 #include <time.h>
 
-enum { TAG_REQUEST = 1, TAG_GRANT, TAG_ANSWER };
+enum { TAG_REQUEST = 1, TAG_GRANT, TAG_SUMS, TAG_ANSWER };
 
 /* A rank waiting for a message or for the slowest rank at a merge tests its request, then sleeps
  * 50 us, doubling up to 1 ms while nothing comes: it leaves the cores to the render threads, at a
  * cost of at most 1 ms a wait; 10 to 200 us took 0.55 s of system time in a 5 s run against 0.3 s,
- * for no shorter waits (docs/mpi.md). */
-static const long POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000;
+ * for no shorter waits (docs/mpi.md). A rank waiting for rank 0 to begin a pass sleeps up to
+ * POLL_IDLE_NS once it has waited IDLE_AFTER_NS: rank 0 may be paused or done, for as long as its
+ * window stays open. */
+static const long POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000, POLL_IDLE_NS = 20000000, IDLE_AFTER_NS = 50000000;
 
 /* Rank 0 grants a rank 1 / (CHUNKS x ranks) of the entries still to hand out, so that chunks
  * shrink as the pass runs out: a rank holds at most two chunks (the one it traces and the next,
@@ -35,6 +38,11 @@ struct ao_cluster {
     int rank, size;
     MPI_Comm claims, sums, control;
     atomic_bool stopping;
+    bool closed;             /* rank 0: it gave up the pass (a restart or stop); nothing is handed
+                                out until the next pass begins */
+    bool open;               /* rank 0: from a pass's first claim (or its giving up) to its merge,
+                                when requests may come: the server thread polls */
+    pthread_cond_t opened;   /* rank 0: signalled when a pass opens, and on stop */
     long delay_ns;           /* tests only: AO_MPI_TEST_DELAY_US per tile claimed, a slow rank */
 
     pthread_mutex_t lock;    /* the claim state below */
@@ -47,13 +55,19 @@ struct ao_cluster {
     double entry_seconds;    /* other ranks: the time between claims, smoothed; 0: unknown */
     int grant[2];            /* other ranks: its answer, [begin, end) */
     MPI_Request granted;
+    MPI_Request *requests;   /* one per rank: the sums' messages */
+    struct range *ranges;    /* the chunks of the pass: rank 0, those it granted; others, those they
+                                were granted */
+    int range_count, range_capacity;
+    int *lengths, *starts;   /* range_capacity each: a rank's chunks as an MPI datatype's blocks */
+    bool starved;            /* reserve failed once (and said so) */
     uint64_t tiles;          /* entries this rank claimed */
     uint64_t request[3];     /* rank 0: the request being received (pass, count, least) */
     MPI_Request incoming;
 
     double merge_seconds;    /* the last merge's duration (render thread) */
-    uint64_t merges;         /* merges so far, the bytes of their buffers, the seconds spent */
-    double merge_bytes, waited, moved;  /* waiting for the slowest rank, and moving the sums */
+    uint64_t merges;         /* merges so far, the bytes this rank sent and received, the seconds */
+    double merge_bytes, waited, moved;  /* waiting for the slowest rank, and moving sums and states */
     pthread_t server;
     bool serving;
 
@@ -61,6 +75,11 @@ struct ao_cluster {
     MPI_Request *pending;
     int *answers;
     unsigned long long *tiles_by_rank;
+};
+
+/* A chunk of a pass's work list that rank 0 granted: entries [begin, end) to rank `rank`. */
+struct range {
+    int rank, begin, end;
 };
 
 static double now_seconds(void)
@@ -77,22 +96,49 @@ static void sleep_ns(long ns)
 }
 
 /* Tests the n requests until all complete (true) or *stopping is set (false; they are left
- * pending: the process ends without MPI_Finalize); sleeps between tests unless spin. */
-static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, MPI_Status *statuses, bool spin)
+ * pending: the process ends without MPI_Finalize), sleeping between tests up to POLL_MOST_NS, or
+ * `most` ns once IDLE_AFTER_NS have passed; `most` 0: without sleeping (data in flight). */
+static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, long most)
 {
-    long pause = POLL_FIRST_NS;
+    long pause = POLL_FIRST_NS, slept = 0;
     for (;;) {
         int done = 0;
-        MPI_Testall(n, requests, &done, statuses ? statuses : MPI_STATUSES_IGNORE);
+        MPI_Testall(n, requests, &done, MPI_STATUSES_IGNORE);
         if (done)
             return true;
         if (stopping && atomic_load_explicit(stopping, memory_order_relaxed))
             return false;
-        if (!spin) {
-            sleep_ns(pause);
-            pause = pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
-        }
+        if (!most)
+            continue;
+        sleep_ns(pause);
+        slept += pause;
+        long cap = slept < IDLE_AFTER_NS && most > POLL_MOST_NS ? POLL_MOST_NS : most;
+        pause = pause * 2 < cap ? pause * 2 : cap;
     }
+}
+
+/* Lock held: makes room for the chunks of a pass of count entries (each has one at least) and
+ * forgets the last pass's; false, with one message the first time, when memory is short (the
+ * rank then takes no chunks: rank 0's threads trace the pass). */
+static bool reserve(struct ao_cluster *c, int count)
+{
+    c->range_count = 0;
+    if (count <= c->range_capacity)
+        return true;
+    struct range *ranges = realloc(c->ranges, (size_t)count * sizeof *ranges);
+    c->ranges = ranges ? ranges : c->ranges;
+    int *lengths = realloc(c->lengths, (size_t)count * sizeof *lengths);
+    c->lengths = lengths ? lengths : c->lengths;
+    int *starts = realloc(c->starts, (size_t)count * sizeof *starts);
+    c->starts = starts ? starts : c->starts;
+    if (!ranges || !lengths || !starts) {
+        if (!c->starved)
+            fprintf(stderr, "aoview-mpi: rank %d: out of memory for a pass of %d tiles\n", c->rank, count);
+        c->starved = true;
+        return false;
+    }
+    c->range_capacity = count;
+    return true;
 }
 
 /* Rank 0, lock held: opens pass `pass` of `count` entries when it is new, and hands out a chunk of
@@ -103,8 +149,11 @@ static void hand_out(struct ao_cluster *c, uint64_t pass, int count, int least, 
         c->pass = pass;
         c->next = 0;
         c->count = count;
+        c->open = true;
+        pthread_cond_signal(&c->opened);
+        reserve(c, count);
     }
-    int left = pass == c->pass ? c->count - c->next : 0;
+    int left = pass == c->pass && !c->closed ? c->count - c->next : 0;
     int chunk = left / (CHUNKS * c->size);
     chunk = chunk < least ? least : chunk > most ? most : chunk;
     chunk = chunk < left ? chunk : left;
@@ -124,21 +173,28 @@ static bool serve_pending(struct ao_cluster *c)
             return served;
         int grant[2];
         hand_out(c, c->request[0], (int)c->request[1], (int)c->request[2], INT_MAX, &grant[0], &grant[1]);
+        if (grant[0] < grant[1] && c->range_count < c->range_capacity)
+            c->ranges[c->range_count++] = (struct range){status.MPI_SOURCE, grant[0], grant[1]};
+        else /* not recorded (memory was short): kept for rank 0's threads */
+            c->next = grant[1] = grant[0];
         MPI_Send(grant, 2, MPI_INT, status.MPI_SOURCE, TAG_GRANT, c->claims);
         MPI_Irecv(c->request, 3, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_REQUEST, c->claims, &c->incoming);
         served = true;
     }
 }
 
-/* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (between
- * passes, at a merge), when a woken thread may take milliseconds to run on a busy machine; during
- * a pass, each claim of rank 0's answers them first. */
+/* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (inside
+ * long tiles, or done with the pass), when a woken thread may take milliseconds to run on a busy
+ * machine; each claim of rank 0's answers them first. Between passes, when no request can come,
+ * it sleeps until the next pass opens. */
 static void *serve(void *arg)
 {
     struct ao_cluster *c = arg;
     long pause = POLL_FIRST_NS;
     while (!atomic_load_explicit(&c->stopping, memory_order_relaxed)) {
         pthread_mutex_lock(&c->lock);
+        while (!c->open && !atomic_load(&c->stopping))
+            pthread_cond_wait(&c->opened, &c->lock);
         bool served = serve_pending(c);
         pthread_mutex_unlock(&c->lock);
         pause = served ? POLL_FIRST_NS : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
@@ -165,22 +221,24 @@ static int claim_remote(struct ao_cluster *c, uint64_t pass, int count)
     if (c->pass != pass) { /* tiles cost more in some passes than in others: measure anew */
         c->pass = pass;
         c->begin = c->end = 0;
-        c->exhausted = false;
+        c->exhausted = !reserve(c, count);
         c->last_claim = c->entry_seconds = 0.0;
     }
     bool waited = false;
     while (!c->exhausted && c->begin == c->end) {
         if (!c->asked)
             ask(c, pass, count);
-        if (!await(&c->stopping, 1, &c->granted, NULL, false))
+        if (!await(&c->stopping, 1, &c->granted, POLL_MOST_NS))
             return -1;
         waited = true;
         c->asked = false;
         c->begin = c->grant[0];
         c->end = c->grant[1];
         c->exhausted = c->begin == c->end;
-        if (!c->exhausted)
+        if (!c->exhausted) {
+            c->ranges[c->range_count++] = (struct range){c->rank, c->begin, c->end};
             ask(c, pass, count);
+        }
     }
     if (c->exhausted)
         return -1;
@@ -211,36 +269,132 @@ static int claim(void *user, uint64_t pass, int count)
     return n;
 }
 
-/* The pass's seconds are the slowest rank's, the previous merge included; waiting for it doubles
- * as the barrier, with sleeps, before the sums move with blocking calls (everyone being there) of
- * SEGMENT floats each: here 1 MB buffers reduce at 4-5 GB/s, 64 MB ones at 0.4, and a 100 MB
- * MPI_Iallreduce tested in a loop took 2 s (docs/mpi.md). The run may stop between segments. */
-static bool merge(void *user, struct ao_vec3 *sums, size_t count, uint64_t rays[2], double *seconds)
+/* What rank 0 sends at the beginning of every pass: the settings and restarts that every rank
+ * renders it with, or (go 0) the end of the run; as bytes, since the ranks run one binary. */
+struct start {
+    struct ao_settings settings;
+    uint64_t restarts;
+    uint64_t go;
+};
+
+/* Broadcasts rank 0's start to every rank; false when the cluster stops first. */
+static bool broadcast_start(struct ao_cluster *c, struct start *start)
 {
-    enum { SEGMENT = 1 << 18 };
-    struct ao_cluster *c = user;
-    double start = now_seconds(), slowest = *seconds + c->merge_seconds;
     MPI_Request pending;
-    MPI_Iallreduce(MPI_IN_PLACE, &slowest, 1, MPI_DOUBLE, MPI_MAX, c->sums, &pending);
-    if (!await(&c->stopping, 1, &pending, NULL, false))
+    MPI_Ibcast(start, sizeof *start, MPI_BYTE, 0, c->sums, &pending);
+    return await(&c->stopping, 1, &pending, POLL_IDLE_NS);
+}
+
+static bool begin_pass(void *user, struct ao_settings *settings, uint64_t *restarts)
+{
+    struct ao_cluster *c = user;
+    struct start start;
+    memset(&start, 0, sizeof start);
+    if (c->rank == 0) {
+        pthread_mutex_lock(&c->lock);
+        c->closed = false;
+        pthread_mutex_unlock(&c->lock);
+        start.settings = *settings;
+        start.restarts = *restarts;
+        start.go = 1;
+    }
+    if (!broadcast_start(c, &start) || !start.go)
+        return false;
+    *settings = start.settings;
+    *restarts = start.restarts;
+    return true;
+}
+
+/* Rank 0's render thread ends (the window closed, or the run is over): the others' end too. */
+static void end_run(void *user)
+{
+    struct ao_cluster *c = user;
+    struct start start;
+    memset(&start, 0, sizeof start);
+    if (c->rank == 0 && !atomic_load(&c->stopping))
+        broadcast_start(c, &start);
+}
+
+/* Moves the sums of the pass's chunks (ranges of `rank`, or of every other rank on rank 0) between
+ * rank 0 and the others, entries of `size` floats: rank 0 receives into the granted entries, the
+ * others send theirs, each rank's chunks as one message of an indexed datatype; false when the run
+ * stops first. */
+static bool move_sums(struct ao_cluster *c, float *sums, int size)
+{
+    MPI_Request *requests = c->requests;
+    int n = 0, first = c->rank == 0 ? 1 : c->rank, last = c->rank == 0 ? c->size - 1 : c->rank;
+    for (int r = first; r <= last; r++) {
+        int blocks = 0;
+        for (int k = 0; k < c->range_count; k++)
+            if (c->ranges[k].rank == r) {
+                c->starts[blocks] = c->ranges[k].begin * size;
+                c->lengths[blocks++] = (c->ranges[k].end - c->ranges[k].begin) * size;
+            }
+        MPI_Datatype chunks;
+        MPI_Type_indexed(blocks, c->lengths, c->starts, MPI_FLOAT, &chunks);
+        MPI_Type_commit(&chunks);
+        if (c->rank == 0)
+            MPI_Irecv(sums, 1, chunks, r, TAG_SUMS, c->sums, &requests[n++]);
+        else
+            MPI_Isend(sums, 1, chunks, 0, TAG_SUMS, c->sums, &requests[n++]);
+        MPI_Type_free(&chunks);
+        for (int k = 0; k < blocks; k++)
+            c->merge_bytes += (double)c->lengths[k] * sizeof(float);
+    }
+    return await(&c->stopping, n, requests, 0);
+}
+
+/* The pass's seconds are the slowest rank's, the previous merge included; waiting for it doubles
+ * as the barrier, with sleeps, and tells whether a rank gave the pass up (rank 0 then hands out
+ * no more of it, so that the others come soon). Then each other rank sends rank 0 the sums of the
+ * tiles it traced, while rank 0 waits for them without sleeping (everyone being there), and its
+ * rays; the others need no sums, since they take rank 0's tile states (states). */
+static bool merge(void *user, bool finished, struct ao_vec3 *sums, int pixels, uint64_t rays[2], double *seconds)
+{
+    struct ao_cluster *c = user;
+    double start = now_seconds(), slowest[2] = {*seconds + c->merge_seconds, finished ? 0.0 : 1.0};
+    if (!finished && c->rank == 0) { /* the server thread answers the others' requests: none */
+        pthread_mutex_lock(&c->lock);
+        c->closed = c->open = true;
+        pthread_cond_signal(&c->opened);
+        pthread_mutex_unlock(&c->lock);
+    }
+    MPI_Request pending;
+    MPI_Iallreduce(MPI_IN_PLACE, slowest, 2, MPI_DOUBLE, MPI_MAX, c->sums, &pending);
+    if (!await(&c->stopping, 1, &pending, POLL_MOST_NS))
+        return false;
+    if (c->rank == 0) { /* every rank is here: no request is left for the server thread */
+        pthread_mutex_lock(&c->lock);
+        c->open = false;
+        pthread_mutex_unlock(&c->lock);
+    }
+    if (slowest[1] > 0.0)
         return false;
     double arrived = now_seconds();
     _Static_assert(sizeof(struct ao_vec3) == 3 * sizeof(float), "pixel sums are 3 packed floats");
-    float *floats = &sums->x;
-    for (size_t done = 0, total = 3 * count; done < total; done += SEGMENT) {
-        if (atomic_load_explicit(&c->stopping, memory_order_relaxed))
-            return false;
-        int n = total - done < SEGMENT ? (int)(total - done) : SEGMENT;
-        MPI_Allreduce(MPI_IN_PLACE, floats + done, n, MPI_FLOAT, MPI_SUM, c->sums);
-    }
-    MPI_Allreduce(MPI_IN_PLACE, rays, 2, MPI_UINT64_T, MPI_SUM, c->sums);
-    *seconds = slowest;
-    double end = now_seconds();
-    c->merge_seconds = end - start;
+    if (!move_sums(c, &sums->x, 3 * pixels))
+        return false;
+    MPI_Reduce(c->rank == 0 ? MPI_IN_PLACE : rays, rays, 2, MPI_UINT64_T, MPI_SUM, 0, c->sums);
+    *seconds = slowest[0];
+    c->merge_seconds = now_seconds() - start;
     c->merges++;
-    c->merge_bytes += (double)count * sizeof *sums;
     c->waited += arrived - start;
-    c->moved += end - arrived;
+    c->moved += now_seconds() - arrived;
+    return true;
+}
+
+/* Rank 0 sends the tile states it has accumulated the pass into; the others wait for them. */
+static bool states(void *user, void *tiles, size_t size)
+{
+    struct ao_cluster *c = user;
+    assert(size <= INT_MAX);
+    double start = now_seconds();
+    MPI_Request pending;
+    MPI_Ibcast(tiles, (int)size, MPI_BYTE, 0, c->sums, &pending);
+    if (!await(&c->stopping, 1, &pending, POLL_MOST_NS))
+        return false;
+    c->merge_bytes += (double)size * (c->rank == 0 ? c->size - 1 : 1);
+    c->moved += now_seconds() - start;
     return true;
 }
 
@@ -265,7 +419,7 @@ bool ao_cluster_agree(bool ok)
     int all = ok;
     MPI_Request pending;
     MPI_Iallreduce(MPI_IN_PLACE, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD, &pending);
-    await(NULL, 1, &pending, NULL, false);
+    await(NULL, 1, &pending, POLL_MOST_NS);
     return all;
 }
 
@@ -274,7 +428,7 @@ bool ao_cluster_same(uint64_t value)
     uint64_t range[2] = {value, ~value}; /* the smallest value, and the largest as its complement */
     MPI_Request pending;
     MPI_Iallreduce(MPI_IN_PLACE, range, 2, MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD, &pending);
-    await(NULL, 1, &pending, NULL, false);
+    await(NULL, 1, &pending, POLL_MOST_NS);
     return range[0] == ~range[1];
 }
 
@@ -298,13 +452,16 @@ struct ao_cluster *ao_cluster_create(void)
     MPI_Comm_dup(MPI_COMM_WORLD, &c->sums);
     MPI_Comm_dup(MPI_COMM_WORLD, &c->control);
     pthread_mutex_init(&c->lock, NULL);
+    pthread_cond_init(&c->opened, NULL);
     atomic_init(&c->stopping, false);
-    c->share = (struct ao_render_share){.claim = claim, .merge = merge, .user = c};
+    c->share = (struct ao_render_share){.begin = begin_pass, .claim = claim, .merge = merge, .states = states,
+                                        .end = end_run, .follows = c->rank != 0, .user = c};
     const char *delay = getenv("AO_MPI_TEST_DELAY_US");
     c->delay_ns = delay ? 1000L * strtol(delay, NULL, 10) : 0;
-    bool ok = true;
-    if (c->rank == 0) {
-        size_t ranks = (size_t)c->size;
+    size_t ranks = (size_t)c->size;
+    c->requests = calloc(ranks, sizeof *c->requests);
+    bool ok = c->requests != NULL;
+    if (c->rank == 0 && ok) {
         c->pending = calloc(ranks, sizeof *c->pending);
         c->answers = calloc(ranks, sizeof *c->answers);
         c->tiles_by_rank = calloc(ranks, sizeof *c->tiles_by_rank);
@@ -313,9 +470,9 @@ struct ao_cluster *ao_cluster_create(void)
             MPI_Irecv(c->request, 3, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_REQUEST, c->claims, &c->incoming);
             ok = c->serving = pthread_create(&c->server, NULL, serve, c) == 0;
         }
-        if (!ok)
-            fprintf(stderr, "aoview-mpi: out of memory or threads for the cluster\n");
     }
+    if (!ok)
+        fprintf(stderr, "aoview-mpi: out of memory or threads for the cluster\n");
     if (!ao_cluster_agree(ok)) {
         ao_cluster_destroy(c);
         return NULL;
@@ -331,6 +488,9 @@ const struct ao_render_share *ao_cluster_share(struct ao_cluster *cluster)
 void ao_cluster_stop(struct ao_cluster *cluster)
 {
     atomic_store(&cluster->stopping, true);
+    pthread_mutex_lock(&cluster->lock);
+    pthread_cond_broadcast(&cluster->opened);
+    pthread_mutex_unlock(&cluster->lock);
 }
 
 void ao_cluster_answer(struct ao_cluster *cluster)
@@ -362,12 +522,12 @@ void ao_cluster_summary(struct ao_cluster *cluster, char *out, size_t size)
     unsigned long long mine = cluster->tiles, *all = cluster->tiles_by_rank;
     MPI_Request pending;
     MPI_Igather(&mine, 1, MPI_UNSIGNED_LONG_LONG, all, 1, MPI_UNSIGNED_LONG_LONG, 0, cluster->control, &pending);
-    await(NULL, 1, &pending, NULL, false);
+    await(NULL, 1, &pending, POLL_IDLE_NS);
     int used = snprintf(out, size, "%d rank%s, tiles traced by rank", cluster->size, cluster->size > 1 ? "s" : "");
     for (int r = 0; all && r < cluster->size && used >= 0 && (size_t)used < size; r++)
         used += snprintf(out + used, size - (size_t)used, "%s %d: %llu", r ? "," : "", r, all[r]);
     if (used >= 0 && (size_t)used < size)
-        snprintf(out + used, size - (size_t)used, "; %llu merges of %.1f MB in all took %.3f s, after %.3f s waiting for the slowest rank",
+        snprintf(out + used, size - (size_t)used, "; %llu merges moved %.1f MB (tiles in, tile states out) in %.3f s, after %.3f s waiting for the slowest rank",
                  (unsigned long long)cluster->merges, cluster->merge_bytes / 1e6, cluster->moved, cluster->waited);
 }
 
@@ -384,7 +544,12 @@ void ao_cluster_destroy(struct ao_cluster *cluster)
     MPI_Comm_free(&cluster->claims);
     MPI_Comm_free(&cluster->sums);
     MPI_Comm_free(&cluster->control);
+    pthread_cond_destroy(&cluster->opened);
     pthread_mutex_destroy(&cluster->lock);
+    free(cluster->requests);
+    free(cluster->ranges);
+    free(cluster->lengths);
+    free(cluster->starts);
     free(cluster->pending);
     free(cluster->answers);
     free(cluster->tiles_by_rank);

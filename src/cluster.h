@@ -1,7 +1,8 @@
-/* The processes of an MPI run that render one image together (aoview-mpi): rank 0 hands out the
- * tiles of each pass on request, in chunks that shrink as the pass runs out, so that a slow rank
- * takes fewer; every pass's sums are added up over all ranks; the end of a run, interrupted or
- * not. Only this file and main_mpi.c include mpi.h. */
+/* The processes of an MPI run that render one image together (aoview-mpi): rank 0 leads, sending
+ * every pass's settings (its window's) to the others, and hands out the tiles of each pass on
+ * request, in chunks that shrink as the pass runs out, so that a slow rank takes fewer; gathers
+ * the sums of every pass and sends back the tile states they make; the end of a run, interrupted
+ * or not. Only this file and main_mpi.c include mpi.h. */
 #ifndef AO_CLUSTER_H
 #define AO_CLUSTER_H
 

@@ -1,6 +1,7 @@
 /* aoview-mpi: `mpirun -np N aoview-mpi [aoview's options] SCENE` renders aoview's image on N
- * ranks: each loads the scene and traces the tiles it claims from rank 0, every pass's sums are
- * added up over the ranks, and rank 0 writes -o, --stats and the progress bar. Headless only. */
+ * ranks: each loads the scene and traces the tiles it claims from rank 0, which gathers every
+ * pass's sums, and shows the window (its keys and mouse set every rank's passes) or, headless,
+ * writes -o; and --stats and the progress bar. */
 #include <fcntl.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -13,6 +14,7 @@
 #include "cli.h"
 #include "cluster.h"
 #include "config.h"
+#include "window.h"
 
 /* How long rank 0 waits for the other ranks to answer after an interruption: mpirun sends SIGTERM
  * to every rank at once and SIGKILL a second later, and a PNG takes about 0.5 s to write. The
@@ -123,19 +125,40 @@ static int interrupted(struct ao_app *app, struct ao_cluster *cluster, const str
     return ao_app_write(app, opts, frame, why, false, missing[0] || !frame ? AO_EXIT_RUNTIME : 128 + sig);
 }
 
-/* Renders on every rank; rank 0 writes. Returns the exit status; *clean says whether every rank
- * got to the end alike (MPI may then be finalized). */
+/* Rank 0: shows the window until the user quits; false where no window can be opened (after one
+ * line: the run goes on headless, with the progress bar), *status AO_EXIT_RUNTIME when OpenGL
+ * failed. */
+static bool show_window(struct ao_app *app, const struct ao_options *opts, int *status)
+{
+    /* No config: V, which would start renderers of its own, is not available. */
+    struct ao_window_info info = {.scene_name = app->scene.name, .quiet = opts->quiet, .seed = opts->seed,
+                                  .save_exr = opts->save_exr, .reference = app->reference,
+                                  .difference = opts->view == AO_VIEW_MODE_DIFFERENCE};
+    enum ao_window_result result = ao_window_run(app->render, &info);
+    if (result != AO_WINDOW_NO_DISPLAY) {
+        *status = result == AO_WINDOW_OK ? 0 : AO_EXIT_RUNTIME;
+        return true;
+    }
+    fprintf(stderr, "aoview: no display available; rendering headless to %s\n",
+            opts->output ? opts->output : "aoview.png");
+    app->reporter.progress = !opts->quiet && watched_on_terminal();
+    return false;
+}
+
+/* Renders on every rank; rank 0 shows the window or writes. Returns the exit status; *clean says
+ * whether every rank got to the end alike (MPI may then be finalized). */
 static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool *clean)
 {
     struct ao_options mine = *opts;
-    if (rank != 0) /* only rank 0 reports and writes */
-        mine.quiet = true, mine.stats_path = NULL, mine.reference_path = NULL, mine.output = NULL;
+    if (rank != 0) /* only rank 0 shows, reports and writes */
+        mine.quiet = mine.headless = true, mine.stats_path = NULL, mine.reference_path = NULL, mine.output = NULL;
     struct ao_render_config config;
     struct ao_settings settings;
     int status = load(app, &mine, rank, &config, &settings);
     if (status)
         return status;
-    app->reporter.progress = !mine.quiet && watched_on_terminal();
+    app->reporter.progress = !mine.quiet && mine.headless && watched_on_terminal();
+    app->reporter.notify = ao_window_notify;
     struct ao_cluster *cluster = ao_cluster_create();
     if (!cluster)
         return AO_EXIT_RUNTIME;
@@ -145,22 +168,32 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool
         ao_cluster_destroy(cluster);
         return AO_EXIT_RUNTIME;
     }
-    atomic_store(&app->interrupt.graceful, true);
-    int sig;
-    bool finished = ao_app_wait(app, &sig);
-    if (!finished) {
-        *clean = false;
-        ao_cluster_stop(cluster);
-        return sig ? interrupted(app, cluster, &mine, rank, sig) : AO_EXIT_RUNTIME;
+
+    /* Rank 0's window, or headless (also where no window can be opened): the other ranks follow
+     * rank 0's passes until its render thread ends theirs. */
+    bool shown = !mine.headless && show_window(app, &mine, &status);
+    if (!shown) {
+        atomic_store(&app->interrupt.graceful, true);
+        int sig;
+        bool finished = ao_app_wait(app, &sig);
+        if (!finished && (sig || rank == 0)) {
+            *clean = false;
+            ao_cluster_stop(cluster);
+            return sig ? interrupted(app, cluster, &mine, rank, sig) : AO_EXIT_RUNTIME;
+        }
     }
+    if (rank == 0)
+        ao_render_stop(app->render);
     char summary[1024];
     ao_cluster_summary(cluster, summary, sizeof summary);
-    ao_cluster_destroy(cluster);
-    if (rank != 0)
-        return 0;
-    if (!mine.quiet)
+    if (rank == 0 && !mine.quiet)
         fprintf(stderr, "aoview-mpi: %s\n", summary);
-    return ao_app_write(app, &mine, ao_render_take_frame(app->render), NULL, false, 0);
+    if (rank == 0 && !shown)
+        status = ao_app_write(app, &mine, ao_render_take_frame(app->render), NULL, false, 0);
+    ao_render_destroy(app->render);   /* before the cluster, which its render thread may still use */
+    app->render = NULL;
+    ao_cluster_destroy(cluster);
+    return status;
 }
 
 int main(int argc, char **argv)

@@ -267,8 +267,6 @@ static void *worker_main(void *arg)
 /* Runs one pass on all threads; false when it was aborted by a restart or stop. */
 static bool run_pass(struct ao_render *r)
 {
-    if (r->config.share) /* the entries other processes trace add nothing in the merge */
-        memset(r->pass_sums, 0, (size_t)r->shares[r->config.threads - 1].end * TILE * TILE * sizeof *r->pass_sums);
     pthread_mutex_lock(&r->pass_lock);
     for (int k = 0; k < r->config.threads; k++)
         atomic_store(&r->shares[k].next, 0);
@@ -284,22 +282,23 @@ static bool run_pass(struct ao_render *r)
     return !aborted(r);
 }
 
-/* With a share: adds up the pass's sums, rays and seconds over the processes, then adds every
- * tile of the work list to the accumulation, in the order of the list; false when the share
- * ends the run. */
-static bool merge_pass(struct ao_render *r, uint64_t rays[2], double *seconds)
+/* With a share, after a pass this process finished or gave up: gathers the pass's sums, rays and
+ * seconds from the processes; the leader adds every tile of the work list to the accumulation,
+ * in the order of the list, and the followers take its tile states; false when the pass does not
+ * count (given up somewhere, or the run stops). */
+static bool merge_pass(struct ao_render *r, bool finished, uint64_t rays[2], double *seconds)
 {
     const struct ao_render_share *share = r->config.share;
     int count = r->shares[r->config.threads - 1].end;
-    if (!share->merge(share->user, r->pass_sums, (size_t)count * TILE * TILE, rays, seconds))
+    if (!share->merge(share->user, finished, r->pass_sums, TILE * TILE, rays, seconds))
         return false;
-    for (int n = 0; n < count; n++) {
+    for (int n = 0; n < count && !share->follows; n++) {
         int t = r->work[n];
         uint32_t next;
         struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
         add_tile(r, t, &work, next, r->pass_sums + (size_t)n * TILE * TILE);
     }
-    return true;
+    return share->states(share->user, r->tiles, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
 }
 
 /* ---- planning: run by the render thread between passes ---- */
@@ -475,21 +474,30 @@ static bool wait_for_work(struct ao_render *r, const struct ao_frame_info *info)
 static void *render_main(void *arg)
 {
     struct ao_render *r = arg;
+    const struct ao_render_share *share = r->config.share;
+    bool follows = share && share->follows;
     struct ao_frame_info info = {.restarts = UINT64_MAX};
     ao_tracer_thread_init();
     pthread_mutex_lock(&r->lock);
-    while (wait_for_work(r, &info)) {
-        /* Take the settings; a restart clears the sums. */
+    while (follows ? !r->stop : wait_for_work(r, &info)) {
+        /* Take the settings (with a share, the leader's: `own` counts this process's restarts,
+         * which abort its pass, `restarts` the generation of the sums); a restart clears the sums. */
         struct ao_settings s = r->settings;
-        if (info.restarts != r->restarts) {
-            ao_accum_reset(&r->accum);
+        uint64_t own = r->restarts, restarts = own;
+        pthread_mutex_unlock(&r->lock);
+        if (share && !share->begin(share->user, &s, &restarts)) {
+            ao_render_stop(r);
+            pthread_mutex_lock(&r->lock);
+            break;
+        }
+        if (info.restarts != restarts) {
+            if (!follows) /* a follower keeps no image: its accumulation is never touched */
+                ao_accum_reset(&r->accum);
             memset(r->tiles, 0, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
-            info = (struct ao_frame_info){.restarts = r->restarts, .target_spp = r->config.target_spp,
+            info = (struct ao_frame_info){.restarts = restarts, .target_spp = r->config.target_spp,
                                           .target_error = r->config.target_error,
                                           .time_limit = r->config.time_limit};
-            r->done = false;
         }
-        pthread_mutex_unlock(&r->lock);
 
         /* Plan the pass: its tiles, its samples. */
         size_t pixels = select_tiles(r, s.adaptive);
@@ -506,14 +514,14 @@ static void *render_main(void *arg)
             r->ctx.output = s.output;
             r->ctx.shading = s.shading;
             ao_camera_view(&s.camera, r->config.width, r->config.height, &r->ctx.view);
-            r->pass_restarts = info.restarts;
+            r->pass_restarts = own;
             atomic_store(&r->eye_rays, 0);
             atomic_store(&r->shadow_rays, 0);
             complete = run_pass(r);
             uint64_t rays[2] = {atomic_load(&r->eye_rays), atomic_load(&r->shadow_rays)};
             double seconds = now_seconds() - start;
-            if (complete && r->config.share)
-                complete = merge_pass(r, rays, &seconds);
+            if (share)
+                complete = merge_pass(r, complete, rays, &seconds);
             info.eye_rays += rays[0];
             info.shadow_rays += rays[1];
             info.seconds += seconds;
@@ -523,23 +531,29 @@ static void *render_main(void *arg)
             info.shading = s.shading;
         }
 
-        /* Publish it. */
+        /* Publish it (a follower keeps no image). */
         if (complete) {
             info.pass++;
             info.spppp = spppp;
             survey(r, &info, s.adaptive);
-            publish(r, &info);
-            if (r->config.on_pass)
-                r->config.on_pass(&info, r->config.user);
+            if (!follows) {
+                publish(r, &info);
+                if (r->config.on_pass)
+                    r->config.on_pass(&info, r->config.user);
+            }
         }
+        /* Done: the image is finished until the settings change; a follower's run goes on until
+         * the leader ends it. */
         pthread_mutex_lock(&r->lock);
-        if ((complete ? info.done : !pixels) && info.restarts == r->restarts) {
+        if ((complete ? info.done : !pixels) && own == r->restarts && !follows) {
             r->done = true;
             pthread_cond_broadcast(&r->finished);
         }
     }
     r->last_info = info;
     pthread_mutex_unlock(&r->lock);
+    if (share)
+        share->end(share->user);
     return NULL;
 }
 

@@ -60,17 +60,32 @@ struct ao_frame {
     float *tile_error;
 };
 
-/* How processes rendering the same image split each pass (aoview-mpi's cluster.c): each traces the
- * work-list entries it claims, and the pass's sums are added up over all of them before any is
- * accumulated, so that every process holds the same sums and takes the same decisions. */
+/* How processes rendering the same image split each pass (aoview-mpi's cluster.c): one process
+ * leads (its settings, restarts and stop decide), the others follow; each traces the work-list
+ * entries it claims, the leader gathers the pass's sums and accumulates them, and the followers,
+ * which keep no image, take its tile states, so that every process plans the same passes. */
 struct ao_render_share {
+    /* Before each pass: replaces *settings and *restarts (this process's own) by those every
+     * process renders the pass with, the leader's, which a follower waits here for; false when the
+     * leader ended the run or it is being stopped. Render thread. */
+    bool (*begin)(void *user, struct ao_settings *settings, uint64_t *restarts);
     /* The next entry of pass `pass`'s work list of `count` tiles for this process to trace, or -1
      * when none is left; every process numbers the passes alike. Any render thread. */
     int (*claim)(void *user, uint64_t pass, int count);
-    /* Replaces sums (count pixel sums, zero where this process traced nothing), rays (eye,
-     * shadow) and seconds by their totals over the processes (seconds: the largest); false when
-     * the run is being stopped (ao_render_stop). Render thread. */
-    bool (*merge)(void *user, struct ao_vec3 *sums, size_t count, uint64_t rays[2], double *seconds);
+    /* At the end of a pass this process finished (or gave up: a restart or stop), with `pixels`
+     * pixel sums in sums for each work-list entry, of those it traced: fills in, on the leader,
+     * the other processes' entries and adds their rays (eye, shadow) to rays, and sets seconds to
+     * the largest over the processes; true when the pass counts, false when a process gave it up
+     * or the run is being stopped. Render thread. */
+    bool (*merge)(void *user, bool finished, struct ao_vec3 *sums, int pixels, uint64_t rays[2], double *seconds);
+    /* After a pass counted: a follower's tile states (size bytes, what passes are planned from)
+     * become the leader's, as it has accumulated the pass; false when the run is being stopped.
+     * Render thread. */
+    bool (*states)(void *user, void *tiles, size_t size);
+    /* The render thread is ending (stopped): the leader tells the followers. Render thread. */
+    void (*end)(void *user);
+    bool follows;            /* a follower: waits in begin, not for its own settings or pause; keeps
+                                no image (publishes no frame) and is never done by itself */
     void *user;
 };
 
@@ -119,7 +134,8 @@ void ao_render_restart(struct ao_render *render);
  * until the next call. One consumer thread only (the GL thread, or main when headless). */
 const struct ao_frame *ao_render_take_frame(struct ao_render *render);
 
-/* Blocks until the target spp is reached (true) or ao_render_stop was called (false). */
+/* Blocks until the target spp is reached (true) or ao_render_stop was called or, with a share, the
+ * leader ended the run (false: a follower is never done by itself). */
 bool ao_render_wait(struct ao_render *render);
 
 /* After an interruption: stops and joins the render thread, then resolves the accumulation as it

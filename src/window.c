@@ -198,7 +198,13 @@ static void on_char(GLFWwindow *window, unsigned int codepoint)
         else
             ao_render_restart(v->render);
         return;
-    case 'v': v->toggle_compare = true; return;
+    case 'v':
+        if (!v->info->config && !v->info->quiet) {
+            printf("aoview: V compares two configurations; not available here\n");
+            fflush(stdout);
+        }
+        v->toggle_compare = v->info->config != NULL;
+        return;
     case 'b':
         v->layout = v->layout == AO_COMPARE_SPLIT ? AO_COMPARE_SIDE_BY_SIDE : AO_COMPARE_SPLIT;
         v->reupload = true;

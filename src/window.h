@@ -17,7 +17,8 @@ struct ao_window_info {
     bool save_exr;           /* S saves aoview-N.exr beside the PNG instead of aoview-N.pfm */
     const float *reference;  /* --reference for the difference view (the frames' size), or NULL */
     bool difference;         /* start in the difference view (needs reference) */
-    const struct ao_render_config *config;   /* the window's renderer's, for V's two renderers */
+    const struct ao_render_config *config;   /* the window's renderer's, for V's two renderers; NULL:
+                                                no V (aoview-mpi) */
     bool compare;            /* --compare: start in the comparison, B being sides[1] */
     struct ao_compare_side sides[2];
     void *users[2];          /* config->on_pass's argument for each side of a comparison */

@@ -20,7 +20,7 @@ run() {
   if [ "${words[0]}" = aoview ]; then
     "${timing[@]}" "$build/aoview" --headless -q --size "$size" "${words[1]}" "${words[2]}" -o "$work/x.pfm"
   else
-    "${timing[@]}" mpirun --oversubscribe -np "${words[2]}" "$build/aoview-mpi" -q --size "$size" "${words[3]}" \
+    "${timing[@]}" mpirun --oversubscribe -np "${words[2]}" "$build/aoview-mpi" --headless -q --size "$size" "${words[3]}" \
       "${words[4]}" -o "$work/x.pfm"
   fi
 }

@@ -1,12 +1,21 @@
 #!/usr/bin/env bash
 # aoview-mpi on localhost: the same image and --stats decisions as one aoview process for 2 and 3
 # ranks; a slowed rank takes fewer tiles; a killed rank and SIGINT to mpirun end the run with one
-# line and the image merged so far. Usage: test_mpi.sh equal|slow|killed|sigint
+# line and the image merged so far; rank 0's window under Xvfb drives every rank (keys and an
+# orbit give one process's image), quits cleanly, and without a display the run goes headless.
+# Usage: test_mpi.sh equal|slow|killed|sigint|window
 set -u
 bin=${AO_BINARY:?AO_BINARY not set}
 mpi_bin=${AO_MPI_BINARY:?AO_MPI_BINARY not set}
 command -v mpirun >/dev/null || { echo "SKIP: no mpirun (Debian: openmpi-bin)"; exit 77; }
 [ -x "$mpi_bin" ] || { echo "SKIP: $mpi_bin not built"; exit 77; }
+if [ "${1:-}" = window ] && [ -z "${AO_UNDER_XVFB:-}" ]; then
+  for tool in xvfb-run xdotool; do
+    command -v "$tool" >/dev/null || { echo "SKIP: no $tool (Debian: xvfb xdotool)"; exit 77; }
+  done
+  # A 24-bit screen: xvfb-run's default depth has no OpenGL visual.
+  AO_UNDER_XVFB=1 exec xvfb-run -a -s "-screen 0 1280x1024x24" bash "$0" "$@"
+fi
 # OpenMPI refuses root without these; loopback only, never another network address.
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_btl_tcp_if_include=lo OMPI_MCA_oob_tcp_if_include=lo
@@ -40,7 +49,7 @@ same() {
   # shellcheck disable=SC2086 # the arguments are words
   "$bin" --headless -q $args --threads 2 -o "$name-1.pfm" --stats "$name-1.csv" || { fail "$name: aoview failed"; return; }
   # shellcheck disable=SC2086
-  "${mpirun[@]}" -np "$np" "$mpi_bin" -q $args $rank_args -o "$name-n.pfm" --stats "$name-n.csv" "$@" 2>"$name.err" \
+  "${mpirun[@]}" -np "$np" "$mpi_bin" --headless -q $args $rank_args -o "$name-n.pfm" --stats "$name-n.csv" "$@" 2>"$name.err" \
     || { fail "$name: aoview-mpi -np $np failed: $(cat "$name.err")"; return; }
   local d
   d=$(max_diff "$name-1.pfm" "$name-n.pfm")
@@ -67,7 +76,7 @@ rank_pid() {
 # (OSMesa and LLVM load), too much of it in the sanitizer builds on a busy machine.
 start_long() {
   rm -f long.pfm long.csv
-  "${mpirun[@]}" -np 3 "$mpi_bin" --spp 1000000 --size 96x64 --threads 1 -o long.pfm --stats long.csv 2>long.err &
+  "${mpirun[@]}" -np 3 "$mpi_bin" --headless --spp 1000000 --size 96x64 --threads 1 -o long.pfm --stats long.csv 2>long.err &
   long_pid=$!
   for _ in $(seq 200); do [ -f long.csv ] && [ "$(wc -l < long.csv)" -ge 4 ] && break; sleep 0.1; done
 }
@@ -79,7 +88,72 @@ complete_pfm() {
     [ -z "$(ls -A | grep -v -x -e long.pfm -e long.csv -e long.err)" ]
 }
 
-case ${1:?equal, slow, killed or sigint} in
+# viewer NAME COMMAND...: starts COMMAND (a viewer) in the background with its output in NAME.out
+# and NAME.err, and waits for its window, then a moment for it to take keys: $viewer_pid, $wid.
+viewer() {
+  local name=$1
+  shift
+  "$@" >"$name.out" 2>"$name.err" &
+  viewer_pid=$!
+  wid=$(timeout 30 xdotool search --sync --onlyvisible --name '^aoview') || { fail "$name: no window: $(cat "$name.err")"; return 1; }
+  wid=${wid%%$'\n'*}
+  sleep 1
+}
+
+# end_viewer: after a failure, ends the viewer (mpirun ends its ranks), so that the next window
+# found is the next viewer's.
+end_viewer() {
+  kill "$viewer_pid" 2>/dev/null
+  wait "$viewer_pid" 2>/dev/null
+}
+
+# title_shows REGEX: polls the window's title until it matches (true), for at most 20 s.
+title_shows() {
+  for _ in $(seq 400); do
+    [[ $(xdotool getwindowname "$wid" 2>/dev/null) =~ $1 ]] && return 0
+    sleep 0.05
+  done
+  return 1
+}
+
+wait_title() { title_shows "$1" || { fail "title never matched /$1/: $(xdotool getwindowname "$wid" 2>/dev/null)"; return 1; }; }
+
+press() { xdotool windowfocus --sync "$wid" key --delay 20 "$@" 2>/dev/null; }
+
+# quit NAME: Q, then the viewer (every rank, for aoview-mpi) must end with status 0 within 10 s.
+quit() {
+  press q
+  for _ in $(seq 100); do kill -0 "$viewer_pid" 2>/dev/null || break; sleep 0.1; done
+  if kill -0 "$viewer_pid" 2>/dev/null; then
+    fail "$1: still running 10 s after Q"
+    end_viewer
+    return 1
+  fi
+  wait "$viewer_pid" || fail "$1: ended with status $? after Q: $(cat "$1.err")"
+}
+
+# drive NAME: from hemisphere sampling with AA, C, A and one orbit (a drag as a single mouse move,
+# so that both viewers turn the camera alike); at 64 spp, S saves the image shown (NAME.pfm), Q.
+drive() {
+  local name=$1
+  wait_title " — hemisphere — AA on — " || return
+  # C again if the first key, right after the window showed, went astray (C twice is C once).
+  press c
+  title_shows " — cosine — AA on — " || { press c && wait_title " — cosine — AA on — "; } || return
+  press a
+  wait_title " — cosine — AA off — " || return
+  xdotool mousemove --window "$wid" 300 200 && sleep 0.2 && xdotool mousedown 1 && sleep 0.2 &&
+    xdotool mousemove --window "$wid" 360 220 && sleep 0.2 && xdotool mouseup 1
+  wait_title " — spp 64 of 64 — " || return
+  sleep 0.5
+  press s
+  for _ in $(seq 200); do [ -s aoview-1.pfm ] && break; sleep 0.05; done
+  mv aoview-1.pfm "$name.pfm" 2>/dev/null || fail "$name: S saved no image"
+  rm -f aoview-1.png
+  quit "$name"
+}
+
+case ${1:?equal, slow, killed, sigint or window} in
 equal)
   # The defaults (adaptive sampling, auto passes, Sobol) with a reference for the RMSE column.
   "$bin" --headless -q --size 160x120 --spp 64 --seed 7 -o ref.pfm || fail "reference failed"
@@ -89,7 +163,7 @@ equal)
   same target "--size 160x120 --target-error 0.02" 1 "--threads 1" : -np 2 "$mpi_bin" --threads 2 -q --size 160x120 --target-error 0.02
   same textbook "--size 120x90 --spp 32 --sampler random --spppp 4 --adaptive off --sampling uniform" 3 ""
   # Ranks given other settings would render another image: refused, once, with status 2.
-  "${mpirun[@]}" -np 1 "$mpi_bin" --size 96x64 --spp 64 -o mismatch.pfm : -np 1 "$mpi_bin" --size 96x64 --spp 32 \
+  "${mpirun[@]}" -np 1 "$mpi_bin" --headless --size 96x64 --spp 64 -o mismatch.pfm : -np 1 "$mpi_bin" --size 96x64 --spp 32 \
     2>mismatch.err
   [ "$(grep -c "ranks were given different options" mismatch.err)" = 1 ] && [ ! -e mismatch.pfm ] ||
     fail "ranks with other --spp were not refused once: $(cat mismatch.err)"
@@ -101,7 +175,7 @@ slow)
   # about 1/16 of a pass plus the little it finishes meanwhile; with equal static shares it would
   # get 1/2. The bound, rank 1 below 1/4 of the tiles, leaves a wide margin for a busy machine.
   same slow "--size 160x120 --spp 128" 1 "--threads 1" : -np 1 env AO_MPI_TEST_DELAY_US=3000 "$mpi_bin" -q --size 160x120 --spp 128 --threads 1
-  "${mpirun[@]}" -np 1 "$mpi_bin" --size 160x120 --spp 128 --threads 1 -o slow.pfm : \
+  "${mpirun[@]}" -np 1 "$mpi_bin" --headless --size 160x120 --spp 128 --threads 1 -o slow.pfm : \
     -np 1 env AO_MPI_TEST_DELAY_US=3000 "$mpi_bin" --size 160x120 --spp 128 --threads 1 -o slow.pfm 2>slow.err
   fast=$(tiles_of 0 slow.err) slow=$(tiles_of 1 slow.err)
   echo "tiles: rank 0 $fast, slowed rank 1 $slow"
@@ -129,6 +203,36 @@ sigint)
   grep -q "^aoview: interrupted by SIGTERM at [0-9]* spp" long.err || fail "no interruption line: $(cat long.err)"
   grep -q "lost" long.err && fail "a rank named lost after SIGINT: $(cat long.err)"
   complete_pfm long.pfm 96 64 || fail "no complete image after SIGINT: $(ls -A)"
+  ;;
+window)
+  spheres=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
+  small=(--size 96x64 --spp 64 --adaptive off --sampling hemisphere "$spheres")
+  # Rank 0 sleeps 2 ms a tile (AO_MPI_TEST_DELAY_US), so that rank 1 traces most tiles: had it
+  # not taken up the window's sampling, AA and camera, the image would not be one process's.
+  viewer one "$bin" --threads 2 "${small[@]}" && { drive one || end_viewer; }
+  viewer ranks "${mpirun[@]}" -np 1 env AO_MPI_TEST_DELAY_US=2000 "$mpi_bin" --threads 1 "${small[@]}" : \
+    -np 1 "$mpi_bin" --threads 1 "${small[@]}" && { drive ranks || end_viewer; }
+  d=$(max_diff one.pfm ranks.pfm 2>/dev/null)
+  traced=$(tiles_of 1 ranks.err)
+  echo "after C, A and an orbit: max |d| = ${d:-?} from one process; tiles traced by rank 0 $(tiles_of 0 ranks.err), rank 1 ${traced:-?}"
+  [ "$d" = 0.0 ] || fail "the ranks' image after C, A and an orbit differs from one process's by ${d:-?}"
+  [ "${traced:-0}" -gt 0 ] || fail "rank 1 traced no tile: $(cat ranks.err)"
+  "$bin" --headless -q --size 96x64 --spp 64 --adaptive off --sampling cosine --no-aa -o still.pfm "$spheres"
+  [ "$(max_diff one.pfm still.pfm)" != 0.0 ] || fail "the drag did not orbit the camera"
+
+  # Q mid-pass (after V, which aoview-mpi has not), and Q while paused: every rank ends, status 0.
+  viewer long "${mpirun[@]}" -np 2 "$mpi_bin" --threads 1 --size 160x120 --spp 1000000 --spppp 256 "$spheres" &&
+    { wait_title " — pass ([2-9]|[1-9][0-9]+) — " && press v && sleep 0.3 && quit long || end_viewer; }
+  grep -q "V compares two configurations; not available here" long.out || fail "V said nothing: $(cat long.out)"
+  viewer paused "${mpirun[@]}" -np 2 "$mpi_bin" --threads 1 --size 160x120 --spp 1000000 "$spheres" &&
+    { wait_title " — pass ([2-9]|[1-9][0-9]+) — " && press space && wait_title " — paused" && quit paused || end_viewer; }
+
+  # No display: one line, then headless to the default output, as aoview does.
+  rm -f aoview.png
+  env -u DISPLAY "${mpirun[@]}" -np 2 "$mpi_bin" -q --size 96x64 --spp 16 "$spheres" 2>nodisplay.err ||
+    fail "no display: status $?: $(cat nodisplay.err)"
+  grep -q "^aoview: no display available; rendering headless to aoview.png" nodisplay.err && [ -s aoview.png ] ||
+    fail "no display: $(cat nodisplay.err)"
   ;;
 esac
 [ "$failures" = 0 ] || exit 1
