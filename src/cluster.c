@@ -16,21 +16,25 @@
 
 enum { TAG_REQUEST = 1, TAG_GRANT, TAG_SUMS, TAG_ANSWER };
 
-/* A rank waiting for a message or for the slowest rank at a merge tests its request, then sleeps
- * 50 us, doubling up to 1 ms while nothing comes: it leaves the cores to the render threads, at a
- * cost of at most 1 ms a wait; 10 to 200 us took 0.55 s of system time in a 5 s run against 0.3 s,
- * for no shorter waits (docs/mpi.md). A rank waiting for rank 0 to begin a pass sleeps up to
- * POLL_IDLE_NS once it has waited IDLE_AFTER_NS: rank 0 may be paused or done, for as long as its
- * window stays open. */
-static const long POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000, POLL_IDLE_NS = 20000000, IDLE_AFTER_NS = 50000000;
+/* A rank waiting for a message or for the slowest rank at a merge tests its request without
+ * sleeping for SPIN_NS, which most waits at the ends of passes and for chunks take (a sleep's
+ * wake-up alone costs more), then sleeps 50 us, doubling up to 1 ms while nothing comes: it leaves
+ * the cores to the render threads, at a cost of at most 1 ms a wait; sleeps of 10 to 200 us took
+ * 0.55 s of system time in a 5 s run against 0.3 s, for no shorter waits (docs/mpi.md). A rank
+ * waiting for rank 0 to begin a pass sleeps up to POLL_IDLE_NS once it has waited IDLE_AFTER_NS:
+ * rank 0 may be paused or done, for as long as its window stays open. */
+static const long SPIN_NS = 200000, POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000, POLL_IDLE_NS = 20000000,
+                  IDLE_AFTER_NS = 50000000;
 
 /* Rank 0 grants a rank 1 / (CHUNKS x ranks) of the entries still to hand out, so that chunks
  * shrink as the pass runs out: a rank holds at most two chunks (the one it traces and the next,
  * asked for ahead), 1/16 of a pass between two ranks however slow one of them is. But at least
  * what the rank traces in CHUNK_SECONDS, by its own measure, so that the next chunk's round trip
- * (0.1 ms here, a few ms when the machine is busy) hides behind the one it traces; with single
- * entries at the ends of passes a rank waited for a fifth of a run (docs/mpi.md). */
-enum { CHUNKS = 16 };
+ * (0.1 ms here, a few ms when the machine is busy) hides behind the one it traces; and, near the
+ * end of a pass, at most 1 / (LAST x ranks) of what is left, so that the last chunks shrink to
+ * single entries and rank 0's threads, which take one at a time, do not wait at the merge for
+ * another rank's two last chunks of 2 ms each (docs/mpi.md). */
+enum { CHUNKS = 16, LAST = 4 };
 static const double CHUNK_SECONDS = 2e-3;
 
 struct ao_cluster {
@@ -101,6 +105,7 @@ static void sleep_ns(long ns)
 static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, long most)
 {
     long pause = POLL_FIRST_NS, slept = 0;
+    double spin_until = now_seconds() + 1e-9 * (double)SPIN_NS;
     for (;;) {
         int done = 0;
         MPI_Testall(n, requests, &done, MPI_STATUSES_IGNORE);
@@ -108,7 +113,7 @@ static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, lon
             return true;
         if (stopping && atomic_load_explicit(stopping, memory_order_relaxed))
             return false;
-        if (!most)
+        if (!most || now_seconds() < spin_until)
             continue;
         sleep_ns(pause);
         slept += pause;
@@ -154,8 +159,9 @@ static void hand_out(struct ao_cluster *c, uint64_t pass, int count, int least, 
         reserve(c, count);
     }
     int left = pass == c->pass && !c->closed ? c->count - c->next : 0;
-    int chunk = left / (CHUNKS * c->size);
+    int chunk = left / (CHUNKS * c->size), last = left / (LAST * c->size);
     chunk = chunk < least ? least : chunk > most ? most : chunk;
+    chunk = chunk < last ? chunk : last > 1 ? last : 1;
     chunk = chunk < left ? chunk : left;
     *begin = c->next;
     *end = c->next += chunk;

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Whole runs of the bunny (defaults, 640x480 unless SIZE is set) as one aoview process and as
-# aoview-mpi under mpirun on this machine, interleaved REPS times; prints the median wall seconds
+# Whole runs of the bunny (defaults; 640x480 and 256 spp unless SIZE or SPP is set) as one aoview
+# process and as aoview-mpi under mpirun on this machine, interleaved REPS times; prints the median wall seconds
 # and CPU seconds (user + system, the ranks' and mpirun's) of each configuration and its throughput
 # relative to one 2-thread aoview by both (the images are the same, so the rays are too): on a
 # machine busy with other work, wall time measures the share of the cores a configuration gets,
@@ -9,6 +9,7 @@ set -eu
 build=${1:?build dir}
 reps=${2:-5}
 size=${SIZE:-640x480}
+spp=${SPP:-256}
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_btl_tcp_if_include=lo OMPI_MCA_oob_tcp_if_include=lo
 work=$(mktemp -d)
@@ -18,9 +19,9 @@ configs=("aoview --threads 2" "aoview --threads 1" "mpirun -np 1 --threads 2" "m
 run() {
   local words=($1) timing=(/usr/bin/time -f "%e %U %S" -o "$work/one")
   if [ "${words[0]}" = aoview ]; then
-    "${timing[@]}" "$build/aoview" --headless -q --size "$size" "${words[1]}" "${words[2]}" -o "$work/x.pfm"
+    "${timing[@]}" "$build/aoview" --headless -q --size "$size" --spp "$spp" "${words[1]}" "${words[2]}" -o "$work/x.pfm"
   else
-    "${timing[@]}" mpirun --oversubscribe -np "${words[2]}" "$build/aoview-mpi" --headless -q --size "$size" "${words[3]}" \
+    "${timing[@]}" mpirun --oversubscribe -np "${words[2]}" "$build/aoview-mpi" --headless -q --size "$size" --spp "$spp" "${words[3]}" \
       "${words[4]}" -o "$work/x.pfm"
   fi
 }
