@@ -219,6 +219,19 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     return 0;
 }
 
+bool ao_app_run_window(struct ao_app *app, const struct ao_options *opts, const struct ao_window_info *info,
+                       int *status)
+{
+    enum ao_window_result result = ao_window_run(app->render, info);
+    if (result != AO_WINDOW_NO_DISPLAY) {
+        *status = result == AO_WINDOW_OK ? 0 : AO_EXIT_RUNTIME;
+        return true;
+    }
+    fprintf(stderr, "aoview: no display available; rendering headless to %s\n",
+            opts->output ? opts->output : "aoview.png");
+    return false;
+}
+
 bool ao_app_wait(struct ao_app *app, int *sig)
 {
     bool finished = ao_render_wait(app->render);

@@ -13,6 +13,7 @@
 #include "render.h"
 #include "scene.h"
 #include "tracer.h"
+#include "window.h"
 
 /* Exit statuses besides 0 and 128 + signal. */
 enum { AO_EXIT_RUNTIME = 1, AO_EXIT_USAGE = 2 };
@@ -78,6 +79,12 @@ bool ao_app_start_watcher(struct ao_app *app, struct ao_render *render);
  * message. */
 bool ao_app_write_output(const char *path, const struct ao_frame *frame, const char *scene, uint64_t seed,
                          const float *difference);
+
+/* Runs the window on app->render with info until the user quits: true, *status the exit status.
+ * False where no window can be opened, after one line saying that the run goes on headless to -o
+ * (aoview.png by default), as SPEC.md wants of a machine without a display. Main thread. */
+bool ao_app_run_window(struct ao_app *app, const struct ao_options *opts, const struct ao_window_info *info,
+                       int *status);
 
 /* Waits for app->render to finish; true when it did, false when interrupted (*sig the signal) or
  * stopped otherwise (*sig 0). Main thread. */

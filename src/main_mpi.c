@@ -134,13 +134,8 @@ static bool show_window(struct ao_app *app, const struct ao_options *opts, int *
     struct ao_window_info info = {.scene_name = app->scene.name, .quiet = opts->quiet, .seed = opts->seed,
                                   .save_exr = opts->save_exr, .reference = app->reference,
                                   .difference = opts->view == AO_VIEW_MODE_DIFFERENCE};
-    enum ao_window_result result = ao_window_run(app->render, &info);
-    if (result != AO_WINDOW_NO_DISPLAY) {
-        *status = result == AO_WINDOW_OK ? 0 : AO_EXIT_RUNTIME;
+    if (ao_app_run_window(app, opts, &info, status))
         return true;
-    }
-    fprintf(stderr, "aoview: no display available; rendering headless to %s\n",
-            opts->output ? opts->output : "aoview.png");
     app->reporter.progress = !opts->quiet && watched_on_terminal();
     return false;
 }
