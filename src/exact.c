@@ -15,14 +15,22 @@
  *   With no sphere, AO = rho everywhere (an open plane); with no plane, a sphere point sees
  *   nothing: AO = rho.
  *   Finite ground. A downward direction at depression angle beta from a point at height z meets
- *   the plane within horizontal distance z / tan(beta); so with D the distance from the point's
- *   foot to the nearest boundary edge of the triangles, only directions with beta < eps =
- *   atan(z / D) can miss the ground. Their cosine-weighted share is at most
- *   (1/pi) (2 sin(alpha) eps + pi eps^2) <= 2 eps / pi + eps^2, the error of the sphere formula.
- *   The tool bounds z by h + r and D by (distance from the centre's foot to the boundary) - r, and
- *   refuses a ground whose bound exceeds MAX_GROUND_ERROR: a quad of +-1e4 under a sphere of
- *   radius 0.5 resting on it (top at height 1) gives eps = 1e-4, an error below 6.4e-5 rho.
- *   Plane points are exact.
+ *   the plane at horizontal distance s = z / tan(beta); it escapes where that is off the ground.
+ *   With D the distance from the point's foot to the nearest boundary edge of the triangles, only
+ *   beta < eps = atan(z / D) can escape, and for such small angles the escaping share is, to
+ *   first order in eps, (z / pi) Int max(0, n.h(phi)) E(phi) dphi, h(phi) the horizontal
+ *   direction of azimuth phi and E(phi) = sum (1/s_in - 1/s_out) over the stretches [s_in, s_out)
+ *   of the ray from the foot along h(phi) that lie off the ground (s_out infinite for the last):
+ *   the depression angles atan(z/s) that land there, per unit z. The integral depends on n only
+ *   through its horizontal part: |n_h| G(phi_n) with G(psi) = Int max(0, cos(phi - psi)) E(phi)
+ *   dphi, tabulated once per scene from the sphere's foot (ESCAPE_STEPS azimuths) and added to
+ *   the infinite-plane form. What is left is second order: the cosine weight and the solid angle
+ *   at angle beta (eps^2), atan against its argument (eps^3), and a sphere point's foot lying up
+ *   to r from the centre's (eps r / D <= eps^2): at most 2 eps^2 with rho = 1. The tool bounds z
+ *   by h + r and D by (distance from the centre's foot to the boundary) - r, and refuses a ground
+ *   whose bound exceeds MAX_GROUND_ERROR: a quad of +-1e4 under a sphere of radius 0.5 resting on
+ *   it (top at height 1) gives eps = 1e-4 and a residual below 2e-8 rho, against the 6.4e-5 rho
+ *   (2 eps / pi) that the escaping share itself reaches. Plane points are exact.
  * - a closed box around the eye: watertight triangles (every edge shared by exactly two) all on
  *   the faces of their bounding box, with the eye strictly inside it. Every occlusion ray from an
  *   inner wall meets another wall: AO = 0.
@@ -53,8 +61,10 @@
 
 enum { EXIT_RUNTIME = 1, EXIT_USAGE = 2 };
 
-/* Largest accepted error of the sphere formula caused by a finite ground (albedo 1). */
-static const float MAX_GROUND_ERROR = 1e-4f;
+/* Largest accepted residual of the sphere formula's finite-ground term (albedo 1), and the
+ * azimuths its table is integrated over. */
+static const float MAX_GROUND_ERROR = 1e-6f;
+enum { ESCAPE_STEPS = 4096, MAX_CROSSINGS = 64 };
 static const float PI = 3.14159265358979323846f;
 
 static const char USAGE[] =
@@ -72,7 +82,10 @@ struct closed_form {
     const struct ao_sphere *sphere;   /* NULL: no sphere */
     bool plane;                        /* some triangles (all in one plane) */
     struct ao_vec3 up;                 /* the plane's unit normal, towards the sphere's side */
-    float ground_error;                /* bound on the sphere formula's finite-ground error */
+    struct ao_vec3 plane_point;        /* a vertex of the plane */
+    struct ao_basis axes;              /* axes.t, axes.b: the plane's azimuth 0 and pi/2 */
+    float ground_error;                /* bound on the residual of the sphere formula's ground term */
+    double escape[ESCAPE_STEPS];       /* G(psi) at psi = 2 pi k / ESCAPE_STEPS, see above */
 };
 
 /* An edge with its end points in lexicographic order, so that shared edges compare equal. */
@@ -208,6 +221,58 @@ static bool on_box_faces(const struct ao_scene *s, struct ao_vec3 eye)
     return true;
 }
 
+/* Distance along the in-plane ray foot + s dir to segment [a, b] of the plane, or -1 when the ray
+ * misses it (2D, in the plane's axes t and b). */
+static double ray_segment(const struct closed_form *cf, struct ao_vec3 foot, double dx, double dy, struct ao_vec3 a,
+                          struct ao_vec3 b)
+{
+    struct ao_vec3 pa = ao_vec3_sub(a, foot), pb = ao_vec3_sub(b, foot);
+    double ax = ao_vec3_dot(pa, cf->axes.t), ay = ao_vec3_dot(pa, cf->axes.b);
+    double ex = ao_vec3_dot(pb, cf->axes.t) - ax, ey = ao_vec3_dot(pb, cf->axes.b) - ay;
+    double det = ex * dy - ey * dx; /* solves s dir = a + u e */
+    if (det == 0.0)
+        return -1.0;
+    double along = (ex * ay - ey * ax) / det, u = (dx * ay - dy * ax) / det;
+    return along > 0.0 && u >= 0.0 && u < 1.0 ? along : -1.0;
+}
+
+/* Fills cf->escape, G(psi) = Int max(0, cos(phi - psi)) E(phi) dphi, from the boundary edges (runs
+ * of one) as seen from foot, which the ground contains: E(phi) sums 1/s_in - 1/s_out over the
+ * stretches of the ray along phi that lie off the ground. Midpoint azimuths keep the rays off the
+ * outline's vertices, where one crossing would count twice. False when a ray crosses the outline
+ * more than MAX_CROSSINGS times. */
+static bool tabulate_escape(struct closed_form *cf, const struct edge *e, size_t count, struct ao_vec3 foot)
+{
+    double across[ESCAPE_STEPS];
+    const double step = 2.0 * (double)PI / ESCAPE_STEPS;
+    for (int k = 0; k < ESCAPE_STEPS; k++) {
+        double phi = (k + 0.5) * step, dx = cos(phi), dy = sin(phi), crossings[MAX_CROSSINGS];
+        int n = 0;
+        for (size_t i = 0; i < count; i += run_length(e, count, i)) {
+            double at = run_length(e, count, i) == 1 ? ray_segment(cf, foot, dx, dy, e[i].a, e[i].b) : -1.0;
+            if (at > 0.0 && n == MAX_CROSSINGS)
+                return false;
+            if (at > 0.0) { /* kept in increasing order */
+                int j = n++;
+                for (; j > 0 && crossings[j - 1] > at; j--)
+                    crossings[j] = crossings[j - 1];
+                crossings[j] = at;
+            }
+        }
+        /* The ray starts on the ground: it is off it from crossing 0 to 1, 2 to 3, ... */
+        across[k] = 0.0;
+        for (int j = 0; j < n; j += 2)
+            across[k] += 1.0 / crossings[j] - (j + 1 < n ? 1.0 / crossings[j + 1] : 0.0);
+    }
+    for (int m = 0; m < ESCAPE_STEPS; m++) {
+        double sum = 0.0, psi = m * step;
+        for (int k = 0; k < ESCAPE_STEPS; k++)
+            sum += fmax(0.0, cos((k + 0.5) * step - psi)) * across[k];
+        cf->escape[m] = sum * step;
+    }
+    return true;
+}
+
 /* Finds the scene's closed form; false with the reason in why when it has none. */
 static bool classify(const struct ao_scene *s, float ao_distance, struct closed_form *cf, char *why, size_t why_size)
 {
@@ -250,7 +315,9 @@ static bool classify(const struct ao_scene *s, float ao_distance, struct closed_
         struct ao_vec3 foot = ao_vec3_sub(sp->center, ao_vec3_scale(cf->up, h));
         float reach = distance_to_outline(edges, count, foot) - sp->radius;
         float eps = reach > 0.0f ? atanf((h + sp->radius) / reach) : 0.5f * PI;
-        cf->ground_error = fminf(1.0f, 2.0f * eps / PI + eps * eps);   /* AO lies in [0, rho] */
+        cf->ground_error = fminf(1.0f, 2.0f * eps * eps);   /* AO lies in [0, rho] */
+        cf->plane_point = s->positions[s->indices[0]];
+        cf->axes = ao_basis_from_normal(cf->up);
         if (h < sp->radius * (1.0f - 1e-6f)) {
             snprintf(why, why_size, "the sphere cuts the plane (centre height %g < radius %g)", (double)h,
                      (double)sp->radius);
@@ -259,14 +326,33 @@ static bool classify(const struct ao_scene *s, float ao_distance, struct closed_
             snprintf(why, why_size, "the plane does not extend under the sphere");
             ok = false;
         } else if (!(cf->ground_error <= MAX_GROUND_ERROR)) {
-            snprintf(why, why_size, "the ground is too small for the infinite-plane limit under the sphere "
+            snprintf(why, why_size, "the ground is too small for the closed form's ground term under the sphere "
                                     "(sphere points would be off by up to %.2g, limit %.0e)",
                      (double)cf->ground_error, (double)MAX_GROUND_ERROR);
+            ok = false;
+        } else if (!tabulate_escape(cf, edges, count, foot)) {
+            snprintf(why, why_size, "the ground's outline has more than %d edges along some direction from under "
+                                    "the sphere", MAX_CROSSINGS);
             ok = false;
         }
     }
     free(edges);
     return ok;
+}
+
+/* The share of a sphere point's cosine-weighted hemisphere that passes below the plane's horizon
+ * off the finite ground: (z / pi) |n_h| G(phi_n), G interpolated in its table (see above). */
+static double ground_escape(const struct closed_form *cf, const struct ao_surface *s)
+{
+    double z = ao_vec3_dot(ao_vec3_sub(s->position, cf->plane_point), cf->up);
+    double nx = ao_vec3_dot(s->ns, cf->axes.t), ny = ao_vec3_dot(s->ns, cf->axes.b), len = hypot(nx, ny);
+    if (!(len > 0.0 && z > 0.0))
+        return 0.0;
+    double at = atan2(ny, nx) / (2.0 * (double)PI) * ESCAPE_STEPS;
+    at = at < 0.0 ? at + ESCAPE_STEPS : at;
+    int k = (int)at % ESCAPE_STEPS;
+    double w = at - floor(at), g = (1.0 - w) * cf->escape[k] + w * cf->escape[(k + 1) % ESCAPE_STEPS];
+    return z / (double)PI * len * g;
 }
 
 /* The exact AO of the surface an eye ray found. */
@@ -281,7 +367,7 @@ static struct ao_vec3 exact_value(const struct closed_form *cf, const struct ao_
         if (ao_vec3_dot(s->ng, ao_vec3_sub(s->position, sp->center)) < 0.0f)
             factor = 0.0;
         else if (cf->plane)
-            factor = 0.5 * (1.0 + (double)ao_vec3_dot(s->ns, cf->up));
+            factor = 0.5 * (1.0 + (double)ao_vec3_dot(s->ns, cf->up)) + ground_escape(cf, s);
     } else if (sp) {
         /* A plane point on the sphere's side sees the sphere's disc: r^2 h / d^3. */
         struct ao_vec3 to_center = ao_vec3_sub(sp->center, s->position);
@@ -393,7 +479,7 @@ static int run(struct app *app, const struct ao_options *opts)
                 : cf.sphere                ? "sphere alone"
                                            : "open plane");
         if (cf.sphere && cf.plane)
-            fprintf(stderr, ", sphere points within %.1e of the infinite-ground limit", (double)cf.ground_error);
+            fprintf(stderr, ", sphere points within %.1e of the finite ground's term", (double)cf.ground_error);
         if (grid)
             fprintf(stderr, ", %dx%d sub-pixel grid", grid, grid);
         fprintf(stderr, ")\n");
