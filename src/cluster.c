@@ -161,8 +161,12 @@ static void hand_out(struct ao_cluster *c, uint64_t pass, int count, int least, 
     int left = pass == c->pass && !c->closed ? c->count - c->next : 0;
     int chunk = left / (CHUNKS * c->size), last = left / (LAST * c->size);
     chunk = chunk < least ? least : chunk > most ? most : chunk;
-    chunk = chunk < last ? chunk : last > 1 ? last : 1;
-    chunk = chunk < left ? chunk : left;
+    if (last < 1)
+        last = 1;
+    if (chunk > last)
+        chunk = last;
+    if (chunk > left)
+        chunk = left;
     *begin = c->next;
     *end = c->next += chunk;
 }
