@@ -1,8 +1,8 @@
 /* The processes of an MPI run that render one image together (aoview-mpi): rank 0 leads, sending
  * every pass's settings (its window's) to the others, and hands out the tiles of each pass on
- * request, in chunks that shrink as the pass runs out, so that a slow rank takes fewer; gathers
- * the sums of every pass and sends back the tile states they make; the end of a run, interrupted
- * or not. Only this file and main_mpi.c include mpi.h. */
+ * request, in chunks that shrink as the pass runs out, so that a slow rank takes fewer; receives
+ * each chunk's sums as soon as it is traced, and sends its tile states with the next pass's
+ * settings; the end of a run, interrupted or not. Only this file and main_mpi.c include mpi.h. */
 #ifndef AO_CLUSTER_H
 #define AO_CLUSTER_H
 

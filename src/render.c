@@ -90,6 +90,8 @@ struct ao_render {
     int *work;                           /* the pass's tiles, grouped by share */
     struct share *shares;                /* one per thread, the render thread's first */
     struct ao_vec3 *pass_sums;           /* with a share: TILE x TILE per work-list entry */
+    bool *added;                         /* with a share, the leader: the entries of the pass
+                                            added to the accumulation */
     atomic_uint_fast64_t eye_rays, shadow_rays;
 
     pthread_t thread;
@@ -201,8 +203,8 @@ static void add_tile(struct ao_render *r, int t, const struct ao_tile_work *work
     ts->variance = variance > rounding * rounding * pixels ? variance : 0.0;
 }
 
-/* Traces entry n of the work list: alone, adds its sums at once; with a share, leaves them in the
- * pass's sums for merge_pass. */
+/* Traces entry n of the work list: alone or leading, adds its sums at once; following, leaves them
+ * in the pass's sums, to be sent to the leader. */
 static void render_tile(struct ao_render *r, int n, uint64_t *eye, uint64_t *shadow)
 {
     int t = r->work[n];
@@ -210,10 +212,33 @@ static void render_tile(struct ao_render *r, int n, uint64_t *eye, uint64_t *sha
     uint32_t next;
     struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
     struct ao_vec3 own[AO_TILE_PIXELS];
-    struct ao_vec3 *sums = r->config.share ? r->pass_sums + (size_t)n * TILE * TILE : own;
+    bool follows = r->config.share && r->config.share->follows;
+    struct ao_vec3 *sums = follows ? r->pass_sums + (size_t)n * TILE * TILE : own;
     ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow);
-    if (!r->config.share)
-        add_tile(r, t, &work, next, sums);
+    if (follows)
+        return;
+    add_tile(r, t, &work, next, sums);
+    if (r->config.share)
+        r->added[n] = true;
+}
+
+/* The leader adds entries [begin, end) of the pass's sums, which other processes traced. */
+static void add_entries(struct ao_render *r, int begin, int end)
+{
+    for (int n = begin; n < end; n++) {
+        int t = r->work[n];
+        uint32_t next;
+        struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
+        add_tile(r, t, &work, next, r->pass_sums + (size_t)n * TILE * TILE);
+        r->added[n] = true;
+    }
+}
+
+/* The pass in flight, as a share numbers it. */
+static struct ao_share_pass share_pass(const struct ao_render *r)
+{
+    return (struct ao_share_pass){.serial = r->pass_serial, .count = r->shares[r->config.threads - 1].end,
+                                  .sums = r->pass_sums, .pixels = TILE * TILE};
 }
 
 /* Thread `self`'s part of a pass: its own share, then what is left of the others'. */
@@ -222,8 +247,11 @@ static void render_tiles(struct ao_render *r, int self)
     int threads = r->config.threads;
     uint64_t eye = 0, shadow = 0;
     const struct ao_render_share *share = r->config.share;
-    while (share && !aborted(r)) { /* the entries this process claims, in any order */
-        int n = share->claim(share->user, r->pass_serial, r->shares[threads - 1].end);
+    struct ao_share_pass pass = share_pass(r);
+    for (int n = -1; share && !aborted(r);) { /* the entries this process claims, in any order */
+        int arrived[2] = {0, 0};
+        n = share->claim(share->user, &pass, n, arrived);
+        add_entries(r, arrived[0], arrived[1]);
         if (n < 0)
             break;
         render_tile(r, n, &eye, &shadow);
@@ -270,6 +298,8 @@ static bool run_pass(struct ao_render *r)
     pthread_mutex_lock(&r->pass_lock);
     for (int k = 0; k < r->config.threads; k++)
         atomic_store(&r->shares[k].next, 0);
+    if (r->added)
+        memset(r->added, 0, (size_t)r->shares[r->config.threads - 1].end * sizeof *r->added);
     r->busy = r->worker_count;
     r->pass_serial++;
     pthread_cond_broadcast(&r->pass_start);
@@ -282,23 +312,19 @@ static bool run_pass(struct ao_render *r)
     return !aborted(r);
 }
 
-/* With a share, after a pass this process finished or gave up: gathers the pass's sums, rays and
- * seconds from the processes; the leader adds every tile of the work list to the accumulation,
- * in the order of the list, and the followers take its tile states; false when the pass does not
- * count (given up somewhere, or the run stops). */
+/* With a share, after a pass this process finished or gave up: gathers the pass's rays and seconds
+ * from the processes, and the leader adds the tiles the others traced to the accumulation; false
+ * when the pass does not count (given up somewhere, or the run stops). */
 static bool merge_pass(struct ao_render *r, bool finished, uint64_t rays[2], double *seconds)
 {
     const struct ao_render_share *share = r->config.share;
-    int count = r->shares[r->config.threads - 1].end;
-    if (!share->merge(share->user, finished, r->pass_sums, TILE * TILE, rays, seconds))
+    struct ao_share_pass pass = share_pass(r);
+    if (!share->merge(share->user, &pass, finished, rays, seconds))
         return false;
-    for (int n = 0; n < count && !share->follows; n++) {
-        int t = r->work[n];
-        uint32_t next;
-        struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
-        add_tile(r, t, &work, next, r->pass_sums + (size_t)n * TILE * TILE);
-    }
-    return share->states(share->user, r->tiles, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
+    for (int n = 0; n < pass.count && !share->follows; n++)
+        if (!r->added[n])
+            add_entries(r, n, n + 1);
+    return true;
 }
 
 /* ---- planning: run by the render thread between passes ---- */
@@ -463,12 +489,38 @@ const struct ao_frame *ao_render_take_frame(struct ao_render *render)
 
 /* ---- the render thread ---- */
 
+/* True while there is no pass to run: paused, or done until the settings change. Called with
+ * r->lock held. */
+static bool idle(const struct ao_render *r, const struct ao_frame_info *info)
+{
+    return r->settings.paused || (info->restarts == r->restarts && r->done);
+}
+
 /* Waits until there is a pass to run; false on stop. Called with r->lock held. */
 static bool wait_for_work(struct ao_render *r, const struct ao_frame_info *info)
 {
-    while (!r->stop && (r->settings.paused || (info->restarts == r->restarts && r->done)))
+    while (!r->stop && idle(r, info))
         pthread_cond_wait(&r->wake, &r->lock);
     return !r->stop;
+}
+
+/* What a pass is rendered with: the settings, and (with a share, the leader's) restarts, the
+ * generation of the sums; `own` counts this process's restarts, which abort its pass. */
+struct pass_start {
+    struct ao_settings settings;
+    uint64_t own, restarts;
+};
+
+/* Takes the settings for the next pass and, with a share, begins it on every process. Called with
+ * r->lock held, which it releases; false when the share ended the run. */
+static bool take_pass(struct ao_render *r, struct pass_start *p)
+{
+    p->settings = r->settings;
+    p->own = p->restarts = r->restarts;
+    pthread_mutex_unlock(&r->lock);
+    const struct ao_render_share *share = r->config.share;
+    return !share || share->begin(share->user, &p->settings, &p->restarts, r->tiles,
+                                  (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
 }
 
 static void *render_main(void *arg)
@@ -477,19 +529,22 @@ static void *render_main(void *arg)
     const struct ao_render_share *share = r->config.share;
     bool follows = share && share->follows;
     struct ao_frame_info info = {.restarts = UINT64_MAX};
+    struct pass_start next;
+    bool begun = false; /* the leader began the next pass before it published the last */
     ao_tracer_thread_init();
     pthread_mutex_lock(&r->lock);
-    while (follows ? !r->stop : wait_for_work(r, &info)) {
-        /* Take the settings (with a share, the leader's: `own` counts this process's restarts,
-         * which abort its pass, `restarts` the generation of the sums); a restart clears the sums. */
-        struct ao_settings s = r->settings;
-        uint64_t own = r->restarts, restarts = own;
-        pthread_mutex_unlock(&r->lock);
-        if (share && !share->begin(share->user, &s, &restarts)) {
+    while (begun || (follows ? !r->stop : wait_for_work(r, &info))) {
+        /* Take the settings, unless they were taken; a restart clears the sums. */
+        if (begun) {
+            pthread_mutex_unlock(&r->lock);
+        } else if (!take_pass(r, &next)) {
             ao_render_stop(r);
             pthread_mutex_lock(&r->lock);
             break;
         }
+        begun = false;
+        struct ao_settings s = next.settings;
+        uint64_t own = next.own, restarts = next.restarts;
         if (info.restarts != restarts) {
             if (!follows) /* a follower keeps no image: its accumulation is never touched */
                 ao_accum_reset(&r->accum);
@@ -531,16 +586,22 @@ static void *render_main(void *arg)
             info.shading = s.shading;
         }
 
-        /* Publish it (a follower keeps no image). */
-        if (complete) {
+        /* Publish it (a follower keeps no image, and plans from the leader's tile states). */
+        if (complete && !follows) {
             info.pass++;
             info.spppp = spppp;
             survey(r, &info, s.adaptive);
-            if (!follows) {
-                publish(r, &info);
-                if (r->config.on_pass)
-                    r->config.on_pass(&info, r->config.user);
+            /* The other processes wait for the next pass: it begins before this one is published. */
+            if (share && !info.done) {
+                pthread_mutex_lock(&r->lock);
+                if (r->stop || idle(r, &info))
+                    pthread_mutex_unlock(&r->lock);
+                else if (!(begun = take_pass(r, &next)))
+                    ao_render_stop(r);
             }
+            publish(r, &info);
+            if (r->config.on_pass)
+                r->config.on_pass(&info, r->config.user);
         }
         /* Done: the image is finished until the settings change; a follower's run goes on until
          * the leader ends it. */
@@ -582,9 +643,13 @@ static bool allocate(struct ao_render *r)
     r->work = calloc(tiles, sizeof *r->work);
     r->workers = calloc((size_t)r->config.threads, sizeof *r->workers);
     r->shares = aligned_alloc(_Alignof(struct share), (size_t)r->config.threads * sizeof *r->shares);
+    bool leads = r->config.share && !r->config.share->follows;
     if (r->config.share)
         r->pass_sums = malloc(tiles * TILE * TILE * sizeof *r->pass_sums);
-    if (!r->tiles || !r->work || !r->workers || !r->shares || (r->config.share && !r->pass_sums)) {
+    if (leads)
+        r->added = calloc(tiles, sizeof *r->added);
+    if (!r->tiles || !r->work || !r->workers || !r->shares || (r->config.share && !r->pass_sums) ||
+        (leads && !r->added)) {
         fprintf(stderr, "aoview: out of memory starting the renderer\n");
         return false;
     }
@@ -688,6 +753,7 @@ void ao_render_destroy(struct ao_render *render)
     free(render->workers);
     free(render->shares);
     free(render->pass_sums);
+    free(render->added);
     ao_accum_finish(&render->accum);
     free(render);
 }

@@ -60,28 +60,38 @@ struct ao_frame {
     float *tile_error;
 };
 
+/* A pass as the processes sharing it number it alike: its work list has `count` entries, whose
+ * sums go to sums, `pixels` pixel sums an entry. */
+struct ao_share_pass {
+    uint64_t serial;
+    int count;
+    struct ao_vec3 *sums;
+    int pixels;
+};
+
 /* How processes rendering the same image split each pass (aoview-mpi's cluster.c): one process
  * leads (its settings, restarts and stop decide), the others follow; each traces the work-list
- * entries it claims, the leader gathers the pass's sums and accumulates them, and the followers,
- * which keep no image, take its tile states, so that every process plans the same passes. */
+ * entries it claims, the followers send the leader the sums of theirs as they trace them, the
+ * leader accumulates every entry, and the followers, which keep no image, take its tile states
+ * with each pass's settings, so that every process plans the same passes. */
 struct ao_render_share {
     /* Before each pass: replaces *settings and *restarts (this process's own) by those every
-     * process renders the pass with, the leader's, which a follower waits here for; false when the
-     * leader ended the run or it is being stopped. Render thread. */
-    bool (*begin)(void *user, struct ao_settings *settings, uint64_t *restarts);
-    /* The next entry of pass `pass`'s work list of `count` tiles for this process to trace, or -1
-     * when none is left; every process numbers the passes alike. Any render thread. */
-    int (*claim)(void *user, uint64_t pass, int count);
-    /* At the end of a pass this process finished (or gave up: a restart or stop), with `pixels`
-     * pixel sums in sums for each work-list entry, of those it traced: fills in, on the leader,
-     * the other processes' entries and adds their rays (eye, shadow) to rays, and sets seconds to
-     * the largest over the processes; true when the pass counts, false when a process gave it up
-     * or the run is being stopped. Render thread. */
-    bool (*merge)(void *user, bool finished, struct ao_vec3 *sums, int pixels, uint64_t rays[2], double *seconds);
-    /* After a pass counted: a follower's tile states (size bytes, what passes are planned from)
-     * become the leader's, as it has accumulated the pass; false when the run is being stopped.
-     * Render thread. */
-    bool (*states)(void *user, void *tiles, size_t size);
+     * process renders the pass with, the leader's, and a follower's tile states (size bytes at
+     * tiles, what passes are planned from) by the leader's, which a follower waits here for;
+     * false when the leader ended the run or it is being stopped. Render thread. */
+    bool (*begin)(void *user, struct ao_settings *settings, uint64_t *restarts, void *tiles, size_t size);
+    /* The next entry of the pass's work list for this process to trace, or -1 when none is left;
+     * `traced` is the entry this thread traced since its last claim of the pass, or -1 (a
+     * follower sends the sums of what it was given once it is traced). On the leader, entries
+     * [arrived[0], arrived[1]) of the pass's sums came from another process, for this thread to
+     * add (empty when none). Any render thread. */
+    int (*claim)(void *user, const struct ao_share_pass *pass, int traced, int arrived[2]);
+    /* At the end of a pass this process finished (or gave up: a restart or stop): waits until the
+     * sums of the other processes' entries are in the leader's pass sums, adds their rays (eye,
+     * shadow) to the leader's rays, and sets seconds to the largest over the processes; true
+     * when the pass counts, false when a process gave it up or the run is being stopped. Render
+     * thread. */
+    bool (*merge)(void *user, const struct ao_share_pass *pass, bool finished, uint64_t rays[2], double *seconds);
     /* The render thread is ending (stopped): the leader tells the followers. Render thread. */
     void (*end)(void *user);
     bool follows;            /* a follower: waits in begin, not for its own settings or pause; keeps
@@ -139,7 +149,7 @@ const struct ao_frame *ao_render_take_frame(struct ao_render *render);
 bool ao_render_wait(struct ao_render *render);
 
 /* After an interruption: stops and joins the render thread, then resolves the accumulation as it
- * stands, the aborted pass's finished tiles included (with a share, the merged passes only), into a frame whose info.spp is the smallest
+ * stands, the aborted pass's finished tiles included (with a share, those the leader traced), into a frame whose info.spp is the smallest
  * per-pixel sample count. Main thread, as the frame consumer; call ao_render_destroy afterwards. */
 const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render);
 
