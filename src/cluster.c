@@ -44,8 +44,9 @@ struct ao_cluster {
     atomic_bool stopping;
     bool closed;             /* rank 0: it gave up the pass (a restart or stop); nothing is handed
                                 out until the next pass begins */
-    bool open;               /* rank 0: from a pass's first claim (or its giving up) to its merge,
-                                when requests may come: the server thread polls */
+    bool open;               /* rank 0: from a pass's begin (or its giving up) to its merge, when
+                                requests may come: the server thread polls */
+    bool claiming;           /* rank 0: its threads claimed since the server thread last looked */
     pthread_cond_t opened;   /* rank 0: signalled when a pass opens, and on stop */
     long delay_ns;           /* tests only: AO_MPI_TEST_DELAY_US per tile claimed, a slow rank */
 
@@ -219,20 +220,24 @@ static bool serve_pending(struct ao_cluster *c)
 }
 
 /* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (inside
- * long tiles, or done with the pass), when a woken thread may take milliseconds to run on a busy
- * machine; each claim of rank 0's answers them first. Between passes, when no request can come,
- * it sleeps until the next pass opens. */
+ * long tiles, or done with the pass, or not yet started on it), when a woken thread may take
+ * milliseconds to run on a busy machine; each claim of rank 0's answers them first, so while they
+ * claim it looks only every POLL_MOST_NS (it shares their core). Between passes, when no request
+ * can come, it sleeps until the next pass opens. */
 static void *serve(void *arg)
 {
     struct ao_cluster *c = arg;
     long pause = POLL_FIRST_NS;
     while (!atomic_load_explicit(&c->stopping, memory_order_relaxed)) {
         pthread_mutex_lock(&c->lock);
+        if (!c->open) /* the next pass's first requests come as soon as it opens */
+            pause = POLL_FIRST_NS;
         while (!c->open && !atomic_load(&c->stopping))
             pthread_cond_wait(&c->opened, &c->lock);
-        bool served = serve_pending(c);
+        bool served = serve_pending(c), claiming = c->claiming;
+        c->claiming = false;
         pthread_mutex_unlock(&c->lock);
-        pause = served ? POLL_FIRST_NS : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
+        pause = claiming ? POLL_MOST_NS : served ? POLL_FIRST_NS : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
         sleep_ns(pause);
     }
     return NULL;
@@ -333,6 +338,7 @@ static int claim(void *user, const struct ao_share_pass *pass, int done, int arr
         post_receives(c);
         hand_out(c, pass->serial, pass->count, 1, 1, &n, &end);
         n = n < end ? n : -1;
+        c->claiming = n >= 0;
         take_arrived(c, arrived);
     } else {
         if (done >= 0)

@@ -81,16 +81,35 @@ static uint64_t fingerprint(const struct ao_render_config *c, const struct ao_se
     return fnv(hash, scene->indices, 3 * scene->triangle_count * sizeof *scene->indices);
 }
 
-/* Loads the scene and the rest on rank 0, then (if it could) on the others, so that a file
- * missing everywhere is reported once; 0 when every rank has it. */
+/* Writes what was held in `held` (see load) to stderr and closes it. */
+static void release(FILE *held, bool say)
+{
+    char buffer[4096];
+    size_t n;
+    rewind(held);
+    while (say && (n = fread(buffer, 1, sizeof buffer, held)) > 0)
+        fwrite(buffer, 1, n, stderr);
+    fclose(held);
+}
+
+/* Loads the scene and the rest on every rank at once; a rank other than 0 holds back what it says
+ * (its stderr goes to a temporary file) and says it only if rank 0 loaded, so that a file missing
+ * everywhere is reported once; 0 when every rank has it. */
 static int load(struct ao_app *app, const struct ao_options *opts, int rank, struct ao_render_config *config,
                 struct ao_settings *settings)
 {
-    int status = rank == 0 ? ao_app_load(app, opts, config, settings) : 0;
-    if (!ao_cluster_agree(status == 0))
-        return AO_EXIT_RUNTIME;
-    if (rank != 0)
-        status = ao_app_load(app, opts, config, settings);
+    FILE *held = rank == 0 ? NULL : tmpfile();
+    int saved = held ? dup(STDERR_FILENO) : -1;
+    if (saved >= 0)
+        dup2(fileno(held), STDERR_FILENO);
+    int status = ao_app_load(app, opts, config, settings);
+    if (saved >= 0) {
+        dup2(saved, STDERR_FILENO);
+        close(saved);
+    }
+    bool first_loaded = ao_cluster_agree(rank != 0 || status == 0);
+    if (held)
+        release(held, first_loaded);
     if (!ao_cluster_agree(status == 0))
         return AO_EXIT_RUNTIME;
     if (ao_cluster_same(fingerprint(config, settings, &app->scene)))
