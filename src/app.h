@@ -26,7 +26,8 @@ struct ao_reporter {
     struct ao_render *_Atomic render;   /* --compare: the side's renderer, stopped at stop_at */
     double stop_at;        /* --compare: seconds whose nearest pass end ends the side; 0: none */
     double pass_end;       /* seconds at the end of the previous pass */
-    bool progress;         /* a progress bar on stderr (a terminal, not --quiet) */
+    atomic_bool progress;  /* a progress bar on stderr (a terminal, not --quiet); set by main while
+                              the render thread reads it (the window's no-display fallback) */
     bool stats_failed;
     struct ao_progress eta;   /* the bar's time-left estimate */
     double drawn_at;          /* monotonic seconds of the bar's last redraw; 0: never */
