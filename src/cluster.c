@@ -106,15 +106,20 @@ static void sleep_ns(long ns)
     nanosleep(&ts, NULL);
 }
 
+static void serve_claims(struct ao_cluster *c);
+
 /* Tests the n requests until all complete (true) or *stopping is set (false; they are left
  * pending: the process ends without MPI_Finalize), sleeping between tests up to POLL_MOST_NS, or
- * `most` ns once IDLE_AFTER_NS have passed; `most` 0: without sleeping (data in flight). */
-static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, long most)
+ * `most` ns once IDLE_AFTER_NS have passed; `most` 0: without sleeping (data in flight). Rank 0
+ * answers the others' requests between tests when `serving` is set. */
+static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, long most, struct ao_cluster *serving)
 {
     long pause = POLL_FIRST_NS, slept = 0;
     double spin_until = now_seconds() + 1e-9 * (double)SPIN_NS;
     for (;;) {
         int done = 0;
+        if (serving)
+            serve_claims(serving);
         MPI_Testall(n, requests, &done, MPI_STATUSES_IGNORE);
         if (done)
             return true;
@@ -219,11 +224,21 @@ static bool serve_pending(struct ao_cluster *c)
     }
 }
 
+/* Rank 0, lock not held: answers the requests that have come and posts their sums' receives. */
+static void serve_claims(struct ao_cluster *c)
+{
+    pthread_mutex_lock(&c->lock);
+    serve_pending(c);
+    pthread_mutex_unlock(&c->lock);
+}
+
 /* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (inside
- * long tiles, or done with the pass, or not yet started on it), when a woken thread may take
- * milliseconds to run on a busy machine; each claim of rank 0's answers them first, so while they
- * claim it looks only every POLL_MOST_NS (it shares their core). Between passes, when no request
- * can come, it sleeps until the next pass opens. */
+ * long tiles, or not yet started on the pass), when a woken thread may take milliseconds to run on
+ * a busy machine. Each claim of rank 0's answers them first, and so does its wait at the pass's
+ * end; while its threads claim, the server looks only every CHUNK_SECONDS, as long as a chunk
+ * lasts at least, since each of its wake-ups interrupts a render thread (on a virtual machine, at
+ * a cost of 3 % of rank 0's time when it looked every 1 ms). Between passes, when no request can
+ * come, it sleeps until the next pass opens. */
 static void *serve(void *arg)
 {
     struct ao_cluster *c = arg;
@@ -237,7 +252,8 @@ static void *serve(void *arg)
         bool served = serve_pending(c), claiming = c->claiming;
         c->claiming = false;
         pthread_mutex_unlock(&c->lock);
-        pause = claiming ? POLL_MOST_NS : served ? POLL_FIRST_NS : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
+        pause = claiming ? (long)(CHUNK_SECONDS * 1e9) : served ? POLL_FIRST_NS
+                                                    : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
         sleep_ns(pause);
     }
     return NULL;
@@ -284,7 +300,7 @@ static int claim_remote(struct ao_cluster *c, uint64_t pass, int count)
     while (!c->exhausted && c->begin == c->end) {
         if (!c->asked)
             ask(c, pass, count);
-        if (!await(&c->stopping, 1, &c->granted, POLL_MOST_NS))
+        if (!await(&c->stopping, 1, &c->granted, POLL_MOST_NS, NULL))
             return -1;
         waited = true;
         c->asked = false;
@@ -365,7 +381,7 @@ static bool broadcast_start(struct ao_cluster *c, struct start *start)
 {
     MPI_Request pending;
     MPI_Ibcast(start, sizeof *start, MPI_BYTE, 0, c->passes, &pending);
-    return await(&c->stopping, 1, &pending, POLL_IDLE_NS);
+    return await(&c->stopping, 1, &pending, POLL_IDLE_NS, NULL);
 }
 
 /* Rank 0 sends its settings, restarts and then its tile states; the others wait for them. */
@@ -390,7 +406,7 @@ static bool begin_pass(void *user, struct ao_settings *settings, uint64_t *resta
     double began = now_seconds();
     MPI_Request pending;
     MPI_Ibcast(tiles, (int)size, MPI_BYTE, 0, c->passes, &pending);
-    if (!await(&c->stopping, 1, &pending, 0)) /* in flight: rank 0 sent the start and its states */
+    if (!await(&c->stopping, 1, &pending, 0, NULL)) /* in flight: rank 0 sent the start and its states */
         return false;
     pthread_mutex_lock(&c->lock);
     c->merge_bytes += (double)size * (c->rank == 0 ? c->size - 1 : 1);
@@ -412,8 +428,9 @@ static void end_run(void *user)
 }
 
 /* The pass's seconds are the slowest rank's, the previous merge included; waiting for it doubles
- * as the barrier, with sleeps, and tells whether a rank gave the pass up (rank 0 then hands out
- * no more of it, so that the others come soon). Then the sums of the chunks, sent as they were
+ * as the barrier, with sleeps (rank 0 answering the others' last requests meanwhile), and tells
+ * whether a rank gave the pass up (rank 0 then hands out no more of it, so that the others come
+ * soon). Then the sums of the chunks, sent as they were
  * traced, have arrived or are the last in flight: every rank waits for its receives or sends
  * without sleeping, even for a pass given up (rank 0's receives write into the pass's sums), and
  * rank 0 adds up the rays. */
@@ -421,15 +438,14 @@ static bool merge(void *user, const struct ao_share_pass *pass, bool finished, u
 {
     struct ao_cluster *c = user;
     double start = now_seconds(), slowest[2] = {*seconds + c->merge_seconds, finished ? 0.0 : 1.0};
-    if (!finished && c->rank == 0) { /* the server thread answers the others' requests: none */
+    if (!finished && c->rank == 0) { /* nothing more is handed out: the others come soon */
         pthread_mutex_lock(&c->lock);
-        c->closed = c->open = true;
-        pthread_cond_signal(&c->opened);
+        c->closed = true;
         pthread_mutex_unlock(&c->lock);
     }
     MPI_Request pending;
     MPI_Iallreduce(MPI_IN_PLACE, slowest, 2, MPI_DOUBLE, MPI_MAX, c->passes, &pending);
-    if (!await(&c->stopping, 1, &pending, POLL_MOST_NS))
+    if (!await(&c->stopping, 1, &pending, POLL_MOST_NS, c->rank == 0 ? c : NULL))
         return false;
     /* every rank is here: no request is left for rank 0's server thread, no chunk to trace */
     pthread_mutex_lock(&c->lock);
@@ -440,7 +456,7 @@ static bool merge(void *user, const struct ao_share_pass *pass, bool finished, u
     int moves = c->moving;
     pthread_mutex_unlock(&c->lock);
     double arrived = now_seconds();
-    if (!await(&c->stopping, moves, c->moves, 0) || slowest[1] > 0.0)
+    if (!await(&c->stopping, moves, c->moves, 0, NULL) || slowest[1] > 0.0)
         return false;
     MPI_Reduce(c->rank == 0 ? MPI_IN_PLACE : rays, rays, 2, MPI_UINT64_T, MPI_SUM, 0, c->passes);
     *seconds = slowest[0];
@@ -472,7 +488,7 @@ bool ao_cluster_agree(bool ok)
     int all = ok;
     MPI_Request pending;
     MPI_Iallreduce(MPI_IN_PLACE, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD, &pending);
-    await(NULL, 1, &pending, POLL_MOST_NS);
+    await(NULL, 1, &pending, POLL_MOST_NS, NULL);
     return all;
 }
 
@@ -481,7 +497,7 @@ bool ao_cluster_same(uint64_t value)
     uint64_t range[2] = {value, ~value}; /* the smallest value, and the largest as its complement */
     MPI_Request pending;
     MPI_Iallreduce(MPI_IN_PLACE, range, 2, MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD, &pending);
-    await(NULL, 1, &pending, POLL_MOST_NS);
+    await(NULL, 1, &pending, POLL_MOST_NS, NULL);
     return range[0] == ~range[1];
 }
 
@@ -574,7 +590,7 @@ void ao_cluster_summary(struct ao_cluster *cluster, char *out, size_t size)
     unsigned long long mine = cluster->tiles, *all = cluster->tiles_by_rank;
     MPI_Request pending;
     MPI_Igather(&mine, 1, MPI_UNSIGNED_LONG_LONG, all, 1, MPI_UNSIGNED_LONG_LONG, 0, cluster->control, &pending);
-    await(NULL, 1, &pending, POLL_IDLE_NS);
+    await(NULL, 1, &pending, POLL_IDLE_NS, NULL);
     int used = snprintf(out, size, "%d rank%s, tiles traced by rank", cluster->size, cluster->size > 1 ? "s" : "");
     for (int r = 0; all && r < cluster->size && used >= 0 && (size_t)used < size; r++)
         used += snprintf(out + used, size - (size_t)used, "%s %d: %llu", r ? "," : "", r, all[r]);
