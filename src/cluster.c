@@ -269,9 +269,6 @@ static void ask(struct ao_cluster *c, uint64_t pass, int count)
     c->asked = true;
 }
 
-/* Other ranks, lock held: the next entry of the pass, or -1 when none is left or the cluster
- * stops. A chunk is asked for as soon as the one before it arrives, so that the answer's round
- * trip overlaps tracing. */
 /* Other ranks, lock held: entry n is traced; sends rank 0 the sums of the chunks traced in full, in
  * the order they were granted, which is the order rank 0 posted their receives in. */
 static void traced(struct ao_cluster *c, int n)
@@ -288,6 +285,9 @@ static void traced(struct ao_cluster *c, int n)
     }
 }
 
+/* Other ranks, lock held: the next entry of the pass, or -1 when none is left or the cluster
+ * stops. A chunk is asked for as soon as the one before it arrives, so that the answer's round
+ * trip overlaps tracing. */
 static int claim_remote(struct ao_cluster *c, uint64_t pass, int count)
 {
     if (c->pass != pass) { /* tiles cost more in some passes than in others: measure anew */
@@ -430,10 +430,9 @@ static void end_run(void *user)
 /* The pass's seconds are the slowest rank's, the previous merge included; waiting for it doubles
  * as the barrier, with sleeps (rank 0 answering the others' last requests meanwhile), and tells
  * whether a rank gave the pass up (rank 0 then hands out no more of it, so that the others come
- * soon). Then the sums of the chunks, sent as they were
- * traced, have arrived or are the last in flight: every rank waits for its receives or sends
- * without sleeping, even for a pass given up (rank 0's receives write into the pass's sums), and
- * rank 0 adds up the rays. */
+ * soon). Then the sums of the chunks, sent as they were traced, have arrived or are the last in
+ * flight: every rank waits for its receives or sends without sleeping, even for a pass given up
+ * (rank 0's receives write into the pass's sums), and rank 0 adds up the rays. */
 static bool merge(void *user, const struct ao_share_pass *pass, bool finished, uint64_t rays[2], double *seconds)
 {
     struct ao_cluster *c = user;

@@ -149,8 +149,9 @@ const struct ao_frame *ao_render_take_frame(struct ao_render *render);
 bool ao_render_wait(struct ao_render *render);
 
 /* After an interruption: stops and joins the render thread, then resolves the accumulation as it
- * stands, the aborted pass's finished tiles included (with a share, those the leader traced), into a frame whose info.spp is the smallest
- * per-pixel sample count. Main thread, as the frame consumer; call ao_render_destroy afterwards. */
+ * stands, the aborted pass's finished tiles included (with a share, those the leader added: its own
+ * and those whose sums arrived), into a frame whose info.spp is the smallest per-pixel sample count.
+ * Main thread, as the frame consumer; call ao_render_destroy afterwards. */
 const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render);
 
 /* Asks the render thread to stop at the next tile boundary and wakes ao_render_wait. Any thread. */
