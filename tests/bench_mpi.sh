@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Whole runs of the bunny (defaults; 640x480 and 256 spp unless SIZE or SPP is set) as one aoview
-# process and as aoview-mpi under mpirun on this machine, interleaved REPS times; prints the median wall seconds
+# process and as aoview-mpi under mpirun on this machine, interleaved REPS times (ONLY="0 3": those
+# configurations alone, the first always among them); prints the median wall seconds
 # and CPU seconds (user + system, the ranks' and mpirun's) of each configuration and its throughput
 # relative to one 2-thread aoview by both (the images are the same, so the rays are too): on a
 # machine busy with other work, wall time measures the share of the cores a configuration gets,
@@ -29,7 +30,7 @@ run() {
   fi
 }
 for ((k = 0; k < reps; k++)); do
-  for c in "${!configs[@]}"; do
+  for c in ${ONLY:-${!configs[@]}}; do
     run "${configs[$c]}"
     echo "$c $(cat "$work/one")" >> "$work/times"
   done
@@ -48,6 +49,8 @@ w0, c0 = statistics.median(wall[0]), statistics.median(cpu[0])
 print('| configuration | wall s (median) | wall runs | throughput by wall | by wall, paired | CPU s (median) | throughput by CPU |')
 print('|---|---|---|---|---|---|---|')
 for c, name in enumerate(names):
+    if c not in wall:
+        continue
     w, u = statistics.median(wall[c]), statistics.median(cpu[c])
     paired = statistics.median(a / b for a, b in zip(wall[0], wall[c]))
     print('| `%s` | %.2f | %s | %.0f %% | %.0f %% | %.2f | %.0f %% |' % (name, w, ' '.join('%.2f' % t for t in wall[c]),
