@@ -29,12 +29,14 @@ void ao_accum_finish(struct ao_accum *a)
     memset(a, 0, sizeof *a);
 }
 
-void ao_accum_reset(struct ao_accum *a)
+void ao_accum_clear(struct ao_accum *a, int x0, int y0, int x1, int y1)
 {
-    size_t pixels = (size_t)a->width * (size_t)a->height;
-    memset(a->sum, 0, 3 * pixels * sizeof *a->sum);
-    memset(a->count, 0, pixels * sizeof *a->count);
-    memset(a->odd_sum, 0, pixels * sizeof *a->odd_sum);
+    for (int j = y0; j < y1; j++) {
+        size_t p = (size_t)j * (size_t)a->width + (size_t)x0, n = (size_t)(x1 - x0);
+        memset(a->sum + 3 * p, 0, 3 * n * sizeof *a->sum);
+        memset(a->count + p, 0, n * sizeof *a->count);
+        memset(a->odd_sum + p, 0, n * sizeof *a->odd_sum);
+    }
 }
 
 void ao_accum_resolve(const struct ao_accum *a, float *rgb)

@@ -24,8 +24,8 @@ bool ao_accum_init(struct ao_accum *a, int width, int height);
 /* Frees the sums; accepts a zeroed accumulator. */
 void ao_accum_finish(struct ao_accum *a);
 
-/* Zeroes every sum and count (a restart). */
-void ao_accum_reset(struct ao_accum *a);
+/* Zeroes the sums and counts of the pixels [x0, x1) x [y0, y1) (a tile's first pass of a run). */
+void ao_accum_clear(struct ao_accum *a, int x0, int y0, int x1, int y1);
 
 /* Adds the sum of n samples to pixel p; `odd` says which half of the passes they belong to. */
 static inline void ao_accum_add(struct ao_accum *a, size_t p, struct ao_vec3 sum, uint32_t n, bool odd)

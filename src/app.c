@@ -82,6 +82,13 @@ void ao_app_on_pass(const struct ao_frame_info *info, void *user)
         rep->notify();
 }
 
+void ao_app_on_preview(void *user)
+{
+    struct ao_reporter *rep = user;
+    if (rep->notify)
+        rep->notify();
+}
+
 /* The difference view of frame from reference as a heat map PNG with its colour bar. */
 static bool write_difference_png(const char *path, const struct ao_frame *frame, const float *reference)
 {
@@ -200,15 +207,16 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     /* Renderer. */
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     *config = (struct ao_render_config){
-        .scene = &app->scene, .tracer = app->tracer, .width = width, .height = height,
+        .scene = &app->scene, .tracer = app->tracer,
         .threads = opts->threads ? opts->threads : (cores > 0 ? (int)cores : 1),
         .seed = opts->seed, .target_spp = opts->spp, .target_error = opts->target_error,
         .time_limit = opts->time_limit,
         .ao_distance = isnan(opts->ao_distance) ? app->scene.ao_distance : opts->ao_distance,
         .sequence = opts->sequence, .below = opts->below,
-        .reference = app->reference, .on_pass = ao_app_on_pass, .user = &app->reporter};
-    *settings = (struct ao_settings){.sampling = opts->sampling, .aa = opts->aa, .spppp = (int)opts->spppp,
-                                     .adaptive = opts->adaptive, .camera = app->scene.camera,
+        .reference = app->reference, .reference_width = width, .reference_height = height,
+        .on_pass = ao_app_on_pass, .on_preview = ao_app_on_preview, .user = &app->reporter};
+    *settings = (struct ao_settings){.width = width, .height = height, .sampling = opts->sampling, .aa = opts->aa,
+                                     .spppp = (int)opts->spppp, .adaptive = opts->adaptive, .camera = app->scene.camera,
                                      .output = opts->view == AO_VIEW_MODE_NORMALS ? AO_OUTPUT_NORMALS : AO_OUTPUT_AO,
                                      .shading = opts->shading};
     struct ao_view view;

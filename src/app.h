@@ -68,6 +68,9 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
 /* The render config's on_pass: a --stats row, the progress bar, --compare's stop, notify. */
 void ao_app_on_pass(const struct ao_frame_info *info, void *user);
 
+/* The render config's on_preview: notify. */
+void ao_app_on_preview(void *user);
+
 /* Mega-rays (eye and shadow) per second of the frame's run. Pure. */
 double ao_app_mrays_per_second(const struct ao_frame_info *info);
 

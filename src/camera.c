@@ -22,6 +22,27 @@ bool ao_camera_view(const struct ao_camera *c, int width, int height, struct ao_
     return true;
 }
 
+bool ao_camera_view_coarse(const struct ao_camera *c, int width, int height, int block, struct ao_view *v)
+{
+    if (!ao_camera_view(c, width, height, v))
+        return false;
+    /* ao_camera_ray's screen coordinates are affine in the pixel position: with n = ceil(width /
+     * block) columns, sx' = (2 x' / n - 1) t a' stands for the image's sx = (2 block x' / width - 1)
+     * t a when t a' = t a block n / width, off by the constant t a' - t a; rows likewise. The
+     * constants go into forward (the direction is normalized after the sum). */
+    int columns = (width + block - 1) / block, rows = (height + block - 1) / block;
+    float t = v->tan_half_fov, ta = t * v->aspect;
+    float coarse_ta = ta * (float)block * (float)columns / (float)width;
+    float coarse_t = t * (float)block * (float)rows / (float)height;
+    v->forward = ao_vec3_add(v->forward, ao_vec3_add(ao_vec3_scale(v->right, coarse_ta - ta),
+                                                     ao_vec3_scale(v->up, t - coarse_t)));
+    v->tan_half_fov = coarse_t;
+    v->aspect = coarse_ta / coarse_t;
+    v->width = columns;
+    v->height = rows;
+    return true;
+}
+
 void ao_camera_orbit(struct ao_camera *c, float yaw, float pitch)
 {
     /* Spherical coordinates of the eye about the target, with the camera's up as the pole. */

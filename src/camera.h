@@ -23,6 +23,12 @@ struct ao_view {
  * degenerate (eye on target, up parallel to the view direction, fov outside (0, 180)). */
 bool ao_camera_view(const struct ao_camera *c, int width, int height, struct ao_view *v);
 
+/* The view of a coarse grid over a width x height image, each of whose pixels covers block x block
+ * pixels of the image from its top left (ceil(width / block) x ceil(height / block) of them): the
+ * eye ray through its position (i + u, j + v) is the image's through (block (i + u), block (j + v)).
+ * False as ao_camera_view. */
+bool ao_camera_view_coarse(const struct ao_camera *c, int width, int height, int block, struct ao_view *v);
+
 /* Unit eye-ray direction through image position (x, y) = (i + u, j + v), in pixels; inline, as
  * it runs once per pixel and pass. */
 static inline struct ao_vec3 ao_camera_ray(const struct ao_view *v, float x, float y)

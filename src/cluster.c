@@ -384,8 +384,8 @@ static bool broadcast_start(struct ao_cluster *c, struct start *start)
     return await(&c->stopping, 1, &pending, POLL_IDLE_NS, NULL);
 }
 
-/* Rank 0 sends its settings, restarts and then its tile states; the others wait for them. */
-static bool begin_pass(void *user, struct ao_settings *settings, uint64_t *restarts, void *tiles, size_t size)
+/* Rank 0 sends its settings and restarts; the others wait for them. */
+static bool begin_pass(void *user, struct ao_settings *settings, uint64_t *restarts)
 {
     struct ao_cluster *c = user;
     struct start start;
@@ -402,6 +402,15 @@ static bool begin_pass(void *user, struct ao_settings *settings, uint64_t *resta
     }
     if (!broadcast_start(c, &start) || !start.go)
         return false;
+    *settings = start.settings;
+    *restarts = start.restarts;
+    return true;
+}
+
+/* Rank 0 sends its tile states; the others wait for them. */
+static bool pass_states(void *user, void *tiles, size_t size)
+{
+    struct ao_cluster *c = user;
     assert(size <= INT_MAX);
     double began = now_seconds();
     MPI_Request pending;
@@ -412,8 +421,6 @@ static bool begin_pass(void *user, struct ao_settings *settings, uint64_t *resta
     c->merge_bytes += (double)size * (c->rank == 0 ? c->size - 1 : 1);
     c->moved += now_seconds() - began;
     pthread_mutex_unlock(&c->lock);
-    *settings = start.settings;
-    *restarts = start.restarts;
     return true;
 }
 
@@ -522,7 +529,8 @@ struct ao_cluster *ao_cluster_create(void)
     pthread_mutex_init(&c->lock, NULL);
     pthread_cond_init(&c->opened, NULL);
     atomic_init(&c->stopping, false);
-    c->share = (struct ao_render_share){.begin = begin_pass, .claim = claim, .merge = merge, .end = end_run,
+    c->share = (struct ao_render_share){.begin = begin_pass, .states = pass_states, .claim = claim, .merge = merge,
+                                        .end = end_run,
                                         .follows = c->rank != 0, .user = c};
     const char *delay = getenv("AO_MPI_TEST_DELAY_US");
     c->delay_ns = delay ? 1000L * strtol(delay, NULL, 10) : 0;

@@ -78,7 +78,7 @@ static int run_compare(struct app *app, const struct ao_options *opts, const str
                        const struct ao_settings *settings)
 {
     const char *output = opts->output ? opts->output : "aoview.png";
-    int width = config->width, height = config->height;
+    int width = settings->width, height = settings->height;
     size_t floats = 3 * (size_t)width * (size_t)height;
     if (!(app->sides[0] = malloc(floats * sizeof(float))) || !(app->sides[1] = malloc(floats * sizeof(float)))) {
         fprintf(stderr, "aoview: out of memory for --compare's images\n");

@@ -71,7 +71,7 @@ static uint64_t fnv(uint64_t hash, const void *data, size_t size)
  * the scene's geometry, so that ranks given other options or other files are caught. */
 static uint64_t fingerprint(const struct ao_render_config *c, const struct ao_settings *s, const struct ao_scene *scene)
 {
-    double numbers[] = {c->width, c->height, (double)c->seed, c->target_spp, c->target_error, c->time_limit,
+    double numbers[] = {s->width, s->height, (double)c->seed, c->target_spp, c->target_error, c->time_limit,
                         c->ao_distance, c->sequence, c->below, s->sampling, s->aa, s->spppp, s->adaptive,
                         s->output, s->shading, scene->background.x, scene->background.y, scene->background.z,
                         (double)scene->sphere_count, (double)scene->triangle_count};

@@ -11,6 +11,8 @@
 
 #include "accum.h"
 #include "ao.h"
+#include "pool.h"
+#include "preview.h"
 
 /* Tiles are TILE x TILE pixels (AO_TILE_PIXELS); FRESH marks a frame the consumer has not seen. */
 enum { TILE = 16, FRESH = 4 };
@@ -55,11 +57,14 @@ struct share {
 
 struct ao_render {
     struct ao_render_config config;
+    int width, height;                   /* of the accumulation: the size of the current run */
     struct ao_accum accum;               /* render thread (and its workers, pixel-disjoint) only */
 
     /* Triple buffer: the render thread owns frames[back], the consumer frames[front]; `middle`
-     * holds the third index, with FRESH set while it is newer than what the consumer has. */
+     * holds the third index, with FRESH set while it is newer than what the consumer has. Each
+     * frame's buffers hold room[k] pixels and tiles, grown by the render thread while it owns it. */
     struct ao_frame frames[3];
+    size_t room[3][2];
     int back, front;
     atomic_uint middle;
 
@@ -73,12 +78,9 @@ struct ao_render {
     atomic_uint_fast64_t live_restarts;  /* copies of restarts and stop for the tile loop */
     atomic_bool live_stop;
 
-    /* The pass in flight: written by the render thread before it starts the workers. */
-    pthread_mutex_t pass_lock;
-    pthread_cond_t pass_start, pass_end;
-    uint64_t pass_serial;                /* bumped to start a pass */
-    int busy;                            /* workers still in the pass */
-    bool quit;                           /* workers exit */
+    /* The pass in flight: written by the render thread before the pool runs it. */
+    struct ao_pool *pool;
+    uint64_t pass_serial;                /* numbers the passes */
     struct ao_context ctx;
     uint64_t pass_restarts;
     int samples;                         /* AO samples per pixel of this pass (fewer where the tile
@@ -93,13 +95,11 @@ struct ao_render {
     bool *added;                         /* with a share, the leader: the entries of the pass
                                             added to the accumulation */
     atomic_uint_fast64_t eye_rays, shadow_rays;
+    struct ao_preview preview;           /* the preview in flight */
 
     pthread_t thread;
     bool started;
     struct ao_frame_info last_info;      /* the render thread's facts when it stopped */
-    pthread_t *workers;
-    int worker_count;
-    atomic_int workers_started;          /* numbers the workers' shares */
 };
 
 static double now_seconds(void)
@@ -158,8 +158,8 @@ static struct ao_tile_work tile_work(const struct ao_render *r, const struct til
 static struct ao_tile tile_rect(const struct ao_render *r, int t)
 {
     struct ao_tile rect = {.x0 = t % r->tiles_x * TILE, .y0 = t / r->tiles_x * TILE};
-    rect.x1 = rect.x0 + TILE < r->config.width ? rect.x0 + TILE : r->config.width;
-    rect.y1 = rect.y0 + TILE < r->config.height ? rect.y0 + TILE : r->config.height;
+    rect.x1 = rect.x0 + TILE < r->width ? rect.x0 + TILE : r->width;
+    rect.y1 = rect.y0 + TILE < r->height ? rect.y0 + TILE : r->height;
     return rect;
 }
 
@@ -170,10 +170,11 @@ static void add_tile(struct ao_render *r, int t, const struct ao_tile_work *work
 {
     struct tile_state *ts = &r->tiles[t];
     struct ao_tile rect = tile_rect(r, t);
-    size_t width = (size_t)r->config.width;
+    size_t width = (size_t)r->width;
     uint32_t samples = (uint32_t)(work->rounds * work->count);
     int half = work->half & 1; /* half 2 belongs to the even half */
-    ts->passes++;
+    if (ts->passes++ == 0) /* a run clears its sums tile by tile, as each is first traced */
+        ao_accum_clear(&r->accum, rect.x0, rect.y0, rect.x1, rect.y1);
     ts->rays[half] += work->half == 2 ? 0u : (uint32_t)work->rounds;
     ts->spp[half] += samples;
     ts->next[half] = next;
@@ -269,46 +270,21 @@ static void render_tiles(struct ao_render *r, int self)
     atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
 }
 
-static void *worker_main(void *arg)
+/* The pool's job for a pass: render_tiles on every thread. */
+static void pass_job(void *user, int self)
 {
-    struct ao_render *r = arg;
-    uint64_t seen = 0;
-    int self = 1 + atomic_fetch_add(&r->workers_started, 1);
-    ao_tracer_thread_init();
-    pthread_mutex_lock(&r->pass_lock);
-    for (;;) {
-        while (r->pass_serial == seen && !r->quit)
-            pthread_cond_wait(&r->pass_start, &r->pass_lock);
-        if (r->quit)
-            break;
-        seen = r->pass_serial;
-        pthread_mutex_unlock(&r->pass_lock);
-        render_tiles(r, self);
-        pthread_mutex_lock(&r->pass_lock);
-        if (--r->busy == 0)
-            pthread_cond_signal(&r->pass_end);
-    }
-    pthread_mutex_unlock(&r->pass_lock);
-    return NULL;
+    render_tiles(user, self);
 }
 
 /* Runs one pass on all threads; false when it was aborted by a restart or stop. */
 static bool run_pass(struct ao_render *r)
 {
-    pthread_mutex_lock(&r->pass_lock);
     for (int k = 0; k < r->config.threads; k++)
         atomic_store(&r->shares[k].next, 0);
     if (r->added)
         memset(r->added, 0, (size_t)r->shares[r->config.threads - 1].end * sizeof *r->added);
-    r->busy = r->worker_count;
     r->pass_serial++;
-    pthread_cond_broadcast(&r->pass_start);
-    pthread_mutex_unlock(&r->pass_lock);
-    render_tiles(r, 0);
-    pthread_mutex_lock(&r->pass_lock);
-    while (r->busy > 0)
-        pthread_cond_wait(&r->pass_end, &r->pass_lock);
-    pthread_mutex_unlock(&r->pass_lock);
+    ao_pool_run(r->pool, pass_job, r);
     return !aborted(r);
 }
 
@@ -333,8 +309,8 @@ static bool merge_pass(struct ao_render *r, bool finished, uint64_t rays[2], dou
 static int tile_pixels(const struct ao_render *r, int t)
 {
     int x0 = t % r->tiles_x * TILE, y0 = t / r->tiles_x * TILE;
-    int w = r->config.width - x0 < TILE ? r->config.width - x0 : TILE;
-    int h = r->config.height - y0 < TILE ? r->config.height - y0 : TILE;
+    int w = r->width - x0 < TILE ? r->width - x0 : TILE;
+    int h = r->height - y0 < TILE ? r->height - y0 : TILE;
     return w * h;
 }
 
@@ -402,7 +378,7 @@ static size_t select_tiles(struct ao_render *r, bool adaptive)
 static void survey(struct ao_render *r, struct ao_frame_info *info, bool adaptive)
 {
     int tiles = r->tiles_x * r->tiles_y;
-    double image = (double)r->config.width * (double)r->config.height, samples = 0.0, variance = 0.0, mean = 0.0;
+    double image = (double)r->width * (double)r->height, samples = 0.0, variance = 0.0, mean = 0.0;
     bool halves = true, all_settled = true;
     info->spp = 0;
     for (int t = 0; t < tiles; t++) {
@@ -462,20 +438,118 @@ static double rmse(const float *image, const float *reference, size_t count)
     return sqrt(sum / (double)count);
 }
 
-/* Resolves the running average into the back frame, fills in info's RMSE, and swaps the frame
- * into the middle slot. */
-static void publish(struct ao_render *r, struct ao_frame_info *info)
+/* Makes the back frame width x height pixels with room for `tiles` tile errors, growing its buffers
+ * where they are short; false with one message when memory is. */
+static bool back_frame(struct ao_render *r, int width, int height, int tiles)
 {
+    struct ao_frame *f = &r->frames[r->back];
+    size_t *room = r->room[r->back], pixels = (size_t)width * (size_t)height;
+    if (pixels > room[0]) {
+        float *rgb = realloc(f->rgb, 3 * pixels * sizeof *rgb);
+        if (!rgb) {
+            fprintf(stderr, "aoview: out of memory for %dx%d frames\n", width, height);
+            return false;
+        }
+        f->rgb = rgb;
+        room[0] = pixels;
+    }
+    if ((size_t)tiles > room[1]) {
+        float *error = realloc(f->tile_error, (size_t)tiles * sizeof *error);
+        if (!error) {
+            fprintf(stderr, "aoview: out of memory for %dx%d frames\n", width, height);
+            return false;
+        }
+        f->tile_error = error;
+        room[1] = (size_t)tiles;
+    }
+    f->width = width;
+    f->height = height;
+    return true;
+}
+
+/* Swaps the back frame into the middle slot, newer than what the consumer has. */
+static void swap_back(struct ao_render *r)
+{
+    unsigned previous = atomic_exchange(&r->middle, (unsigned)r->back | FRESH);
+    r->back = (int)(previous & ~(unsigned)FRESH);
+}
+
+/* Resolves the running average into the back frame (grown to the image size: false when memory is
+ * short) with its tile errors, fills in info's RMSE where the reference has the image's size. */
+static bool resolve(struct ao_render *r, struct ao_frame_info *info)
+{
+    if (!back_frame(r, r->width, r->height, r->tiles_x * r->tiles_y))
+        return false;
     struct ao_frame *f = &r->frames[r->back];
     size_t count = 3 * (size_t)f->width * (size_t)f->height;
     ao_accum_resolve(&r->accum, f->rgb);
-    info->rmse = r->config.reference ? rmse(f->rgb, r->config.reference, count) : NAN;
-    for (int t = 0; t < f->tiles_x * f->tiles_y; t++)
+    bool matches = r->config.reference && r->config.reference_width == r->width &&
+                   r->config.reference_height == r->height;
+    info->rmse = matches ? rmse(f->rgb, r->config.reference, count) : NAN;
+    for (int t = 0; t < r->tiles_x * r->tiles_y; t++)
         f->tile_error[t] = r->image_mean > 0.0 ? (float)(sqrt(r->tiles[t].variance / tile_pixels(r, t)) / r->image_mean)
                                                : 0.0f;
+    f->tile = TILE;
+    f->tiles_x = r->tiles_x;
+    f->tiles_y = r->tiles_y;
+    f->block = 1;
+    f->image_width = r->width;
+    f->image_height = r->height;
     f->info = *info;
-    unsigned previous = atomic_exchange(&r->middle, (unsigned)r->back | FRESH);
-    r->back = (int)(previous & ~(unsigned)FRESH);
+    return true;
+}
+
+/* Publishes the pass just surveyed; false when memory is short. */
+static bool publish(struct ao_render *r, struct ao_frame_info *info)
+{
+    if (!resolve(r, info))
+        return false;
+    swap_back(r);
+    return true;
+}
+
+/* ao_preview_trace's stop. */
+static bool preview_stops(void *user)
+{
+    return aborted(user);
+}
+
+/* The pool's job for a preview. */
+static void preview_job(void *user, int self)
+{
+    (void)self;
+    struct ao_render *r = user;
+    ao_preview_trace(&r->preview, preview_stops, r);
+}
+
+/* Traces and publishes the previews of the run that begins with info (pass 0) and camera, coarse
+ * to fine, until the first full pass is due or a restart or stop aborts one; false when memory is
+ * short. */
+static bool preview(struct ao_render *r, const struct ao_camera *camera, const struct ao_frame_info *info)
+{
+    for (int block = ao_preview_first_block(r->width, r->height); block > 1 && !aborted(r);
+         block = ao_preview_next_block(block)) {
+        struct ao_preview *p = &r->preview;
+        if (!ao_preview_begin(p, &r->ctx, camera, r->width, r->height, block))
+            return true;
+        if (!back_frame(r, p->width, p->height, 0))
+            return false;
+        struct ao_frame *f = &r->frames[r->back];
+        p->rgb = f->rgb;
+        ao_pool_run(r->pool, preview_job, r);
+        if (aborted(r))
+            break;
+        f->tile = TILE;
+        f->tiles_x = f->tiles_y = 0;
+        f->block = block;
+        f->image_width = r->width;
+        f->image_height = r->height;
+        f->info = *info;
+        swap_back(r);
+        if (r->config.on_preview)
+            r->config.on_preview(r->config.user);
+    }
+    return true;
 }
 
 const struct ao_frame *ao_render_take_frame(struct ao_render *render)
@@ -511,16 +585,76 @@ struct pass_start {
     uint64_t own, restarts;
 };
 
-/* Takes the settings for the next pass and, with a share, begins it on every process. Called with
- * r->lock held, which it releases; false when the share ended the run. */
-static bool take_pass(struct ao_render *r, struct pass_start *p)
+/* Takes the settings for the next pass and, with a share, begins it on every process: the tile
+ * states follow unless the pass starts a run other than `run`. Called with r->lock held, which it
+ * releases; false when the share ended the run. */
+static bool take_pass(struct ao_render *r, struct pass_start *p, uint64_t run)
 {
     p->settings = r->settings;
     p->own = p->restarts = r->restarts;
     pthread_mutex_unlock(&r->lock);
     const struct ao_render_share *share = r->config.share;
-    return !share || share->begin(share->user, &p->settings, &p->restarts, r->tiles,
-                                  (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
+    if (!share)
+        return true;
+    if (!share->begin(share->user, &p->settings, &p->restarts))
+        return false;
+    return p->restarts != run ||
+           share->states(share->user, r->tiles, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
+}
+
+/* Allocates the accumulation, tile states and work lists of a width x height run; false with one
+ * message when memory is short. */
+static bool allocate_run(struct ao_render *r)
+{
+    r->tiles_x = (r->width + TILE - 1) / TILE;
+    r->tiles_y = (r->height + TILE - 1) / TILE;
+    if (!ao_accum_init(&r->accum, r->width, r->height))
+        return false;
+    size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y;
+    r->tiles = calloc(tiles, sizeof *r->tiles);
+    r->work = calloc(tiles, sizeof *r->work);
+    bool leads = r->config.share && !r->config.share->follows;
+    if (r->config.share)
+        r->pass_sums = malloc(tiles * TILE * TILE * sizeof *r->pass_sums);
+    if (leads)
+        r->added = calloc(tiles, sizeof *r->added);
+    if (!r->tiles || !r->work || (r->config.share && !r->pass_sums) || (leads && !r->added)) {
+        fprintf(stderr, "aoview: out of memory for a %dx%d image\n", r->width, r->height);
+        return false;
+    }
+    return true;
+}
+
+/* Frees what allocate_run allocated; accepts what it left half done. */
+static void free_run(struct ao_render *r)
+{
+    ao_accum_finish(&r->accum);
+    free(r->tiles);
+    free(r->work);
+    free(r->pass_sums);
+    free(r->added);
+    r->tiles = NULL;
+    r->work = NULL;
+    r->pass_sums = NULL;
+    r->added = NULL;
+}
+
+/* Starts a run of the settings s (restarts `restarts`): tile states cleared (the sums follow, tile
+ * by tile: add_tile), at the size of s, and the previews traced; false when memory is short. */
+static bool start_run(struct ao_render *r, const struct ao_settings *s, uint64_t restarts, struct ao_frame_info *info)
+{
+    if (s->width != r->width || s->height != r->height) {
+        free_run(r);
+        r->width = s->width;
+        r->height = s->height;
+        if (!allocate_run(r))
+            return false;
+    }
+    memset(r->tiles, 0, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
+    *info = (struct ao_frame_info){.restarts = restarts, .target_spp = r->config.target_spp,
+                                   .target_error = r->config.target_error, .time_limit = r->config.time_limit,
+                                   .sampling = s->sampling, .aa = s->aa, .output = s->output, .shading = s->shading};
+    return !r->config.previews || r->config.share || preview(r, &s->camera, info);
 }
 
 static void *render_main(void *arg)
@@ -534,10 +668,10 @@ static void *render_main(void *arg)
     ao_tracer_thread_init();
     pthread_mutex_lock(&r->lock);
     while (begun || (follows ? !r->stop : wait_for_work(r, &info))) {
-        /* Take the settings, unless they were taken; a restart clears the sums. */
+        /* Take the settings, unless they were taken; a restart starts a run. */
         if (begun) {
             pthread_mutex_unlock(&r->lock);
-        } else if (!take_pass(r, &next)) {
+        } else if (!take_pass(r, &next, info.restarts)) {
             ao_render_stop(r);
             pthread_mutex_lock(&r->lock);
             break;
@@ -545,13 +679,15 @@ static void *render_main(void *arg)
         begun = false;
         struct ao_settings s = next.settings;
         uint64_t own = next.own, restarts = next.restarts;
-        if (info.restarts != restarts) {
-            if (!follows) /* a follower keeps no image: its accumulation is never touched */
-                ao_accum_reset(&r->accum);
-            memset(r->tiles, 0, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
-            info = (struct ao_frame_info){.restarts = restarts, .target_spp = r->config.target_spp,
-                                          .target_error = r->config.target_error,
-                                          .time_limit = r->config.time_limit};
+        r->ctx.sampling = s.sampling;
+        r->ctx.aa = s.aa;
+        r->ctx.output = s.output;
+        r->ctx.shading = s.shading;
+        r->pass_restarts = own;
+        if (info.restarts != restarts && !start_run(r, &s, restarts, &info)) {
+            ao_render_stop(r);
+            pthread_mutex_lock(&r->lock);
+            break;
         }
 
         /* Plan the pass: its tiles, its samples. */
@@ -564,12 +700,7 @@ static void *render_main(void *arg)
         bool complete = false;
         if (pixels) {
             double start = now_seconds();
-            r->ctx.sampling = s.sampling;
-            r->ctx.aa = s.aa;
-            r->ctx.output = s.output;
-            r->ctx.shading = s.shading;
-            ao_camera_view(&s.camera, r->config.width, r->config.height, &r->ctx.view);
-            r->pass_restarts = own;
+            ao_camera_view(&s.camera, r->width, r->height, &r->ctx.view);
             atomic_store(&r->eye_rays, 0);
             atomic_store(&r->shadow_rays, 0);
             complete = run_pass(r);
@@ -580,10 +711,6 @@ static void *render_main(void *arg)
             info.eye_rays += rays[0];
             info.shadow_rays += rays[1];
             info.seconds += seconds;
-            info.sampling = s.sampling;
-            info.aa = s.aa;
-            info.output = s.output;
-            info.shading = s.shading;
         }
 
         /* Publish it (a follower keeps no image, and plans from the leader's tile states). */
@@ -596,10 +723,14 @@ static void *render_main(void *arg)
                 pthread_mutex_lock(&r->lock);
                 if (r->stop || idle(r, &info))
                     pthread_mutex_unlock(&r->lock);
-                else if (!(begun = take_pass(r, &next)))
+                else if (!(begun = take_pass(r, &next, info.restarts)))
                     ao_render_stop(r);
             }
-            publish(r, &info);
+            if (!publish(r, &info)) {
+                ao_render_stop(r);
+                pthread_mutex_lock(&r->lock);
+                break;
+            }
             if (r->config.on_pass)
                 r->config.on_pass(&info, r->config.user);
         }
@@ -620,44 +751,6 @@ static void *render_main(void *arg)
 
 /* ---- life cycle and control ---- */
 
-static bool allocate(struct ao_render *r)
-{
-    size_t floats = 3 * (size_t)r->config.width * (size_t)r->config.height;
-    if (!ao_accum_init(&r->accum, r->config.width, r->config.height))
-        return false;
-    for (int k = 0; k < 3; k++) {
-        r->frames[k].width = r->config.width;
-        r->frames[k].height = r->config.height;
-        r->frames[k].rgb = calloc(floats, sizeof(float));
-        r->frames[k].tile = TILE;
-        r->frames[k].tiles_x = r->tiles_x;
-        r->frames[k].tiles_y = r->tiles_y;
-        r->frames[k].tile_error = calloc((size_t)r->tiles_x * (size_t)r->tiles_y, sizeof(float));
-        if (!r->frames[k].rgb || !r->frames[k].tile_error) {
-            fprintf(stderr, "aoview: out of memory for %dx%d frames\n", r->config.width, r->config.height);
-            return false;
-        }
-    }
-    size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y;
-    r->tiles = calloc(tiles, sizeof *r->tiles);
-    r->work = calloc(tiles, sizeof *r->work);
-    r->workers = calloc((size_t)r->config.threads, sizeof *r->workers);
-    r->shares = aligned_alloc(_Alignof(struct share), (size_t)r->config.threads * sizeof *r->shares);
-    bool leads = r->config.share && !r->config.share->follows;
-    if (r->config.share)
-        r->pass_sums = malloc(tiles * TILE * TILE * sizeof *r->pass_sums);
-    if (leads)
-        r->added = calloc(tiles, sizeof *r->added);
-    if (!r->tiles || !r->work || !r->workers || !r->shares || (r->config.share && !r->pass_sums) ||
-        (leads && !r->added)) {
-        fprintf(stderr, "aoview: out of memory starting the renderer\n");
-        return false;
-    }
-    for (int k = 0; k < r->config.threads; k++)
-        atomic_init(&r->shares[k].next, 0);
-    return true;
-}
-
 struct ao_render *ao_render_create(const struct ao_render_config *config,
                                    const struct ao_settings *settings)
 {
@@ -668,33 +761,33 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
     }
     r->config = *config;
     r->settings = *settings;
+    r->width = settings->width;
+    r->height = settings->height;
     r->back = 0;
     atomic_init(&r->middle, 1u);
-    atomic_init(&r->workers_started, 0);
     r->front = 2;
     r->ctx = (struct ao_context){.scene = config->scene, .tracer = config->tracer,
                                  .ao_distance = config->ao_distance, .seed = config->seed,
                                  .sequence = config->sequence, .below = config->below};
-    r->tiles_x = (config->width + TILE - 1) / TILE;
-    r->tiles_y = (config->height + TILE - 1) / TILE;
     pthread_mutex_init(&r->lock, NULL);
-    pthread_mutex_init(&r->pass_lock, NULL);
     pthread_cond_init(&r->wake, NULL);
     pthread_cond_init(&r->finished, NULL);
-    pthread_cond_init(&r->pass_start, NULL);
-    pthread_cond_init(&r->pass_end, NULL);
-    if (!allocate(r)) {
+    r->shares = aligned_alloc(_Alignof(struct share), (size_t)config->threads * sizeof *r->shares);
+    if (!r->shares) {
+        fprintf(stderr, "aoview: out of memory starting the renderer\n");
         ao_render_destroy(r);
         return NULL;
     }
-    /* The render thread works tiles too, so threads - 1 workers join it. */
-    while (r->worker_count + 1 < config->threads &&
-           pthread_create(&r->workers[r->worker_count], NULL, worker_main, r) == 0)
-        r->worker_count++;
-    r->started = r->worker_count + 1 == config->threads &&
-                 pthread_create(&r->thread, NULL, render_main, r) == 0;
+    for (int k = 0; k < config->threads; k++)
+        atomic_init(&r->shares[k].next, 0);
+    /* The render thread works tiles too, so the pool has threads - 1 workers besides it. */
+    if (!allocate_run(r) || !(r->pool = ao_pool_create(config->threads, ao_tracer_thread_init))) {
+        ao_render_destroy(r);
+        return NULL;
+    }
+    r->started = pthread_create(&r->thread, NULL, render_main, r) == 0;
     if (!r->started) {
-        fprintf(stderr, "aoview: could not start %d render threads\n", config->threads);
+        fprintf(stderr, "aoview: could not start the render thread\n");
         ao_render_destroy(r);
         return NULL;
     }
@@ -713,17 +806,23 @@ static void join_render_thread(struct ao_render *render)
 const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render)
 {
     join_render_thread(render);
+    struct ao_frame_info info = render->last_info;
+    if (!render->accum.count)
+        return NULL;
+    for (int t = 0; t < render->tiles_x * render->tiles_y; t++)
+        if (render->tiles[t].passes == 0) { /* not traced in this run: sums of an earlier one */
+            struct ao_tile rect = tile_rect(render, t);
+            ao_accum_clear(&render->accum, rect.x0, rect.y0, rect.x1, rect.y1);
+        }
+    if (!resolve(render, &info))
+        return NULL;
     struct ao_frame *f = &render->frames[render->back];
     size_t pixels = (size_t)f->width * (size_t)f->height;
     uint32_t fewest = UINT32_MAX;
     for (size_t p = 0; p < pixels; p++)
         fewest = render->accum.count[p] < fewest ? render->accum.count[p] : fewest;
-    struct ao_frame_info info = render->last_info;
-    info.spp = fewest;
-    info.done = false;
-    ao_accum_resolve(&render->accum, f->rgb);
-    info.rmse = render->config.reference ? rmse(f->rgb, render->config.reference, 3 * pixels) : NAN;
-    f->info = info;
+    f->info.spp = fewest;
+    f->info.done = false;
     return f;
 }
 
@@ -732,29 +831,16 @@ void ao_render_destroy(struct ao_render *render)
     if (!render)
         return;
     join_render_thread(render);
-    pthread_mutex_lock(&render->pass_lock);
-    render->quit = true;
-    pthread_cond_broadcast(&render->pass_start);
-    pthread_mutex_unlock(&render->pass_lock);
-    for (int k = 0; k < render->worker_count; k++)
-        pthread_join(render->workers[k], NULL);
-    pthread_cond_destroy(&render->pass_end);
-    pthread_cond_destroy(&render->pass_start);
+    ao_pool_destroy(render->pool);
     pthread_cond_destroy(&render->finished);
     pthread_cond_destroy(&render->wake);
-    pthread_mutex_destroy(&render->pass_lock);
     pthread_mutex_destroy(&render->lock);
     for (int k = 0; k < 3; k++) {
         free(render->frames[k].rgb);
         free(render->frames[k].tile_error);
     }
-    free(render->tiles);
-    free(render->work);
-    free(render->workers);
     free(render->shares);
-    free(render->pass_sums);
-    free(render->added);
-    ao_accum_finish(&render->accum);
+    free_run(render);
     free(render);
 }
 
@@ -778,7 +864,8 @@ bool ao_render_set_settings(struct ao_render *render, const struct ao_settings *
 {
     pthread_mutex_lock(&render->lock);
     const struct ao_settings *old = &render->settings;
-    bool changes_estimate = old->sampling != settings->sampling || old->aa != settings->aa ||
+    bool changes_estimate = old->width != settings->width || old->height != settings->height ||
+                            old->sampling != settings->sampling || old->aa != settings->aa ||
                             old->output != settings->output || old->shading != settings->shading ||
                             memcmp(&old->camera, &settings->camera, sizeof old->camera) != 0;
     if (old->adaptive != settings->adaptive) /* what is left to sample changes */

@@ -14,6 +14,7 @@
 
 /* What the user can change while rendering. */
 struct ao_settings {
+    int width, height;       /* image size in pixels (the window's, or --size) */
     enum ao_sampling sampling;
     bool aa;
     int spppp;               /* AO samples per pixel per pass; 0: auto (render.c's schedule) */
@@ -51,13 +52,17 @@ struct ao_frame_info {
 
 /* A published frame: the running average, 3 linear floats per pixel, top row first, and the
  * estimated error of each tile of tile x tile pixels (the unit adaptive sampling decides on), as
- * an RMSE relative to the image mean, tiles_x per row, top row first; 0 until estimated. */
+ * an RMSE relative to the image mean, tiles_x per row, top row first; 0 until estimated. A preview
+ * (block > 1, preview.h) holds width x height cells of block x block pixels of an image_width x
+ * image_height image, its info that of the run it begins (pass 0), and no tile errors. */
 struct ao_frame {
     struct ao_frame_info info;
     int width, height;
     float *rgb;
     int tile, tiles_x, tiles_y;
     float *tile_error;
+    int block;
+    int image_width, image_height;
 };
 
 /* A pass as the processes sharing it number it alike: its work list has `count` entries, whose
@@ -76,10 +81,12 @@ struct ao_share_pass {
  * with each pass's settings, so that every process plans the same passes. */
 struct ao_render_share {
     /* Before each pass: replaces *settings and *restarts (this process's own) by those every
-     * process renders the pass with, the leader's, and a follower's tile states (size bytes at
-     * tiles, what passes are planned from) by the leader's, which a follower waits here for;
-     * false when the leader ended the run or it is being stopped. Render thread. */
-    bool (*begin)(void *user, struct ao_settings *settings, uint64_t *restarts, void *tiles, size_t size);
+     * process renders the pass with, the leader's, which a follower waits here for; false when
+     * the leader ended the run or it is being stopped. Render thread. */
+    bool (*begin)(void *user, struct ao_settings *settings, uint64_t *restarts);
+    /* After begin, unless the pass restarts accumulation: replaces a follower's tile states (size
+     * bytes at tiles, what passes are planned from) by the leader's; false as begin. Render thread. */
+    bool (*states)(void *user, void *tiles, size_t size);
     /* The next entry of the pass's work list for this process to trace, or -1 when none is left;
      * `traced` is the entry this thread traced since its last claim of the pass, or -1 (a
      * follower sends the sums of what it was given once it is traced). On the leader, entries
@@ -99,11 +106,11 @@ struct ao_render_share {
     void *user;
 };
 
-/* How to render; scene, tracer, reference and share must outlive the renderer. */
+/* How to render; scene, tracer, reference and share must outlive the renderer. The image size is
+ * a setting (struct ao_settings). */
 struct ao_render_config {
     const struct ao_scene *scene;
     const struct ao_tracer *tracer;
-    int width, height;
     int threads;
     uint64_t seed;
     uint32_t target_spp;     /* per pixel; with adaptive sampling the most a pixel gets */
@@ -112,9 +119,14 @@ struct ao_render_config {
     float ao_distance;
     enum ao_sequence sequence;   /* random or Sobol numbers for jitter and directions */
     enum ao_below below;         /* directions below the geometric surface */
-    const float *reference;  /* width*height*3 linear floats, or NULL */
+    const float *reference;  /* reference_width x reference_height x 3 linear floats, or NULL; the
+                                RMSE is taken while the image has its size */
+    int reference_width, reference_height;
+    bool previews;           /* coarse frames after each restart (preview.h), for a window */
     /* Called on the render thread after each published pass (stats rows, waking the GL thread). */
     void (*on_pass)(const struct ao_frame_info *info, void *user);
+    /* Called on the render thread after each published preview (waking the GL thread); may be NULL. */
+    void (*on_preview)(void *user);
     void *user;
     const struct ao_render_share *share;   /* NULL: this process traces every tile */
 };
@@ -133,8 +145,8 @@ void ao_render_destroy(struct ao_render *render);
 /* Copies the current settings into *out. Any thread. */
 void ao_render_get_settings(struct ao_render *render, struct ao_settings *out);
 
-/* Applies new settings: a change of sampling, AA, output, shading or camera aborts the pass in flight and restarts
- * accumulation (and returns true); spppp and pause take effect at the next pass boundary. Any thread. */
+/* Applies new settings: a change of size, sampling, AA, output, shading or camera aborts the pass in flight and
+ * restarts accumulation (and returns true); spppp and pause take effect at the next pass boundary. Any thread. */
 bool ao_render_set_settings(struct ao_render *render, const struct ao_settings *settings);
 
 /* Restarts accumulation with the current settings, aborting the pass in flight. Any thread. */

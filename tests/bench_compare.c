@@ -26,11 +26,12 @@ struct run {
 static struct run measure(const struct ao_scene *scene, const struct ao_tracer *tracer, double seconds, int threads,
                           bool turns)
 {
-    struct ao_render_config config = {.scene = scene, .tracer = tracer, .width = WIDTH, .height = HEIGHT,
+    struct ao_render_config config = {.scene = scene, .tracer = tracer,
                                       .threads = turns ? threads : threads / 2, .seed = 1, .target_spp = 1u << 30,
                                       .time_limit = seconds, .ao_distance = scene->ao_distance,
                                       .sequence = AO_SEQUENCE_SOBOL};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = SPPPP, .camera = scene->camera};
+    struct ao_settings settings = {.width = WIDTH, .height = HEIGHT, .sampling = AO_SAMPLING_COSINE, .aa = true,
+                                   .spppp = SPPPP, .camera = scene->camera};
     struct ao_frame_info info[2];
     double start = bench_now();
     if (turns) {

@@ -37,10 +37,11 @@ static double peak_rss_mib(void)
 static struct ao_render *start(const struct ao_scene *scene, const struct ao_tracer *tracer, int width,
                                int height, int threads, int spppp, uint32_t spp)
 {
-    struct ao_render_config config = {.scene = scene, .tracer = tracer, .width = width, .height = height,
+    struct ao_render_config config = {.scene = scene, .tracer = tracer,
                                       .threads = threads, .seed = 1, .target_spp = spp,
                                       .ao_distance = scene->ao_distance};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = spppp,
+    struct ao_settings settings = {.width = width, .height = height, .sampling = AO_SAMPLING_COSINE, .aa = true,
+                                   .spppp = spppp,
                                    .camera = scene->camera};
     struct ao_render *r = ao_render_create(&config, &settings);
     if (!r)
@@ -325,10 +326,11 @@ static void bench_interactivity(const struct ao_scene *scene)
     struct ao_tracer *tracer = ao_tracer_create(scene);
     struct pass_log log = {.lock = PTHREAD_MUTEX_INITIALIZER, .changed = PTHREAD_COND_INITIALIZER,
                            .restarts = UINT64_MAX};
-    struct ao_render_config config = {.scene = scene, .tracer = tracer, .width = 640, .height = 480,
+    struct ao_render_config config = {.scene = scene, .tracer = tracer,
                                       .threads = 2, .seed = 1, .target_spp = 1u << 30,
                                       .ao_distance = scene->ao_distance, .on_pass = log_pass, .user = &log};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 1, .camera = scene->camera};
+    struct ao_settings settings = {.width = 640, .height = 480, .sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 1,
+                                   .camera = scene->camera};
     struct ao_render *r = ao_render_create(&config, &settings);
     if (!tracer || !r)
         exit(1);

@@ -113,11 +113,12 @@ static void start(struct fixture *f, uint32_t spp, double time_limit, const floa
         atomic_init(&f->seen[k].overlapped, false);
         f->seen[k].inside = &f->inside;
     }
-    struct ao_render_config config = {.scene = &f->scene, .tracer = f->tracer, .width = 48, .height = 32,
+    struct ao_render_config config = {.scene = &f->scene, .tracer = f->tracer,
                                       .threads = 2, .seed = 3, .target_spp = spp, .time_limit = time_limit,
-                                      .ao_distance = INFINITY, .reference = reference,
+                                      .ao_distance = INFINITY, .reference = reference, .reference_width = 48,
+                                      .reference_height = 32,
                                       .on_pass = count_pass};
-    struct ao_settings settings = {.spppp = 1, .camera = f->scene.camera};
+    struct ao_settings settings = {.width = 48, .height = 32, .spppp = 1, .camera = f->scene.camera};
     struct ao_compare_side sides[2] = {{AO_SAMPLING_UNIFORM, AO_SEQUENCE_RANDOM, true},
                                        {AO_SAMPLING_COSINE, AO_SEQUENCE_SOBOL, true}};
     void *users[2] = {&f->seen[0], &f->seen[1]};

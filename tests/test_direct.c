@@ -492,10 +492,11 @@ static float *render_spheres(enum ao_backend backend, uint64_t seed)
     load_spheres(&scene);
     struct ao_tracer *tracer = ao_tracer_create_with(&scene, backend);
     assert_non_null(tracer);
-    struct ao_render_config config = {.scene = &scene, .tracer = tracer, .width = WIDTH, .height = HEIGHT,
+    struct ao_render_config config = {.scene = &scene, .tracer = tracer,
                                       .threads = 2, .seed = seed, .target_spp = SPP,
                                       .ao_distance = scene.ao_distance};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 1, .camera = scene.camera};
+    struct ao_settings settings = {.width = WIDTH, .height = HEIGHT, .sampling = AO_SAMPLING_COSINE, .aa = true,
+                                   .spppp = 1, .camera = scene.camera};
     struct ao_render *r = ao_render_create(&config, &settings);
     assert_non_null(r);
     assert_true(ao_render_wait(r));

@@ -213,11 +213,12 @@ static void render_png(const char *scene_name, enum ao_sampling sampling, uint32
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     assert_non_null(tracer);
     struct ao_render_config config = {
-        .scene = &scene, .tracer = tracer, .width = GOLDEN_WIDTH, .height = GOLDEN_HEIGHT,
+        .scene = &scene, .tracer = tracer,
         .threads = 2, .seed = 1, .target_spp = spp, .ao_distance = scene.ao_distance};
     /* One AO sample per pass, so that every sample has its own jittered eye ray (the noise
      * bound below counts the AA coverage noise at silhouettes as part of each sample). */
-    struct ao_settings settings = {.sampling = sampling, .aa = true, .spppp = 1, .camera = scene.camera};
+    struct ao_settings settings = {.width = GOLDEN_WIDTH, .height = GOLDEN_HEIGHT, .sampling = sampling, .aa = true,
+                                   .spppp = 1, .camera = scene.camera};
     struct ao_render *render = ao_render_create(&config, &settings);
     assert_non_null(render);
     assert_true(ao_render_wait(render));

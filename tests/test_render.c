@@ -24,7 +24,16 @@ struct counter {
     int calls;
     uint32_t last_pass, last_spp;
     uint32_t spppp[8];       /* of the first eight passes */
+    int previews;
+    int calls_before_preview;   /* passes published before the first preview; -1: no preview */
 };
+
+static void count_preview(void *user)
+{
+    struct counter *c = user;
+    if (c->previews++ == 0)
+        c->calls_before_preview = c->calls;
+}
 
 static void count_pass(const struct ao_frame_info *info, void *user)
 {
@@ -49,6 +58,7 @@ static float *render_scene(const char *scene_text, struct ao_render_config confi
     config.tracer = tracer;
     config.ao_distance = INFINITY;
     config.on_pass = count_pass;
+    config.on_preview = count_preview;
     config.user = counter;
     settings.camera = scene.camera;
     struct ao_render *r = ao_render_create(&config, &settings);
@@ -57,7 +67,7 @@ static float *render_scene(const char *scene_text, struct ao_render_config confi
     const struct ao_frame *frame = ao_render_take_frame(r);
     assert_non_null(frame);
     assert_null(ao_render_take_frame(r));
-    size_t bytes = 3 * sizeof(float) * (size_t)config.width * (size_t)config.height;
+    size_t bytes = 3 * sizeof(float) * (size_t)settings.width * (size_t)settings.height;
     float *copy = malloc(bytes);
     memcpy(copy, frame->rgb, bytes);
     *info = frame->info;
@@ -71,9 +81,9 @@ static float *render_scene(const char *scene_text, struct ao_render_config confi
 static float *render_with(int threads, uint32_t spp, int spppp, bool aa, enum ao_sampling sampling,
                           enum ao_sequence sequence, struct ao_frame_info *info, struct counter *counter)
 {
-    struct ao_render_config config = {.width = 37, .height = 29, .threads = threads, .seed = 5,
+    struct ao_render_config config = {.threads = threads, .seed = 5,
                                       .target_spp = spp, .sequence = sequence};
-    struct ao_settings settings = {.sampling = sampling, .aa = aa, .spppp = spppp};
+    struct ao_settings settings = {.width = 37, .height = 29, .sampling = sampling, .aa = aa, .spppp = spppp};
     return render_scene(SCENE, config, settings, info, counter);
 }
 
@@ -142,10 +152,11 @@ static void test_restart_resets_and_settings_apply(void **state)
     assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     struct counter counter = {0};
-    struct ao_render_config config = {.scene = &scene, .tracer = tracer, .width = 16, .height = 16,
+    struct ao_render_config config = {.scene = &scene, .tracer = tracer,
                                       .threads = 2, .seed = 1, .target_spp = 8,
                                       .ao_distance = INFINITY, .on_pass = count_pass, .user = &counter};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 8, .camera = scene.camera};
+    struct ao_settings settings = {.width = 16, .height = 16, .sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 8,
+                                   .camera = scene.camera};
     struct ao_render *r = ao_render_create(&config, &settings);
     assert_true(ao_render_wait(r));
     /* A sampling change restarts; the next finished frame says so and carries the new mode. */
@@ -194,10 +205,11 @@ static void test_stop_ends_an_unfinished_render(void **state)
     struct ao_scene scene;
     assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
-    struct ao_render_config config = {.scene = &scene, .tracer = tracer, .width = 64, .height = 64,
+    struct ao_render_config config = {.scene = &scene, .tracer = tracer,
                                       .threads = 2, .seed = 1, .target_spp = 1u << 30,
                                       .ao_distance = INFINITY};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 1, .camera = scene.camera};
+    struct ao_settings settings = {.width = 64, .height = 64, .sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 1,
+                                   .camera = scene.camera};
     struct ao_render *r = ao_render_create(&config, &settings);
     ao_render_stop(r);
     assert_false(ao_render_wait(r));
@@ -210,9 +222,10 @@ static void test_stop_ends_an_unfinished_render(void **state)
 static float *render_adaptive(int threads, enum ao_sequence sequence, struct ao_frame_info *info)
 {
     struct counter counter = {0};
-    struct ao_render_config config = {.width = 128, .height = 96, .threads = threads, .seed = 3,
+    struct ao_render_config config = {.threads = threads, .seed = 3,
                                       .target_spp = 200, .sequence = sequence};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 0, .adaptive = true};
+    struct ao_settings settings = {.width = 128, .height = 96, .sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 0,
+                                   .adaptive = true};
     return render_scene(SCENE, config, settings, info, &counter);
 }
 
@@ -240,8 +253,8 @@ static void test_auto_passes_start_at_one_and_double_each_half(void **state)
     (void)state;
     struct counter counter = {0};
     struct ao_frame_info info;
-    struct ao_render_config config = {.width = 37, .height = 29, .threads = 2, .seed = 5, .target_spp = 100};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 0};
+    struct ao_render_config config = {.threads = 2, .seed = 5, .target_spp = 100};
+    struct ao_settings settings = {.width = 37, .height = 29, .sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 0};
     free(render_scene(SCENE, config, settings, &info, &counter));
     /* One sample first (from a sequence of its own with Sobol numbers); then each half takes 8
      * and doubles what its sequence has given (37x29 pixels are far below the cap): 1, 8, 8, 8, 8,
@@ -263,8 +276,9 @@ static void test_adaptive_stops_an_open_plane_after_the_minimum(void **state)
                                 "quad corner -1e3 0 -1e3 edge1 0 0 2e3 edge2 2e3 0 0 albedo 0.7\n";
     struct counter counter = {0};
     struct ao_frame_info info;
-    struct ao_render_config config = {.width = 40, .height = 30, .threads = 2, .seed = 5, .target_spp = 4096};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 4, .adaptive = true};
+    struct ao_render_config config = {.threads = 2, .seed = 5, .target_spp = 4096};
+    struct ao_settings settings = {.width = 40, .height = 30, .sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 4,
+                                   .adaptive = true};
     float *rgb = render_scene(plane, config, settings, &info, &counter);
     assert_true(info.done);
     assert_int_equal(info.pass, 4);
@@ -284,9 +298,10 @@ static void test_target_error_stops_the_run(void **state)
     for (int adaptive = 0; adaptive < 2; adaptive++) {
         struct counter counter = {0};
         struct ao_frame_info info;
-        struct ao_render_config config = {.width = 64, .height = 48, .threads = 2, .seed = 9,
+        struct ao_render_config config = {.threads = 2, .seed = 9,
                                           .target_spp = 1u << 20, .target_error = 0.03};
-        struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 0, .adaptive = adaptive};
+        struct ao_settings settings = {.width = 64, .height = 48, .sampling = AO_SAMPLING_COSINE, .aa = true,
+                                       .spppp = 0, .adaptive = adaptive};
         free(render_scene(SCENE, config, settings, &info, &counter));
         assert_true(info.done);
         assert_true(info.error <= 0.03);
@@ -301,9 +316,9 @@ static void test_time_limit_stops_the_run(void **state)
     (void)state;
     struct counter counter = {0};
     struct ao_frame_info info;
-    struct ao_render_config config = {.width = 64, .height = 48, .threads = 2, .seed = 9,
+    struct ao_render_config config = {.threads = 2, .seed = 9,
                                       .target_spp = 1u << 30, .time_limit = 0.3};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 1};
+    struct ao_settings settings = {.width = 64, .height = 48, .sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 1};
     free(render_scene(SCENE, config, settings, &info, &counter));
     assert_true(info.done);
     assert_true(info.time_limit == 0.3);
@@ -325,8 +340,8 @@ static void test_normals_view_of_a_quad_from_above(void **state)
     (void)state;
     struct counter counter = {0};
     struct ao_frame_info info;
-    struct ao_render_config config = {.width = 32, .height = 32, .threads = 2, .seed = 4, .target_spp = 8};
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 2,
+    struct ao_render_config config = {.threads = 2, .seed = 4, .target_spp = 8};
+    struct ao_settings settings = {.width = 32, .height = 32, .sampling = AO_SAMPLING_COSINE, .aa = true, .spppp = 2,
                                    .output = AO_OUTPUT_NORMALS};
     float *rgb = render_scene(QUAD_FROM_ABOVE, config, settings, &info, &counter);
     assert_int_equal(info.output, AO_OUTPUT_NORMALS);
@@ -422,8 +437,9 @@ static void test_flat_and_phong_normals_views_differ(void **state)
     for (int shading = 0; shading < 2; shading++) {
         struct counter counter = {0};
         struct ao_frame_info info;
-        struct ao_render_config config = {.width = 24, .height = 24, .threads = 2, .seed = 4, .target_spp = 1};
-        struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = false, .spppp = 1,
+        struct ao_render_config config = {.threads = 2, .seed = 4, .target_spp = 1};
+        struct ao_settings settings = {.width = 24, .height = 24, .sampling = AO_SAMPLING_COSINE, .aa = false,
+                                       .spppp = 1,
                                        .output = AO_OUTPUT_NORMALS, .shading = (enum ao_shading)shading};
         image[shading] = render_scene(text, config, settings, &info, &counter);
     }
@@ -452,6 +468,94 @@ static void test_flat_and_phong_normals_views_differ(void **state)
     free(image[1]);
 }
 
+/* A size change restarts at the new size: the frame after it is the image a renderer started at
+ * that size makes (max |d| = 0), and the RMSE is taken only while the reference has its size. */
+static void test_resize_restarts_at_the_new_size(void **state)
+{
+    (void)state;
+    struct counter counter = {0};
+    struct ao_frame_info info;
+    struct ao_render_config config = {.threads = 2, .seed = 5, .target_spp = 8};
+    struct ao_settings settings = {.width = 50, .height = 20, .sampling = AO_SAMPLING_COSINE, .aa = true,
+                                   .spppp = 4};
+    float *fresh = render_scene(SCENE, config, settings, &info, &counter);
+
+    struct ao_scene scene;
+    assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
+    struct ao_tracer *tracer = ao_tracer_create(&scene);
+    config = (struct ao_render_config){.scene = &scene, .tracer = tracer, .threads = 2, .seed = 5, .target_spp = 8,
+                                       .ao_distance = INFINITY, .reference = fresh, .reference_width = 50,
+                                       .reference_height = 20};
+    settings.width = 37;
+    settings.height = 29;
+    settings.camera = scene.camera;
+    struct ao_render *r = ao_render_create(&config, &settings);
+    assert_true(ao_render_wait(r));
+    const struct ao_frame *frame = ao_render_take_frame(r);
+    assert_int_equal(frame->width, 37);
+    assert_true(isnan(frame->info.rmse));
+    settings.width = 50;
+    settings.height = 20;
+    assert_true(ao_render_set_settings(r, &settings));
+    assert_true(ao_render_wait(r));
+    frame = ao_render_take_frame(r);
+    assert_int_equal(frame->width, 50);
+    assert_int_equal(frame->height, 20);
+    assert_int_equal(frame->block, 1);
+    assert_int_equal(frame->info.restarts, 1);
+    assert_int_equal(frame->tiles_x * frame->tiles_y, 4 * 2);
+    assert_memory_equal(frame->rgb, fresh, 3 * sizeof(float) * 50 * 20);
+    assert_true(frame->info.rmse == 0.0);
+    ao_render_destroy(r);
+    ao_tracer_destroy(tracer);
+    ao_scene_finish(&scene);
+    free(fresh);
+}
+
+/* The coarse view's ray through a cell's position is the image's through the same point of the
+ * image (block times the cell position), within a few float roundings. */
+static void test_coarse_view_rays_are_the_image_rays(void **state)
+{
+    (void)state;
+    struct ao_camera camera = {.eye = {0.3f, 1.5f, 4.0f}, .target = {0.0f, 0.5f, 0.0f}, .up = {0, 1, 0}, .fov = 40};
+    struct ao_view full, coarse;
+    const int width = 1001, height = 601, block = 16;
+    assert_true(ao_camera_view(&camera, width, height, &full));
+    assert_true(ao_camera_view_coarse(&camera, width, height, block, &coarse));
+    assert_int_equal(coarse.width, 63);
+    assert_int_equal(coarse.height, 38);
+    const float cells[][2] = {{0, 0}, {0.5f, 0.5f}, {62.5f, 37.5f}, {63, 38}, {31.25f, 7.75f}};
+    for (size_t k = 0; k < sizeof cells / sizeof cells[0]; k++) {
+        struct ao_vec3 a = ao_camera_ray(&coarse, cells[k][0], cells[k][1]);
+        struct ao_vec3 b = ao_camera_ray(&full, block * cells[k][0], block * cells[k][1]);
+        assert_true(fabsf(a.x - b.x) < 1e-6f && fabsf(a.y - b.y) < 1e-6f && fabsf(a.z - b.z) < 1e-6f);
+    }
+}
+
+/* With previews a restart publishes a coarse frame before its first full pass, and the accumulated
+ * image is the one without previews (max |d| = 0): they never enter the sums. 256x192 takes one
+ * preview, of 4x4-pixel cells. */
+static void test_previews_come_first_and_change_nothing(void **state)
+{
+    (void)state;
+    float *image[2];
+    struct counter counter[2] = {{.calls_before_preview = -1}, {.calls_before_preview = -1}};
+    for (int previews = 0; previews < 2; previews++) {
+        struct ao_frame_info info;
+        struct ao_render_config config = {.threads = 2, .seed = 7, .target_spp = 64, .previews = previews};
+        struct ao_settings settings = {.width = 256, .height = 192, .sampling = AO_SAMPLING_COSINE, .aa = true,
+                                       .adaptive = true};
+        image[previews] = render_scene(SCENE, config, settings, &info, &counter[previews]);
+    }
+    assert_int_equal(counter[0].previews, 0);
+    assert_int_equal(counter[1].previews, 1);
+    assert_int_equal(counter[1].calls_before_preview, 0);
+    assert_int_equal(counter[0].calls, counter[1].calls);
+    assert_memory_equal(image[0], image[1], 3 * sizeof(float) * 256 * 192);
+    free(image[0]);
+    free(image[1]);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -468,6 +572,9 @@ int main(void)
         cmocka_unit_test(test_normals_view_of_a_quad_from_above),
         cmocka_unit_test(test_flat_is_the_face_normal_and_phong_interpolates),
         cmocka_unit_test(test_flat_and_phong_normals_views_differ),
+        cmocka_unit_test(test_resize_restarts_at_the_new_size),
+        cmocka_unit_test(test_coarse_view_rays_are_the_image_rays),
+        cmocka_unit_test(test_previews_come_first_and_change_nothing),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -68,11 +68,12 @@ static void write_icosphere(const char *path)
 static double mean_over_sphere(const struct ao_scene *scene, const struct ao_tracer *tracer, enum ao_below below,
                                int *pixels)
 {
-    struct ao_render_config config = {.scene = scene, .tracer = tracer, .width = SIZE, .height = SIZE,
+    struct ao_render_config config = {.scene = scene, .tracer = tracer,
                                       .threads = 2, .seed = 3, .target_spp = SPP, .ao_distance = INFINITY,
                                       .below = below};
     /* Without AA, so that no pixel mixes sphere and background. */
-    struct ao_settings settings = {.sampling = AO_SAMPLING_COSINE, .aa = false, .spppp = 16, .camera = scene->camera};
+    struct ao_settings settings = {.width = SIZE, .height = SIZE, .sampling = AO_SAMPLING_COSINE, .aa = false,
+                                   .spppp = 16, .camera = scene->camera};
     struct ao_render *r = ao_render_create(&config, &settings);
     assert_true(ao_render_wait(r));
     const struct ao_frame *frame = ao_render_take_frame(r);

@@ -54,9 +54,10 @@ static void teardown(struct fixture *f)
 static float *render_passes(const struct fixture *f, int width, int height, uint32_t spp, uint32_t spppp,
                             enum ao_sampling sampling, bool aa)
 {
-    struct ao_render_config config = {.scene = &f->scene, .tracer = f->tracer, .width = width, .height = height,
+    struct ao_render_config config = {.scene = &f->scene, .tracer = f->tracer,
                                       .threads = 2, .seed = 9, .target_spp = spp, .ao_distance = INFINITY};
-    struct ao_settings settings = {.sampling = sampling, .aa = aa, .spppp = spppp, .camera = f->scene.camera};
+    struct ao_settings settings = {.width = width, .height = height, .sampling = sampling, .aa = aa, .spppp = spppp,
+                                   .camera = f->scene.camera};
     struct ao_render *r = ao_render_create(&config, &settings);
     assert_non_null(r);
     assert_true(ao_render_wait(r));
