@@ -82,8 +82,9 @@ void ao_app_on_pass(const struct ao_frame_info *info, void *user)
         rep->notify();
 }
 
-void ao_app_on_preview(void *user)
+void ao_app_on_preview(const struct ao_frame_info *info, void *user)
 {
+    (void)info;
     struct ao_reporter *rep = user;
     if (rep->notify)
         rep->notify();
@@ -185,6 +186,8 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     int height = opts->height ? opts->height : app->scene.height ? app->scene.height : 480;
     if (opts->reference_path && !(app->reference = load_reference(opts->reference_path, width, height)))
         return AO_EXIT_RUNTIME;
+    app->reference_width = width;
+    app->reference_height = height;
     if (!(app->tracer = ao_tracer_create(&app->scene)))
         return AO_EXIT_RUNTIME;
     if (app->scene.degenerate_count && !opts->quiet)
@@ -213,7 +216,8 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
         .time_limit = opts->time_limit,
         .ao_distance = isnan(opts->ao_distance) ? app->scene.ao_distance : opts->ao_distance,
         .sequence = opts->sequence, .below = opts->below,
-        .reference = app->reference, .reference_width = width, .reference_height = height,
+        .reference = app->reference, .reference_width = app->reference_width,
+        .reference_height = app->reference_height,
         .on_pass = ao_app_on_pass, .on_preview = ao_app_on_preview, .user = &app->reporter};
     *settings = (struct ao_settings){.width = width, .height = height, .sampling = opts->sampling, .aa = opts->aa,
                                      .spppp = (int)opts->spppp, .adaptive = opts->adaptive, .camera = app->scene.camera,

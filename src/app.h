@@ -50,6 +50,7 @@ struct ao_app {
     struct ao_tracer *tracer;
     struct ao_render *render;
     float *reference;
+    int reference_width, reference_height;
     struct ao_reporter reporter;
     struct ao_interrupt interrupt;
 };
@@ -69,7 +70,7 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
 void ao_app_on_pass(const struct ao_frame_info *info, void *user);
 
 /* The render config's on_preview: notify. */
-void ao_app_on_preview(void *user);
+void ao_app_on_preview(const struct ao_frame_info *info, void *user);
 
 /* Mega-rays (eye and shadow) per second of the frame's run. Pure. */
 double ao_app_mrays_per_second(const struct ao_frame_info *info);

@@ -17,7 +17,7 @@ enum option_id {
     OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
     OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
     OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR, OPT_SAVE_FORMAT, OPT_TIME,
-    OPT_VIEW, OPT_SHADING, OPT_COMPARE,
+    OPT_VIEW, OPT_SHADING, OPT_COMPARE, OPT_PIXEL_SIZE,
 };
 
 /* The longest --time: a year, far beyond any render, short of overflowing anything. */
@@ -37,6 +37,8 @@ static const char *const save_formats[] = {"pfm", "exr", NULL};
 static const char *const views[] = {[AO_VIEW_MODE_AO] = "ao", [AO_VIEW_MODE_NORMALS] = "normals",
                                     [AO_VIEW_MODE_DIFFERENCE] = "difference", NULL};
 static const char *const shadings[] = {[AO_SHADING_PHONG] = "phong", [AO_SHADING_FLAT] = "flat", NULL};
+/* Names of the --pixel-size values: auto, then the pixel sizes 1, 2, 4, 8 (choice k is 2^(k-1)). */
+static const char *const pixel_sizes[] = {"auto", "1", "2", "4", "8", NULL};
 
 /* One row of the option table: long name, short name (or 0), whether it takes a value. */
 struct option_spec {
@@ -55,6 +57,7 @@ static const struct option_spec specs[] = {
     {"--aa", 0, false, OPT_AA},
     {"--no-aa", 0, false, OPT_NO_AA},
     {"--size", 0, true, OPT_SIZE},
+    {"--pixel-size", 0, true, OPT_PIXEL_SIZE},
     {"--threads", 0, true, OPT_THREADS},
     {"--seed", 0, true, OPT_SEED},
     {"--ao-distance", 0, true, OPT_AO_DISTANCE},
@@ -105,7 +108,12 @@ static const char usage[] =
     "  --below-surface P     reflect | trace directions that point below the geometric\n"
     "                        surface (default reflect)\n"
     "  --aa, --no-aa         jittered eye rays on / off (default on)\n"
-    "  --size WxH            image size (default: the scene's, else 640x480)\n"
+    "  --size WxH            image size; in a window its initial size (default: the\n"
+    "                        scene's, else 640x480)\n"
+    "  --pixel-size N        1|2|4|8|auto: the window renders 1/N of its pixels each\n"
+    "                        way, shown as NxN blocks; auto: 2 on HiDPI screens, and\n"
+    "                        the magnification of a --size smaller than the window\n"
+    "                        (default auto)\n"
     "  --threads N           render threads, 1 to 256 (default: number of cores)\n"
     "  --seed N              random seed (default 1)\n"
     "  --ao-distance D       occlusion range (default: the scene's, else infinite)\n"
@@ -120,7 +128,7 @@ static const char usage[] =
     "\n"
     "Window keys: U/H/C sampling, A anti-aliasing, Space pause, R restart,\n"
     "+/- samples per pass, G adaptive sampling, E error map, N normals,\n"
-    "F flat/Phong, D difference, S screenshot,\n"
+    "F flat/Phong, D difference, S screenshot, [/] pixel size,\n"
     "drag/wheel orbit, pan, zoom, F1 or ? help, Esc/Q quit.\n";
 
 const char *ao_cli_usage(void)
@@ -386,6 +394,11 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
         opts->shading = (enum ao_shading)choice;
         return true;
     case OPT_COMPARE: opts->compare = value; return true;
+    case OPT_PIXEL_SIZE:
+        if (!parse_choice(name, value, pixel_sizes, &choice, msg, msg_size))
+            return false;
+        opts->pixel_size = choice ? 1 << (choice - 1) : 0;
+        return true;
     }
     return false;
 }

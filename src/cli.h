@@ -45,6 +45,7 @@ struct ao_options {
     enum ao_below below;      /* --below-surface: default reflect */
     bool aa;                  /* default on */
     int width, height;        /* 0: the scene's image size, else 640x480 */
+    int pixel_size;           /* --pixel-size: 1, 2, 4 or 8; 0: auto */
     int threads;              /* 0: number of cores */
     uint64_t seed;            /* default 1 */
     float ao_distance;        /* NAN: the scene's, else infinite */

@@ -59,6 +59,7 @@ static bool apply(struct ao_compare *c, int k, int running)
     s.sampling = c->sides[k].config.sampling;
     s.aa = c->sides[k].config.aa;
     s.paused = running != k;
+    s.previews = false; /* both sides show full passes of the same size */
     return ao_render_set_settings(c->sides[k].render, &s);
 }
 

@@ -12,7 +12,9 @@
 struct ao_display {
     const struct ao_glapi *gl;
     GLuint program, vao, texture;
-    int width, height;              /* of the uploaded image; 0 before the first upload */
+    GLint cover;                    /* the shader's share of the texture the image covers */
+    int width, height;              /* of the texture; 0 before the first upload */
+    int image_width, image_height;  /* of the image it shows */
     GLuint fbo, colour;             /* offscreen 1:1 target for PNG files, made on first use */
     int fbo_width, fbo_height;
 };
@@ -38,6 +40,8 @@ struct ao_display *ao_display_create_from_source(const struct ao_glapi *gl, cons
     }
     gl->UseProgram(d->program);
     gl->Uniform1i(gl->GetUniformLocation(d->program, "image"), 0);
+    d->cover = gl->GetUniformLocation(d->program, "cover");
+    gl->Uniform2f(d->cover, 1.0f, 1.0f);
 
     /* The triangle comes from gl_VertexID, but core profile still wants a vertex array bound. */
     gl->GenVertexArrays(1, &d->vao);
@@ -68,10 +72,21 @@ void ao_display_destroy(struct ao_display *d)
 
 bool ao_display_upload(struct ao_display *d, const float *rgb, int width, int height)
 {
+    return ao_display_upload_cells(d, rgb, width, height, 1, width, height);
+}
+
+bool ao_display_upload_cells(struct ao_display *d, const float *rgb, int width, int height, int block,
+                             int image_width, int image_height)
+{
     const struct ao_glapi *gl = d->gl;
     gl->ActiveTexture(GL_TEXTURE0);
     gl->BindTexture(GL_TEXTURE_2D, d->texture);
     gl->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    /* The cells cover the image from its top left, the last row and column cut by its edges. */
+    gl->UseProgram(d->program);
+    gl->Uniform2f(d->cover, (float)image_width / (float)(width * block), (float)image_height / (float)(height * block));
+    d->image_width = image_width;
+    d->image_height = image_height;
     /* Row 0 of the texture is the image's top row; the vertex shader's uv accounts for it. */
     if (width == d->width && height == d->height) {
         gl->TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGB, GL_FLOAT, rgb);
@@ -82,6 +97,7 @@ bool ao_display_upload(struct ao_display *d, const float *rgb, int width, int he
     if (width > max || height > max) {
         fprintf(stderr, "aoview: image %dx%d exceeds the OpenGL texture limit of %d pixels\n",
                 width, height, (int)max);
+        d->width = d->height = d->image_width = d->image_height = 0;
         return false;
     }
     gl->TexImage2D(GL_TEXTURE_2D, 0, GL_RGB32F, width, height, 0, GL_RGB, GL_FLOAT, rgb);
@@ -92,7 +108,14 @@ bool ao_display_upload(struct ao_display *d, const float *rgb, int width, int he
 
 struct ao_display_rect ao_display_fit(int image_width, int image_height, int fb_width, int fb_height)
 {
-    /* Compare fb_width / fb_height with the image's ratio in integers: the wider side gets bars. */
+    /* A whole magnification k that fills the framebuffer to within k pixels each way (an image
+     * rendered at 1/k of it, or at its size) keeps every pixel a k x k block. */
+    int k = image_width > 0 && image_height > 0 ? fb_width / image_width : 0;
+    k = k > 0 && fb_height / image_height < k ? fb_height / image_height : k;
+    if (k >= 1 && fb_width - k * image_width < k && fb_height - k * image_height < k)
+        return (struct ao_display_rect){(fb_width - k * image_width) / 2, (fb_height - k * image_height) / 2,
+                                        k * image_width, k * image_height};
+    /* Else compare fb_width / fb_height with the image's ratio in integers: the wider side gets bars. */
     struct ao_display_rect r = {0, 0, fb_width, fb_height};
     long long lhs = (long long)fb_width * image_height, rhs = (long long)fb_height * image_width;
     if (lhs > rhs)
@@ -124,7 +147,7 @@ void ao_display_draw(struct ao_display *d, int fb_width, int fb_height)
     gl->ClearColor(BAR_GREY, BAR_GREY, BAR_GREY, 1.0f);
     gl->Clear(GL_COLOR_BUFFER_BIT);
     if (d->width > 0 && fb_width > 0 && fb_height > 0)
-        draw_image(d, ao_display_fit(d->width, d->height, fb_width, fb_height));
+        draw_image(d, ao_display_fit(d->image_width, d->image_height, fb_width, fb_height));
 }
 
 /* Makes the offscreen framebuffer match the image size and binds it; false if GL refuses it. */
@@ -136,15 +159,15 @@ static bool bind_offscreen(struct ao_display *d)
         gl->GenRenderbuffers(1, &d->colour);
     }
     gl->BindFramebuffer(GL_FRAMEBUFFER, d->fbo);
-    if (d->fbo_width != d->width || d->fbo_height != d->height) {
+    if (d->fbo_width != d->image_width || d->fbo_height != d->image_height) {
         gl->BindRenderbuffer(GL_RENDERBUFFER, d->colour);
-        gl->RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, d->width, d->height);
+        gl->RenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, d->image_width, d->image_height);
         gl->FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, d->colour);
-        d->fbo_width = d->width;
-        d->fbo_height = d->height;
+        d->fbo_width = d->image_width;
+        d->fbo_height = d->image_height;
     }
     if (gl->CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE) {
-        fprintf(stderr, "aoview: OpenGL cannot render a %dx%d offscreen image\n", d->width, d->height);
+        fprintf(stderr, "aoview: OpenGL cannot render a %dx%d offscreen image\n", d->image_width, d->image_height);
         gl->BindFramebuffer(GL_FRAMEBUFFER, 0);
         return false;
     }
@@ -172,12 +195,12 @@ bool ao_display_write_png(struct ao_display *d, const char *path)
 bool ao_display_write_png_with(struct ao_display *d, const char *path, ao_display_overlay *overlay, void *user)
 {
     const struct ao_glapi *gl = d->gl;
-    if (d->width == 0) {
+    if (d->image_width == 0) {
         fprintf(stderr, "aoview: %s: no image to save yet\n", path);
         return false;
     }
-    size_t row = (size_t)d->width * 3;
-    uint8_t *pixels = malloc(row * (size_t)d->height);
+    size_t row = (size_t)d->image_width * 3;
+    uint8_t *pixels = malloc(row * (size_t)d->image_height);
     if (!pixels) {
         fprintf(stderr, "aoview: %s: out of memory\n", path);
         return false;
@@ -188,20 +211,20 @@ bool ao_display_write_png_with(struct ao_display *d, const char *path, ao_displa
     }
 
     /* Draw at 1:1 and read back tightly packed (rows of 3 * width bytes). */
-    draw_image(d, (struct ao_display_rect){0, 0, d->width, d->height});
+    draw_image(d, (struct ao_display_rect){0, 0, d->image_width, d->image_height});
     if (overlay)
-        overlay(user, d->width, d->height);
+        overlay(user, d->image_width, d->image_height);
     gl->PixelStorei(GL_PACK_ALIGNMENT, 1);
-    gl->ReadPixels(0, 0, d->width, d->height, GL_RGB, GL_UNSIGNED_BYTE, pixels);
+    gl->ReadPixels(0, 0, d->image_width, d->image_height, GL_RGB, GL_UNSIGNED_BYTE, pixels);
     gl->BindFramebuffer(GL_FRAMEBUFFER, 0);
-    flip_rows(pixels, row, d->height);
+    flip_rows(pixels, row, d->image_height);
 
     GLenum error = gl->GetError();
     bool ok = error == GL_NO_ERROR;
     if (!ok)
         fprintf(stderr, "aoview: %s: OpenGL error 0x%x while reading the image back\n", path, error);
     else
-        ok = ao_image_write_png(path, pixels, d->width, d->height);
+        ok = ao_image_write_png(path, pixels, d->image_width, d->image_height);
     free(pixels);
     return ok;
 }

@@ -34,14 +34,21 @@ void ao_display_destroy(struct ao_display *display);
  * limit. GL thread. */
 bool ao_display_upload(struct ao_display *display, const float *rgb, int width, int height);
 
-/* The largest centred rectangle of the image's aspect ratio inside a framebuffer. Pure. */
+/* As ao_display_upload, for width x height cells of block x block pixels that cover an image_width x
+ * image_height image from its top left (a preview): the display then shows and fits that image,
+ * each cell a block. GL thread. */
+bool ao_display_upload_cells(struct ao_display *display, const float *rgb, int width, int height, int block,
+                             int image_width, int image_height);
+
+/* Where the image goes in a framebuffer: magnified by the whole factor k that fills it to within k
+ * pixels each way, if one does, else the largest centred rectangle of its aspect ratio. Pure. */
 struct ao_display_rect ao_display_fit(int image_width, int image_height, int fb_width, int fb_height);
 
 /* Clears the bound framebuffer (fb_width x fb_height) to the letterbox colour and draws the
  * uploaded image into ao_display_fit's rectangle; only clears before the first upload. GL thread. */
 void ao_display_draw(struct ao_display *display, int fb_width, int fb_height);
 
-/* Renders the uploaded image at 1:1 into an offscreen framebuffer and writes it as an 8-bit PNG
+/* Renders the uploaded image at its size into an offscreen framebuffer and writes it as an 8-bit PNG
  * (the displayed image without overlays); false with one message. GL thread. */
 bool ao_display_write_png(struct ao_display *display, const char *path);
 

@@ -56,6 +56,11 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, char *o
     size_t used = 0;
     out[0] = '\0';
     item(out, size, &used, separator, "%s", s->scene);
+    if (s->block > 1)
+        item(out, size, &used, separator, "preview %dx%d", (s->width + s->block - 1) / s->block,
+             (s->height + s->block - 1) / s->block);
+    else
+        item(out, size, &used, separator, "%dx%d", s->width, s->height);
     item(out, size, &used, separator, "%s", ao_sampling_name(f->sampling));
     item(out, size, &used, separator, "AA %s", f->aa ? "on" : "off");
     if (f->output == AO_OUTPUT_NORMALS)
@@ -82,6 +87,8 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, char *o
     }
     if (!isnan(f->rmse))
         item(out, size, &used, separator, "RMSE %.4g", f->rmse);
+    else if (s->reference_differs)
+        item(out, size, &used, separator, "no RMSE: reference of another size");
     if (s->paused)
         item(out, size, &used, separator, "paused");
 }

@@ -13,6 +13,9 @@
 struct ao_hud_status {
     const char *scene;
     struct ao_frame_info info;   /* of the frame on screen */
+    int width, height;           /* its image's size */
+    int block;                   /* > 1: a preview of block x block pixel cells */
+    bool reference_differs;      /* --reference has another size: no RMSE */
     double seconds;              /* elapsed since the restart, ticking between frames */
     double seconds_left;         /* progress.h's estimate, ticking down between frames; NAN: none */
     int spppp;                   /* samples per pass as set (the next pass's); 0: auto */
@@ -21,10 +24,11 @@ struct ao_hud_status {
 };
 
 /* Writes the status facts joined by separator into out (always terminated, truncated to size):
- * scene, sampling mode, "AA on|off", "normals" in the normals view, "flat" with flat shading,
+ * scene, "WxH" (with a preview, "preview WxH" of its cells), sampling mode, "AA on|off", "normals" in the normals view, "flat" with flat shading,
  * "spp X of Y", "error E %" once estimated, "Ns", "~N s left" while estimated, "M Mrays/s",
  * "pass P", "N spp/pass" (or "auto N spp/pass"), "adaptive: C % converged", "mean M spp" when
- * adaptive, then "RMSE E" when the frame has one and "paused" when paused. Pure. */
+ * adaptive, then "RMSE E" when the frame has one (else "no RMSE: reference of another
+ * size" when --reference has another size) and "paused" when paused. Pure. */
 void ao_hud_format(const struct ao_hud_status *status, const char *separator, char *out, size_t size);
 
 /* The overlay's GL objects and scratch buffers; opaque. */

@@ -152,6 +152,8 @@ static bool show_window(struct ao_app *app, const struct ao_options *opts, int *
     /* No config: V, which would start renderers of its own, is not available. */
     struct ao_window_info info = {.scene_name = app->scene.name, .quiet = opts->quiet, .seed = opts->seed,
                                   .save_exr = opts->save_exr, .reference = app->reference,
+                                  .reference_width = app->reference_width,
+                                  .reference_height = app->reference_height, .pixel_size = opts->pixel_size,
                                   .difference = opts->view == AO_VIEW_MODE_DIFFERENCE};
     if (ao_app_run_window(app, opts, &info, status))
         return true;

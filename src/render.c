@@ -547,7 +547,7 @@ static bool preview(struct ao_render *r, const struct ao_camera *camera, const s
         f->info = *info;
         swap_back(r);
         if (r->config.on_preview)
-            r->config.on_preview(r->config.user);
+            r->config.on_preview(info, r->config.user);
     }
     return true;
 }
@@ -654,7 +654,7 @@ static bool start_run(struct ao_render *r, const struct ao_settings *s, uint64_t
     *info = (struct ao_frame_info){.restarts = restarts, .target_spp = r->config.target_spp,
                                    .target_error = r->config.target_error, .time_limit = r->config.time_limit,
                                    .sampling = s->sampling, .aa = s->aa, .output = s->output, .shading = s->shading};
-    return !r->config.previews || r->config.share || preview(r, &s->camera, info);
+    return !s->previews || r->config.share || preview(r, &s->camera, info);
 }
 
 static void *render_main(void *arg)

@@ -20,6 +20,7 @@ struct ao_settings {
     int spppp;               /* AO samples per pixel per pass; 0: auto (render.c's schedule) */
     bool adaptive;           /* samples go where the estimated error is (render.c) */
     bool paused;
+    bool previews;           /* coarse frames after each restart (preview.h), for a window's eye */
     enum ao_output output;   /* AO or the normals view */
     enum ao_shading shading; /* Phong or flat mesh normals */
     struct ao_camera camera;
@@ -122,11 +123,11 @@ struct ao_render_config {
     const float *reference;  /* reference_width x reference_height x 3 linear floats, or NULL; the
                                 RMSE is taken while the image has its size */
     int reference_width, reference_height;
-    bool previews;           /* coarse frames after each restart (preview.h), for a window */
     /* Called on the render thread after each published pass (stats rows, waking the GL thread). */
     void (*on_pass)(const struct ao_frame_info *info, void *user);
-    /* Called on the render thread after each published preview (waking the GL thread); may be NULL. */
-    void (*on_preview)(void *user);
+    /* Called on the render thread after each published preview, with the facts of the run it
+     * begins (waking the GL thread); may be NULL. */
+    void (*on_preview)(const struct ao_frame_info *info, void *user);
     void *user;
     const struct ao_render_share *share;   /* NULL: this process traces every tile */
 };

@@ -45,6 +45,7 @@ static const char HELP[] =
     "V  compare with a second configuration at equal time\n"
     "B  split / side-by-side comparison\n"
     "S  save aoview-N.png and aoview-N.pfm (or .exr)\n"
+    "[ ]  halve/double the pixel size (restarts)\n"
     "left drag  orbit (on the divider: move it)\n"
     "right drag  pan\n"
     "wheel  zoom\n"
@@ -54,6 +55,13 @@ static const char HELP[] =
 
 /* The redraw rate while the image changes; idle at the target spp. */
 #define FRAME_SECONDS (1.0 / 60.0)
+
+/* A resize restarts the render at the new size once the framebuffer has kept its size this long;
+ * meanwhile the last frame is scaled. */
+#define RESIZE_SECONDS 0.15
+
+/* The largest pixel size ([ and ] stay within 1 to this). */
+#define MAX_PIXEL_SIZE 8
 
 /* What the window shows of the frame: the image, or a heat map of its estimated error or of its
  * difference from the reference (display modes: the image accumulates on underneath). */
@@ -84,13 +92,19 @@ struct viewer {
     double shown_at;                 /* glfwGetTime() when it was taken */
     bool show_hud, show_help, save;
     enum show show;
-    float *heat[2];                  /* the heat maps' colours (one per side), allocated on first use */
+    float *heat[2];                  /* the heat maps' colours (one per side), grown on use */
+    size_t heat_room[2], composite_room;   /* their pixels, and the composite's */
     struct ao_compare *compare;      /* the comparison while V has it on, else NULL */
     bool toggle_compare;             /* V was pressed: the loop turns the comparison on or off */
     enum ao_compare_layout layout;
     double split;                    /* the divider, as a share of the image's width */
     float *composite;                /* the comparison's two views as the layout shows them */
     int image_width, image_height;   /* of the image uploaded; 0 before the first */
+    int pixel_size;                  /* framebuffer pixels per image pixel, each way */
+    double resized_at;               /* glfwGetTime() of the last framebuffer size change; a
+                                        negative value: apply the size at once */
+    bool reference_fits;             /* the frame on screen has the reference's size (else no RMSE
+                                        or difference view: said once on stderr) */
     struct ao_progress progress;     /* the time-left estimate, fed the frames taken */
     int drag;                        /* mouse button held over the window, DRAG_DIVIDER, or -1 */
     double cursor_x, cursor_y;
@@ -210,6 +224,11 @@ static void on_char(GLFWwindow *window, unsigned int codepoint)
         v->reupload = true;
         return;
     case 's': v->save = true; return;
+    case '[': case ']':
+        v->pixel_size = codepoint == '[' ? (v->pixel_size > 1 ? v->pixel_size / 2 : 1)
+                                         : (v->pixel_size < MAX_PIXEL_SIZE ? v->pixel_size * 2 : MAX_PIXEL_SIZE);
+        v->resized_at = -1.0;
+        return;
     case '?': v->show_help = !v->show_help; return;
     case 'q': glfwSetWindowShouldClose(window, GLFW_TRUE); return;
     default: return;
@@ -268,6 +287,15 @@ static void on_cursor(GLFWwindow *window, double x, double y)
     *dy += y - v->cursor_y;
     v->cursor_x = x;
     v->cursor_y = y;
+}
+
+/* The framebuffer changed size: the render follows once it keeps it (follow_size). */
+static void on_framebuffer_size(GLFWwindow *window, int width, int height)
+{
+    (void)width;
+    (void)height;
+    struct viewer *v = glfwGetWindowUserPointer(window);
+    v->resized_at = glfwGetTime();
 }
 
 /* X lost the window's contents (exposed, or shown for the first time). */
@@ -352,9 +380,11 @@ static void save(struct viewer *v)
 /* The status of the frame on screen; elapsed time runs on between frames while passes run. */
 static struct ao_hud_status status(const struct viewer *v, const struct ao_settings *settings)
 {
-    struct ao_hud_status s = {.scene = v->info->scene_name, .info = v->shown->info,
-                              .spppp = settings->spppp, .adaptive = settings->adaptive,
-                              .paused = settings->paused};
+    const struct ao_frame *f = v->shown;
+    struct ao_hud_status s = {.scene = v->info->scene_name, .info = f->info, .width = f->image_width,
+                              .height = f->image_height, .block = f->block,
+                              .reference_differs = !v->reference_fits, .spppp = settings->spppp,
+                              .adaptive = settings->adaptive, .paused = settings->paused};
     s.seconds = s.info.seconds;
     s.seconds_left = ao_progress_left(&v->progress, &s.info);
     if (!s.paused && !s.info.done) {
@@ -488,14 +518,15 @@ static int on_io_error(Display *display)
 #define READABLE_WIDTH 640
 #define READABLE_HEIGHT 480
 
-/* The window size for a width x height image: magnified by the whole factor that brings it to
- * READABLE_WIDTH x READABLE_HEIGHT when it is smaller (pixels stay square blocks), and shrunk,
- * keeping its aspect, to fit 90 % of the primary monitor's work area when it is larger. */
-static void fit_screen(int *width, int *height)
+/* The window size for a width x height image: magnified by the power of two (at most
+ * MAX_PIXEL_SIZE) that brings it to READABLE_WIDTH x READABLE_HEIGHT when it is smaller (pixels
+ * stay square blocks), and shrunk, keeping its aspect, to fit 90 % of the primary monitor's work
+ * area when it is larger; returns the magnification. */
+static int fit_screen(int *width, int *height)
 {
     int zoom = 1;
-    while (*width * zoom < READABLE_WIDTH && *height * zoom < READABLE_HEIGHT)
-        zoom++;
+    while (*width * zoom < READABLE_WIDTH && *height * zoom < READABLE_HEIGHT && zoom < MAX_PIXEL_SIZE)
+        zoom *= 2;
     *width *= zoom;
     *height *= zoom;
     GLFWmonitor *monitor = glfwGetPrimaryMonitor();
@@ -507,6 +538,7 @@ static void fit_screen(int *width, int *height)
         *width = (int)fmax(1, *width * s);
         *height = (int)fmax(1, *height * s);
     }
+    return zoom;
 }
 
 /* Creates the window, hidden until the first frame gives its size, with an OpenGL 3.3 core
@@ -543,46 +575,79 @@ static enum ao_window_result open_window(struct viewer *v)
     glfwSetCursorPosCallback(v->window, on_cursor);
     glfwSetScrollCallback(v->window, on_scroll);
     glfwSetWindowRefreshCallback(v->window, on_refresh);
+    glfwSetFramebufferSizeCallback(v->window, on_framebuffer_size);
     return AO_WINDOW_OK;
 }
 
-/* The view of frame f as the window shows it: its image, or its error map or its difference from
- * the reference painted into *heat (allocated on first use); NULL when memory is short. */
-static const float *view_of(const struct viewer *v, const struct ao_frame *f, float **heat)
+/* Makes *buffer hold 3 floats for each of `pixels` pixels, *room counting them; false with one
+ * message when memory is short. */
+static bool grow(float **buffer, size_t *room, size_t pixels, const char *what)
 {
-    if (v->show == SHOW_IMAGE)
-        return f->rgb;
-    if (!*heat && !(*heat = malloc(3 * sizeof **heat * (size_t)f->width * (size_t)f->height))) {
-        fprintf(stderr, "aoview: out of memory for the heat map\n");
-        return NULL;
+    if (pixels <= *room)
+        return true;
+    float *more = realloc(*buffer, 3 * sizeof *more * pixels);
+    if (!more) {
+        fprintf(stderr, "aoview: out of memory for %s\n", what);
+        return false;
     }
-    if (v->show == SHOW_ERROR)
-        ao_heatmap_tiles(f, *heat);
-    else
-        ao_heatmap_pixels(f->rgb, v->info->reference, f->width, f->height, *heat);
-    return *heat;
+    *buffer = more;
+    *room = pixels;
+    return true;
 }
 
-/* Uploads what is on screen as the view shows it: the frame, or while comparing the two sides'
- * views as the layout shows them; false when the upload failed. */
+/* True when frame f has the reference's size, so that its RMSE and difference view exist. */
+static bool fits_reference(const struct viewer *v, const struct ao_frame *f)
+{
+    return v->info->reference && f->width == v->info->reference_width && f->height == v->info->reference_height;
+}
+
+/* Keeps reference_fits for the full frame f, saying on stderr when the sizes stop matching. */
+static void check_reference(struct viewer *v, const struct ao_frame *f)
+{
+    bool fits = !v->info->reference || fits_reference(v, f);
+    if (!fits && v->reference_fits)
+        fprintf(stderr, "aoview: the image is %dx%d and --reference %dx%d: no RMSE or difference view until the "
+                "sizes match\n", f->width, f->height, v->info->reference_width, v->info->reference_height);
+    v->reference_fits = fits;
+}
+
+/* The view of frame f as the window shows it: its image, or its error map or its difference from
+ * the reference painted into heat[k] (grown on use); NULL when memory is short. A preview, or a
+ * frame of another size than the reference in the difference view, shows its image. */
+static const float *view_of(struct viewer *v, const struct ao_frame *f, int k)
+{
+    if (v->show == SHOW_IMAGE || f->block > 1 || (v->show == SHOW_DIFFERENCE && !fits_reference(v, f)))
+        return f->rgb;
+    if (!grow(&v->heat[k], &v->heat_room[k], (size_t)f->width * (size_t)f->height, "the heat map"))
+        return NULL;
+    if (v->show == SHOW_ERROR)
+        ao_heatmap_tiles(f, v->heat[k]);
+    else
+        ao_heatmap_pixels(f->rgb, v->info->reference, f->width, f->height, v->heat[k]);
+    return v->heat[k];
+}
+
+/* Uploads what is on screen as the view shows it: the frame (a preview's cells as blocks), or
+ * while comparing the two sides' views as the layout shows them, once both sides have the same
+ * size; false when the upload failed. */
 static bool upload(struct viewer *v)
 {
     v->dirty = true;
     if (!v->compare) {
-        const float *image = view_of(v, v->shown, &v->heat[0]);
-        v->image_width = v->shown->width;
-        v->image_height = v->shown->height;
-        return image && ao_display_upload(v->display, image, v->image_width, v->image_height);
+        const struct ao_frame *f = v->shown;
+        const float *image = view_of(v, f, 0);
+        v->image_width = f->image_width;
+        v->image_height = f->image_height;
+        return image && ao_display_upload_cells(v->display, image, f->width, f->height, f->block, f->image_width,
+                                                f->image_height);
     }
     const struct ao_frame *a = ao_compare_frame(v->compare, 0), *b = ao_compare_frame(v->compare, 1);
-    const float *view_a = view_of(v, a, &v->heat[0]), *view_b = view_of(v, b, &v->heat[1]);
-    size_t floats = 3 * (size_t)ao_compare_width(AO_COMPARE_SIDE_BY_SIDE, a->width) * (size_t)a->height;
-    if (!view_a || !view_b)
+    if (a->width != b->width || a->height != b->height) /* one side has restarted at a new size */
+        return true;
+    const float *view_a = view_of(v, a, 0), *view_b = view_of(v, b, 1);
+    size_t pixels = (size_t)ao_compare_width(v->layout, a->width) * (size_t)a->height;
+    if (!view_a || !view_b || !grow(&v->composite, &v->composite_room, pixels, "the comparison"))
         return false;
-    if (!v->composite && !(v->composite = malloc(floats * sizeof *v->composite))) {
-        fprintf(stderr, "aoview: out of memory for the comparison\n");
-        return false;
-    }
     ao_compare_compose(v->layout, (int)lround(v->split * a->width), view_a, view_b, a->width, a->height, v->composite);
     v->image_width = ao_compare_width(v->layout, a->width);
     v->image_height = a->height;
@@ -598,13 +663,18 @@ static bool take_frame(struct viewer *v)
         fresh = ao_compare_take_frames(v->compare);
         if (!ao_compare_frame(v->compare, 0) || !ao_compare_frame(v->compare, 1))
             return true;
+        if (fresh)
+            check_reference(v, ao_compare_frame(v->compare, 0));
     } else {
         const struct ao_frame *f = ao_render_take_frame(v->render);
         if ((fresh = f != NULL)) {
             v->shown = f;
             v->shown_at = glfwGetTime();
+        }
+        if (fresh && f->block == 1) {
             ao_chart_add(&v->chart, &f->info);
             ao_progress_add(&v->progress, &f->info);
+            check_reference(v, f);
         }
         if (!v->shown)
             return true;
@@ -655,7 +725,35 @@ static void toggle_compare(struct viewer *v)
         ao_render_set_settings(v->render, &s);
 }
 
-/* Shows the window at the first image's size (fitted to the screen) once there is one. */
+/* The image size the framebuffer asks for: its pixels over the pixel size, each way. */
+static void wanted_size(const struct viewer *v, int *width, int *height)
+{
+    glfwGetFramebufferSize(v->window, width, height);
+    *width = *width / v->pixel_size > 0 ? *width / v->pixel_size : 1;
+    *height = *height / v->pixel_size > 0 ? *height / v->pixel_size : 1;
+}
+
+/* Restarts the render at the size the framebuffer asks for once it has kept its size for
+ * RESIZE_SECONDS (at once after [ or ]); returns the seconds until that is due, or a negative
+ * number when nothing waits. */
+static double follow_size(struct viewer *v)
+{
+    if (v->resized_at == 0.0)
+        return -1.0;
+    double due = v->resized_at < 0.0 ? 0.0 : v->resized_at + RESIZE_SECONDS - glfwGetTime();
+    if (due > 0.0)
+        return due;
+    v->resized_at = 0.0;
+    struct ao_settings s;
+    get_settings(v, &s);
+    wanted_size(v, &s.width, &s.height);
+    set_settings(v, &s);
+    return -1.0;
+}
+
+/* Shows the window at the render's size, fitted to the screen, once the first frame is there; the
+ * pixel size, unless --pixel-size set it, is the magnification of a small image times 2 on a
+ * HiDPI screen (framebuffer pixels per window point). */
 static bool show_first_frame(struct viewer *v)
 {
     while (!v->image_width) {
@@ -663,10 +761,20 @@ static bool show_first_frame(struct viewer *v)
         if (!take_frame(v))
             return false;
     }
-    int width = v->image_width, height = v->image_height;
-    fit_screen(&width, &height);
+    struct ao_settings s;
+    get_settings(v, &s);
+    int width = s.width, height = s.height, zoom = fit_screen(&width, &height);
     glfwSetWindowSize(v->window, width, height);
     glfwShowWindow(v->window);
+    int points, pixels;
+    glfwGetWindowSize(v->window, &points, NULL);
+    glfwGetFramebufferSize(v->window, &pixels, NULL);
+    int hidpi = points > 0 && pixels >= 2 * points ? 2 : 1;
+    v->pixel_size = v->info->pixel_size ? v->info->pixel_size : zoom * hidpi < MAX_PIXEL_SIZE ? zoom * hidpi
+                                                                                             : MAX_PIXEL_SIZE;
+    v->resized_at = -1.0;
+    s.previews = true;
+    set_settings(v, &s);
     return true;
 }
 
@@ -682,9 +790,12 @@ static enum ao_window_result loop(struct viewer *v)
             toggle_compare(v);
         v->toggle_compare = false;
         apply_mouse(v);
-        if (v->save)
+        double resize_due = follow_size(v);
+        /* S saves a full frame: during previews it waits for the first */
+        if (v->save && !(current_frame(v) && current_frame(v)->block > 1)) {
             save(v);
-        v->save = false;
+            v->save = false;
+        }
         if (!take_frame(v))
             return AO_WINDOW_FAILED;
 
@@ -695,7 +806,10 @@ static enum ao_window_result loop(struct viewer *v)
 
         /* Sleep until something happens once the image stops changing; then, and while passes
          * run, handle events until the next frame is due (vsync may have used the time up). */
-        if (v->compare ? !ao_compare_running(v->compare) : s.paused || (v->shown && v->shown->info.done))
+        bool idle = v->compare ? !ao_compare_running(v->compare) : s.paused || (v->shown && v->shown->info.done);
+        if (idle && resize_due >= 0.0)
+            glfwWaitEventsTimeout(resize_due);
+        else if (idle)
             glfwWaitEvents();
         for (double rest; (rest = started + FRAME_SECONDS - glfwGetTime()) > 0 &&
                           !glfwWindowShouldClose(v->window);)
@@ -713,7 +827,8 @@ enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_wi
         return AO_WINDOW_NO_DISPLAY;
     }
     set_glfw_running(true);
-    struct viewer v = {.render = render, .info = info, .show_hud = true, .drag = -1, .split = 0.5,
+    struct viewer v = {.render = render, .info = info, .show_hud = true, .drag = -1, .split = 0.5, .pixel_size = 1,
+                       .reference_fits = true,
                        .show = info->difference && info->reference ? SHOW_DIFFERENCE : SHOW_IMAGE};
     enum ao_window_result result = open_window(&v);
     /* --compare: main made the renderer paused; the comparison starts unpaused. */

@@ -15,7 +15,9 @@ struct ao_window_info {
     bool quiet;              /* no screenshot names on stdout */
     uint64_t seed;           /* for the saved EXR's header */
     bool save_exr;           /* S saves aoview-N.exr beside the PNG instead of aoview-N.pfm */
-    const float *reference;  /* --reference for the difference view (the frames' size), or NULL */
+    const float *reference;  /* --reference for the difference view, or NULL */
+    int reference_width, reference_height;
+    int pixel_size;          /* --pixel-size: 1, 2, 4 or 8; 0: auto */
     bool difference;         /* start in the difference view (needs reference) */
     const struct ao_render_config *config;   /* the window's renderer's, for V's two renderers; NULL:
                                                 no V (aoview-mpi) */
@@ -31,8 +33,9 @@ enum ao_window_result {
     AO_WINDOW_FAILED,        /* OpenGL failed after the window opened; one message printed */
 };
 
-/* Opens the GLFW window on the running renderer, sized to its first frame, and runs until the user
- * quits; it is the renderer's frame consumer meanwhile. NO_DISPLAY when no window can be opened
+/* Opens the GLFW window on the running renderer, sized to its image (fitted to the screen), and
+ * runs until the user quits, the render following the framebuffer's size; it is the renderer's
+ * frame consumer meanwhile. NO_DISPLAY when no window can be opened
  * (main then falls back to headless). Main thread only. */
 enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_window_info *info);
 

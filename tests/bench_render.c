@@ -41,8 +41,7 @@ static struct ao_render *start(const struct ao_scene *scene, const struct ao_tra
                                       .threads = threads, .seed = 1, .target_spp = spp,
                                       .ao_distance = scene->ao_distance};
     struct ao_settings settings = {.width = width, .height = height, .sampling = AO_SAMPLING_COSINE, .aa = true,
-                                   .spppp = spppp,
-                                   .camera = scene->camera};
+                                   .spppp = spppp, .camera = scene->camera};
     struct ao_render *r = ao_render_create(&config, &settings);
     if (!r)
         exit(1);

@@ -143,6 +143,24 @@ static void test_bad_sizes(void **state)
         REJECT("--size: expected WxH", bad[i], "--size", (char *)bad[i]);
 }
 
+/* --pixel-size: auto (0) by default, the four sizes, nothing else. */
+static void test_pixel_size(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE_NONE(&o));
+    assert_int_equal(o.pixel_size, 0);
+    const char *good[] = {"1", "2", "4", "8", "auto"};
+    const int sizes[] = {1, 2, 4, 8, 0};
+    for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
+        assert_true(PARSE(&o, "--pixel-size", (char *)good[i]));
+        assert_int_equal(o.pixel_size, sizes[i]);
+    }
+    const char *bad[] = {"3", "0", "x", "16", "", "-2", "2.0", "Auto"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+        REJECT("--pixel-size: expected auto, 1, 2, 4 or 8", bad[i], "--pixel-size", (char *)bad[i]);
+}
+
 static void test_bad_strings(void **state)
 {
     (void)state;
@@ -312,6 +330,7 @@ int main(void)
         cmocka_unit_test(test_equals_and_long_forms),
         cmocka_unit_test(test_bad_counts),
         cmocka_unit_test(test_bad_sizes),
+        cmocka_unit_test(test_pixel_size),
         cmocka_unit_test(test_bad_strings),
         cmocka_unit_test(test_bad_distances),
         cmocka_unit_test(test_bad_structure),

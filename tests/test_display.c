@@ -156,6 +156,10 @@ static void test_fit_letterboxes(void **state)
     assert_true(r.x == 0 && r.y == 380 && r.width == 320 && r.height == 240);
     r = ao_display_fit(37, 23, 1, 1);             /* never negative, never larger than the window */
     assert_true(r.width >= 0 && r.height >= 0 && r.width <= 1 && r.height <= 1);
+    r = ao_display_fit(161, 121, 647, 487);       /* --pixel-size 4: 4x4 blocks, centred */
+    assert_true(r.x == 1 && r.y == 1 && r.width == 644 && r.height == 484);
+    r = ao_display_fit(320, 241, 641, 481);       /* 2x2 blocks would leave 3 rows: fitted */
+    assert_true(r.height == 481 && r.width == 638);
 }
 
 /* ---- golden screenshots ----

@@ -28,8 +28,9 @@ struct counter {
     int calls_before_preview;   /* passes published before the first preview; -1: no preview */
 };
 
-static void count_preview(void *user)
+static void count_preview(const struct ao_frame_info *info, void *user)
 {
+    (void)info;
     struct counter *c = user;
     if (c->previews++ == 0)
         c->calls_before_preview = c->calls;
@@ -542,9 +543,9 @@ static void test_previews_come_first_and_change_nothing(void **state)
     struct counter counter[2] = {{.calls_before_preview = -1}, {.calls_before_preview = -1}};
     for (int previews = 0; previews < 2; previews++) {
         struct ao_frame_info info;
-        struct ao_render_config config = {.threads = 2, .seed = 7, .target_spp = 64, .previews = previews};
+        struct ao_render_config config = {.threads = 2, .seed = 7, .target_spp = 64};
         struct ao_settings settings = {.width = 256, .height = 192, .sampling = AO_SAMPLING_COSINE, .aa = true,
-                                       .adaptive = true};
+                                       .adaptive = true, .previews = previews};
         image[previews] = render_scene(SCENE, config, settings, &info, &counter[previews]);
     }
     assert_int_equal(counter[0].previews, 0);

@@ -9,6 +9,9 @@
 #   test_window.sh chart   with --reference: a run in each sampling mode (H, then U, then C) leaves
 #                          a curve in its colour on the screen, read from Xvfb's framebuffer file;
 #                          F2 hides the chart; D shows the difference heat map
+#   test_window.sh resize  the render follows the window: a resize restarts once at the new size
+#                          (title, --stats, S's PNG), ] and [ double and halve the pixel size, a
+#                          resize during V keeps both sides one size; --pixel-size 2 halves it
 #   test_window.sh compare V: uniform against cosine, labelled on both sides, both curves in the
 #                          chart, render seconds within 5 %; B, divider drag, S (screenshots of
 #                          both layouts compared), E, D, +, G restart nothing, an orbit, a pan and
@@ -69,14 +72,14 @@ press() {
 }
 
 # Waits for screenshot number $1 and checks that both files decode: PNG signature and IHDR size
-# ($2 wide, else W), PFM header, size and no NaN or infinity among its floats.
+# ($2 wide, else W; $3 high, else H), PFM header, size and no NaN or infinity among its floats.
 check_screenshot() {
     local png="$work/aoview-$1.png" pfm="$work/aoview-$1.pfm"
     for _ in $(seq 200); do
         [ -s "$png" ] && [ -s "$pfm" ] && break
         sleep 0.05
     done
-    python3 - "$png" "$pfm" "${2:-$W}" "$H" <<'EOF' || fail "screenshot $1 does not decode"
+    python3 - "$png" "$pfm" "${2:-$W}" "${3:-$H}" <<'EOF' || fail "screenshot $1 does not decode"
 import math, struct, sys
 png, pfm, w, h = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 data = open(png, 'rb').read()
@@ -251,6 +254,12 @@ if [ "$mode" = chart ] || [ "$mode" = compare ]; then
     "$AO_BINARY" --headless -q --size ${W}x$H --spp 64 --spppp 16 -o ref.pfm \
         "$scene" || { echo "FAIL: no reference"; exit 1; }
     args=(--reference ref.pfm)
+fi
+if [ "$mode" = resize ]; then
+    # At 640x480 the window is the image's size; every pixel is rendered.
+    W=640
+    H=480
+    args=(--pixel-size 1 --stats stats.csv)
 fi
 # Adaptive sampling off, so that G turns it on.
 "$AO_BINARY" --size ${W}x$H --spp 1000000 --spppp 1 --threads 2 --sampling hemisphere --adaptive off "${args[@]}" \
@@ -474,7 +483,7 @@ EOF
     done
     # V again: the single view, in A's configuration.
     press v
-    wait_title "spheres.scene — uniform — AA on — spp [0-9]+ of 1000000 — "
+    wait_title "spheres.scene — [0-9]+x[0-9]+ — uniform — AA on — spp [0-9]+ of 1000000 — "
     press Escape
     wait "$pid" || fail "exit status $? after Esc"
 
@@ -502,6 +511,46 @@ EOF
     read -r new_a _ new_b _ < <(sides)
     [ "$new_a" -lt "$spp_a" ] && [ "$new_b" -lt "$spp_b" ] || fail "an orbit did not restart the finished comparison"
     wait_title " — finished$"
+elif [ "$mode" = resize ]; then
+    # Each run's first pass is a --stats row with pass 1.
+    runs() { awk -F, '$1 == 1' stats.csv | wc -l; }
+    wait_title "spheres.scene — 640x480 — "
+    [ "$(runs)" -eq 1 ] || fail "the window restarted the render before any resize ($(runs) runs)"
+    xdotool windowsize "$wid" 500 400
+    wait_title "spheres.scene — 500x400 — "
+    sleep 0.5
+    press s
+    check_screenshot 1 500 400
+    [ "$(runs)" -eq 2 ] || fail "a resize did not restart exactly once ($(runs) runs)"
+    # ]: pixels of 2x2, half the size each way; [: back.
+    press bracketright
+    wait_title "spheres.scene — 250x200 — "
+    sleep 0.5
+    press s
+    check_screenshot 2 250 200
+    press bracketleft
+    wait_title "spheres.scene — 500x400 — "
+    [ "$(runs)" -eq 4 ] || fail "[ and ] did not restart once each ($(runs) runs)"
+    # V, then a resize: both sides restart at the new size; side by side, the screenshot is two
+    # 600x300 images.
+    press v
+    wait_title " — compare — A: "
+    xdotool windowsize "$wid" 600 300
+    sleep 1
+    press b
+    sleep 0.5
+    press s
+    check_screenshot 3 1200 300
+    press Escape
+    wait "$pid" || fail "exit status $? after Esc"
+    # --pixel-size 2: the 640x480 window renders 320x240.
+    "$AO_BINARY" --size 640x480 --pixel-size 2 --spp 1000000 --threads 2 "$scene" >stdout 2>stderr &
+    pid=$!
+    wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window for --pixel-size 2"
+    wid=${wid%%$'\n'*}
+    wait_title "spheres.scene — 320x240 — "
+    press s
+    check_screenshot 4 320 240
 else
     # Random keys (no S, Q or Esc), drags, wheel steps and resizes, as fast as xdotool goes.
     keys=(u h c a n f d e g v b space r plus minus equal KP_Add KP_Subtract F1 F2 question)
@@ -517,10 +566,17 @@ else
         esac
         kill -0 "$pid" 2>/dev/null || fail "aoview died after $i random inputs"
     done
-    # Release any button a drag above left down; then the viewer must still answer.
+    # Release any button a drag above left down; then the viewer must still answer, with a
+    # screenshot at the size the title gives once the last resize has taken.
+    # (Resumed if paused: a restart while paused can leave a preview on screen, and S saves full
+    # frames only.)
     xdotool mouseup 1 mouseup 3 2>/dev/null
+    sleep 0.5
+    [[ $(title) == *" — paused" ]] && press space
+    wait_title "spheres.scene — [0-9]+x[0-9]+ — "
+    [[ $(title) =~ spheres.scene\ —\ ([0-9]+)x([0-9]+)\ — ]] || fail "no size in the title"
     press s
-    check_screenshot 1
+    check_screenshot 1 "${BASH_REMATCH[1]}" "${BASH_REMATCH[2]}"
 fi
 
 # Esc: the process ends, with status 0, within a second even with a pass in flight.
