@@ -132,8 +132,9 @@ quit() {
   wait "$viewer_pid" || fail "$1: ended with status $? after Q: $(cat "$1.err")"
 }
 
-# drive NAME: from hemisphere sampling with AA, C, A and one orbit (a drag as a single mouse move,
-# so that both viewers turn the camera alike); at 64 spp, S saves the image shown (NAME.pfm), Q.
+# drive NAME: from hemisphere sampling with AA, C, A, a resize of the window to 640x400 (the 96x64
+# image's pixel size is 8: 80x50 pixels) and one orbit (a drag as a single mouse move, so that
+# both viewers turn the camera alike); at 64 spp, S saves the image shown (NAME.pfm), Q.
 drive() {
   local name=$1
   wait_title " — hemisphere — AA on — " || return
@@ -142,6 +143,8 @@ drive() {
   title_shows " — cosine — AA on — " || { press c && wait_title " — cosine — AA on — "; } || return
   press a
   wait_title " — cosine — AA off — " || return
+  xdotool windowsize "$wid" 640 400
+  wait_title " — 80x50 — cosine — AA off — " || return
   xdotool mousemove --window "$wid" 300 200 && sleep 0.2 && xdotool mousedown 1 && sleep 0.2 &&
     xdotool mousemove --window "$wid" 360 220 && sleep 0.2 && xdotool mouseup 1
   wait_title " — spp 64 of 64 — " || return
@@ -214,10 +217,10 @@ window)
     -np 1 "$mpi_bin" --threads 1 "${small[@]}" && { drive ranks || end_viewer; }
   d=$(max_diff one.pfm ranks.pfm 2>/dev/null)
   traced=$(tiles_of 1 ranks.err)
-  echo "after C, A and an orbit: max |d| = ${d:-?} from one process; tiles traced by rank 0 $(tiles_of 0 ranks.err), rank 1 ${traced:-?}"
-  [ "$d" = 0.0 ] || fail "the ranks' image after C, A and an orbit differs from one process's by ${d:-?}"
+  echo "after C, A, a resize and an orbit: max |d| = ${d:-?} from one process; tiles traced by rank 0 $(tiles_of 0 ranks.err), rank 1 ${traced:-?}"
+  [ "$d" = 0.0 ] || fail "the ranks' image after C, A, a resize and an orbit differs from one process's by ${d:-?}"
   [ "${traced:-0}" -gt 0 ] || fail "rank 1 traced no tile: $(cat ranks.err)"
-  "$bin" --headless -q --size 96x64 --spp 64 --adaptive off --sampling cosine --no-aa -o still.pfm "$spheres"
+  "$bin" --headless -q --size 80x50 --spp 64 --adaptive off --sampling cosine --no-aa -o still.pfm "$spheres"
   [ "$(max_diff one.pfm still.pfm)" != 0.0 ] || fail "the drag did not orbit the camera"
 
   # Q mid-pass (after V, which aoview-mpi has not), and Q while paused: every rank ends, status 0.
