@@ -34,20 +34,19 @@ bool ao_preview_begin(struct ao_preview *p, const struct ao_context *ctx, const 
     p->tiles_x = (p->width + TILE - 1) / TILE;
     p->tiles = p->tiles_x * ((p->height + TILE - 1) / TILE);
     atomic_store(&p->next, 0);
-    atomic_store(&p->rays, 0);
     return true;
 }
 
 void ao_preview_trace(struct ao_preview *p, bool (*stop)(void *user), void *user)
 {
     const struct ao_tile_work work = {.rounds = 1, .count = AO_PREVIEW_SAMPLES};
-    uint64_t eye = 0, shadow = 0;
+    uint64_t rays = 0; /* not counted: previews are not part of the run */
     for (int t; !stop(user) && (t = atomic_fetch_add_explicit(&p->next, 1, memory_order_relaxed)) < p->tiles;) {
         struct ao_tile rect = {.x0 = t % p->tiles_x * TILE, .y0 = t / p->tiles_x * TILE};
         rect.x1 = rect.x0 + TILE < p->width ? rect.x0 + TILE : p->width;
         rect.y1 = rect.y0 + TILE < p->height ? rect.y0 + TILE : p->height;
         struct ao_vec3 sums[TILE * TILE];
-        ao_estimate_tile(&p->ctx, &rect, &work, sums, &eye, &shadow);
+        ao_estimate_tile(&p->ctx, &rect, &work, sums, &rays, &rays);
         const struct ao_vec3 *s = sums;
         for (int j = rect.y0; j < rect.y1; j++)
             for (int i = rect.x0; i < rect.x1; i++, s++) {
@@ -57,5 +56,4 @@ void ao_preview_trace(struct ao_preview *p, bool (*stop)(void *user), void *user
                 out[2] = s->z / AO_PREVIEW_SAMPLES;
             }
     }
-    atomic_fetch_add_explicit(&p->rays, eye + shadow, memory_order_relaxed);
 }

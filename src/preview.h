@@ -22,7 +22,6 @@ struct ao_preview {
     int tiles_x, tiles;          /* 16 x 16 cell tiles */
     atomic_int next;
     float *rgb;                  /* width x height x 3 floats, top row first: set before tracing */
-    atomic_uint_fast64_t rays;   /* eye and AO rays traced */
 };
 
 /* The block size of the first preview of a width x height image (the power of two that brings its
