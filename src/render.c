@@ -62,7 +62,8 @@ struct ao_render {
 
     /* Triple buffer: the render thread owns frames[back], the consumer frames[front]; `middle`
      * holds the third index, with FRESH set while it is newer than what the consumer has. Each
-     * frame's buffers hold room[k] pixels and tiles, grown by the render thread while it owns it. */
+     * frame's buffers hold room[k] floats of pixels and of tile errors, grown by the render thread
+     * while it owns the frame. */
     struct ao_frame frames[3];
     size_t room[3][2];
     int back, front;
@@ -438,29 +439,29 @@ static double rmse(const float *image, const float *reference, size_t count)
     return sqrt(sum / (double)count);
 }
 
+/* Makes *buffer hold `count` floats, *room counting them; false when memory is short. */
+static bool grow(float **buffer, size_t *room, size_t count)
+{
+    if (count <= *room)
+        return true;
+    float *more = realloc(*buffer, count * sizeof *more);
+    if (!more)
+        return false;
+    *buffer = more;
+    *room = count;
+    return true;
+}
+
 /* Makes the back frame width x height pixels with room for `tiles` tile errors, growing its buffers
  * where they are short; false with one message when memory is. */
 static bool back_frame(struct ao_render *r, int width, int height, int tiles)
 {
     struct ao_frame *f = &r->frames[r->back];
-    size_t *room = r->room[r->back], pixels = (size_t)width * (size_t)height;
-    if (pixels > room[0]) {
-        float *rgb = realloc(f->rgb, 3 * pixels * sizeof *rgb);
-        if (!rgb) {
-            fprintf(stderr, "aoview: out of memory for %dx%d frames\n", width, height);
-            return false;
-        }
-        f->rgb = rgb;
-        room[0] = pixels;
-    }
-    if ((size_t)tiles > room[1]) {
-        float *error = realloc(f->tile_error, (size_t)tiles * sizeof *error);
-        if (!error) {
-            fprintf(stderr, "aoview: out of memory for %dx%d frames\n", width, height);
-            return false;
-        }
-        f->tile_error = error;
-        room[1] = (size_t)tiles;
+    size_t *room = r->room[r->back];
+    if (!grow(&f->rgb, &room[0], 3 * (size_t)width * (size_t)height) ||
+        !grow(&f->tile_error, &room[1], (size_t)tiles)) {
+        fprintf(stderr, "aoview: out of memory for %dx%d frames\n", width, height);
+        return false;
     }
     f->width = width;
     f->height = height;
