@@ -11,6 +11,7 @@
 
 #include "accum.h"
 #include "ao.h"
+#include "buffer.h"
 #include "pool.h"
 #include "preview.h"
 
@@ -439,27 +440,14 @@ static double rmse(const float *image, const float *reference, size_t count)
     return sqrt(sum / (double)count);
 }
 
-/* Makes *buffer hold `count` floats, *room counting them; false when memory is short. */
-static bool grow(float **buffer, size_t *room, size_t count)
-{
-    if (count <= *room)
-        return true;
-    float *more = realloc(*buffer, count * sizeof *more);
-    if (!more)
-        return false;
-    *buffer = more;
-    *room = count;
-    return true;
-}
-
 /* Makes the back frame width x height pixels with room for `tiles` tile errors, growing its buffers
  * where they are short; false with one message when memory is. */
 static bool back_frame(struct ao_render *r, int width, int height, int tiles)
 {
     struct ao_frame *f = &r->frames[r->back];
     size_t *room = r->room[r->back];
-    if (!grow(&f->rgb, &room[0], 3 * (size_t)width * (size_t)height) ||
-        !grow(&f->tile_error, &room[1], (size_t)tiles)) {
+    if (!ao_buffer_grow(&f->rgb, &room[0], 3 * (size_t)width * (size_t)height) ||
+        !ao_buffer_grow(&f->tile_error, &room[1], (size_t)tiles)) {
         fprintf(stderr, "aoview: out of memory for %dx%d frames\n", width, height);
         return false;
     }

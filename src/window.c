@@ -13,6 +13,7 @@
 #include <GLFW/glfw3.h>
 #include <X11/Xlib.h>   /* the IO error handler: GLFW 3.3 leaves Xlib's in place */
 
+#include "buffer.h"
 #include "chart.h"
 #include "chartview.h"
 #include "compare.h"
@@ -93,7 +94,7 @@ struct viewer {
     bool show_hud, show_help, save;
     enum show show;
     float *heat[2];                  /* the heat maps' colours (one per side), grown on use */
-    size_t heat_room[2], composite_room;   /* their pixels, and the composite's */
+    size_t heat_room[2], composite_room;   /* their floats, and the composite's */
     struct ao_compare *compare;      /* the comparison while V has it on, else NULL */
     bool toggle_compare;             /* V was pressed: the loop turns the comparison on or off */
     enum ao_compare_layout layout;
@@ -579,20 +580,14 @@ static enum ao_window_result open_window(struct viewer *v)
     return AO_WINDOW_OK;
 }
 
-/* Makes *buffer hold 3 floats for each of `pixels` pixels, *room counting them; false with one
+/* Makes *buffer hold 3 floats for each of `pixels` pixels, *room counting its floats; false with one
  * message when memory is short. */
 static bool grow(float **buffer, size_t *room, size_t pixels, const char *what)
 {
-    if (pixels <= *room)
+    if (ao_buffer_grow(buffer, room, 3 * pixels))
         return true;
-    float *more = realloc(*buffer, 3 * sizeof *more * pixels);
-    if (!more) {
-        fprintf(stderr, "aoview: out of memory for %s\n", what);
-        return false;
-    }
-    *buffer = more;
-    *room = pixels;
-    return true;
+    fprintf(stderr, "aoview: out of memory for %s\n", what);
+    return false;
 }
 
 /* True when frame f has the reference's size, so that its RMSE and difference view exist. */
