@@ -11,12 +11,12 @@
 
 #include "accum.h"
 #include "ao.h"
-#include "buffer.h"
+#include "frames.h"
 #include "pool.h"
 #include "preview.h"
 
-/* Tiles are TILE x TILE pixels (AO_TILE_PIXELS); FRESH marks a frame the consumer has not seen. */
-enum { TILE = 16, FRESH = 4 };
+/* Tiles are TILE x TILE pixels (AO_TILE_PIXELS). */
+enum { TILE = 16 };
 _Static_assert(TILE * TILE <= AO_TILE_PIXELS, "a tile must fit ao_estimate_tile");
 
 /* Adaptive sampling works on whole tiles. A tile takes MIN_PASSES passes (two in each half) and
@@ -61,14 +61,7 @@ struct ao_render {
     int width, height;                   /* of the accumulation: the size of the current run */
     struct ao_accum accum;               /* render thread (and its workers, pixel-disjoint) only */
 
-    /* Triple buffer: the render thread owns frames[back], the consumer frames[front]; `middle`
-     * holds the third index, with FRESH set while it is newer than what the consumer has. Each
-     * frame's buffers hold room[k] floats of pixels and of tile errors, grown by the render thread
-     * while it owns the frame. */
-    struct ao_frame frames[3];
-    size_t room[3][2];
-    int back, front;
-    atomic_uint middle;
+    struct ao_frames frames;             /* to the consumer */
 
     /* Settings and control, under `lock`. */
     pthread_mutex_t lock;
@@ -440,36 +433,13 @@ static double rmse(const float *image, const float *reference, size_t count)
     return sqrt(sum / (double)count);
 }
 
-/* Makes the back frame width x height pixels with room for `tiles` tile errors, growing its buffers
- * where they are short; false with one message when memory is. */
-static bool back_frame(struct ao_render *r, int width, int height, int tiles)
+/* Resolves the running average into the back frame with its tile errors and info, its RMSE filled
+ * in where the reference has the image's size; the frame, or NULL when memory is short. */
+static struct ao_frame *resolve(struct ao_render *r, struct ao_frame_info *info)
 {
-    struct ao_frame *f = &r->frames[r->back];
-    size_t *room = r->room[r->back];
-    if (!ao_buffer_grow(&f->rgb, &room[0], 3 * (size_t)width * (size_t)height) ||
-        !ao_buffer_grow(&f->tile_error, &room[1], (size_t)tiles)) {
-        fprintf(stderr, "aoview: out of memory for %dx%d frames\n", width, height);
-        return false;
-    }
-    f->width = width;
-    f->height = height;
-    return true;
-}
-
-/* Swaps the back frame into the middle slot, newer than what the consumer has. */
-static void swap_back(struct ao_render *r)
-{
-    unsigned previous = atomic_exchange(&r->middle, (unsigned)r->back | FRESH);
-    r->back = (int)(previous & ~(unsigned)FRESH);
-}
-
-/* Resolves the running average into the back frame (grown to the image size: false when memory is
- * short) with its tile errors, fills in info's RMSE where the reference has the image's size. */
-static bool resolve(struct ao_render *r, struct ao_frame_info *info)
-{
-    if (!back_frame(r, r->width, r->height, r->tiles_x * r->tiles_y))
-        return false;
-    struct ao_frame *f = &r->frames[r->back];
+    struct ao_frame *f = ao_frames_back(&r->frames, r->width, r->height, r->tiles_x * r->tiles_y);
+    if (!f)
+        return NULL;
     size_t count = 3 * (size_t)f->width * (size_t)f->height;
     ao_accum_resolve(&r->accum, f->rgb);
     bool matches = r->config.reference && r->config.reference_width == r->width &&
@@ -485,7 +455,7 @@ static bool resolve(struct ao_render *r, struct ao_frame_info *info)
     f->image_width = r->width;
     f->image_height = r->height;
     f->info = *info;
-    return true;
+    return f;
 }
 
 /* Publishes the pass just surveyed; false when memory is short. */
@@ -493,7 +463,7 @@ static bool publish(struct ao_render *r, struct ao_frame_info *info)
 {
     if (!resolve(r, info))
         return false;
-    swap_back(r);
+    ao_frames_publish(&r->frames);
     return true;
 }
 
@@ -521,9 +491,9 @@ static bool preview(struct ao_render *r, const struct ao_camera *camera, const s
         struct ao_preview *p = &r->preview;
         if (!ao_preview_begin(p, &r->ctx, camera, r->width, r->height, block))
             return true;
-        if (!back_frame(r, p->width, p->height, 0))
+        struct ao_frame *f = ao_frames_back(&r->frames, p->width, p->height, 0);
+        if (!f)
             return false;
-        struct ao_frame *f = &r->frames[r->back];
         p->rgb = f->rgb;
         ao_pool_run(r->pool, preview_job, r);
         if (aborted(r))
@@ -534,7 +504,7 @@ static bool preview(struct ao_render *r, const struct ao_camera *camera, const s
         f->image_width = r->width;
         f->image_height = r->height;
         f->info = *info;
-        swap_back(r);
+        ao_frames_publish(&r->frames);
         if (r->config.on_preview)
             r->config.on_preview(info, r->config.user);
     }
@@ -543,11 +513,7 @@ static bool preview(struct ao_render *r, const struct ao_camera *camera, const s
 
 const struct ao_frame *ao_render_take_frame(struct ao_render *render)
 {
-    if (!(atomic_load(&render->middle) & FRESH))
-        return NULL;
-    unsigned previous = atomic_exchange(&render->middle, (unsigned)render->front);
-    render->front = (int)(previous & ~(unsigned)FRESH);
-    return &render->frames[render->front];
+    return ao_frames_take(&render->frames);
 }
 
 /* ---- the render thread ---- */
@@ -752,9 +718,7 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
     r->settings = *settings;
     r->width = settings->width;
     r->height = settings->height;
-    r->back = 0;
-    atomic_init(&r->middle, 1u);
-    r->front = 2;
+    ao_frames_init(&r->frames);
     r->ctx = (struct ao_context){.scene = config->scene, .tracer = config->tracer,
                                  .ao_distance = config->ao_distance, .seed = config->seed,
                                  .sequence = config->sequence, .below = config->below};
@@ -803,9 +767,9 @@ const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render)
             struct ao_tile rect = tile_rect(render, t);
             ao_accum_clear(&render->accum, rect.x0, rect.y0, rect.x1, rect.y1);
         }
-    if (!resolve(render, &info))
+    struct ao_frame *f = resolve(render, &info);
+    if (!f)
         return NULL;
-    struct ao_frame *f = &render->frames[render->back];
     size_t pixels = (size_t)f->width * (size_t)f->height;
     uint32_t fewest = UINT32_MAX;
     for (size_t p = 0; p < pixels; p++)
@@ -824,10 +788,7 @@ void ao_render_destroy(struct ao_render *render)
     pthread_cond_destroy(&render->finished);
     pthread_cond_destroy(&render->wake);
     pthread_mutex_destroy(&render->lock);
-    for (int k = 0; k < 3; k++) {
-        free(render->frames[k].rgb);
-        free(render->frames[k].tile_error);
-    }
+    ao_frames_finish(&render->frames);
     free(render->shares);
     free_run(render);
     free(render);

@@ -1,0 +1,38 @@
+/* The triple buffer that hands frames from the render thread to their one consumer (the GL thread,
+ * or main when headless) without either waiting: the producer fills the back frame and publishes
+ * it with one atomic exchange; the consumer takes the newest. Frames grow to the size asked. */
+#ifndef AO_FRAMES_H
+#define AO_FRAMES_H
+
+#include <stdatomic.h>
+#include <stddef.h>
+
+#include "render.h"
+
+/* The three frames: the producer owns frames[back], the consumer frames[front]; `middle` holds the
+ * third index, with a flag set while it is newer than what the consumer has. Each frame's buffers
+ * hold room[k] floats of pixels and of tile errors. */
+struct ao_frames {
+    struct ao_frame frames[3];
+    size_t room[3][2];
+    int back, front;
+    atomic_uint middle;
+};
+
+/* Starts with three empty frames. */
+void ao_frames_init(struct ao_frames *fs);
+
+/* Frees the frames' buffers. */
+void ao_frames_finish(struct ao_frames *fs);
+
+/* The back frame, made width x height pixels with room for `tiles` tile errors (its buffers grown
+ * where short, never shrunk); NULL with one message when memory is short. Producer thread. */
+struct ao_frame *ao_frames_back(struct ao_frames *fs, int width, int height, int tiles);
+
+/* Publishes the back frame, filled in: it becomes the newest. Producer thread. */
+void ao_frames_publish(struct ao_frames *fs);
+
+/* The newest frame published since the last call, or NULL; valid until the next call. Consumer. */
+const struct ao_frame *ao_frames_take(struct ao_frames *fs);
+
+#endif
