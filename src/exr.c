@@ -279,11 +279,31 @@ static bool check_chunks(exr_const_context_t ctxt, const struct layout *l, char 
     return true;
 }
 
+/* The library's decompressor for the part, wrapped by decompress (through decoding_user_data). */
+struct decompressor {
+    exr_result_t (*run)(exr_decode_pipeline_t *decode);
+};
+
+/* Leaves a chunk stored uncompressed (as many bytes stored as its pixels take) as it is, and
+ * decompresses any other. OpenEXRCore 3.1.5 points the unpacked buffer at such a chunk's bytes
+ * but still runs its B44 and B44A decoders over them in place, which puts float channels' rows
+ * (and any partial tile's pixels) in the wrong place; OpenEXR's C++ library, which writes such
+ * chunks, reads them as they are. */
+static exr_result_t decompress(exr_decode_pipeline_t *decode)
+{
+    const struct decompressor *d = decode->decoding_user_data;
+    if (decode->chunk.packed_size == decode->chunk.unpacked_size &&
+        decode->unpacked_buffer == decode->packed_buffer)
+        return EXR_ERR_SUCCESS;
+    return d->run(decode);
+}
+
 /* Decodes one chunk's R, G and B into rgb (the data window's top-left at rgb[0]), as floats; the
  * chunk's top-left pixel is (x, y). */
 static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_t *chunk,
                                  int64_t x, int64_t y, exr_decode_pipeline_t *decode,
-                                 bool *started, float *rgb, exr_attr_box2i_t window)
+                                 struct decompressor *d, bool *started, float *rgb,
+                                 exr_attr_box2i_t window)
 {
     int width = window.max.x - window.min.x + 1;
     exr_result_t r = *started ? exr_decoding_update(ctxt, 0, chunk, decode)
@@ -302,6 +322,11 @@ static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_
         channel->user_data_type = EXR_PIXEL_FLOAT;
     }
     r = exr_decoding_choose_default_routines(ctxt, 0, decode);
+    if (r == EXR_ERR_SUCCESS && decode->decompress_fn && decode->decompress_fn != decompress) {
+        d->run = decode->decompress_fn;
+        decode->decompress_fn = decompress;
+        decode->decoding_user_data = d;
+    }
     return r == EXR_ERR_SUCCESS ? exr_decoding_run(ctxt, 0, decode) : r;
 }
 
@@ -309,6 +334,7 @@ static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_
 static exr_result_t read_chunks(exr_const_context_t ctxt, const struct layout *l, float *rgb)
 {
     exr_decode_pipeline_t decode = EXR_DECODE_PIPELINE_INITIALIZER;
+    struct decompressor d = {NULL};
     bool started = false;
     exr_result_t r = EXR_ERR_SUCCESS;
     for (int64_t i = 0; r == EXR_ERR_SUCCESS && i < l->count; i++) {
@@ -317,7 +343,7 @@ static exr_result_t read_chunks(exr_const_context_t ctxt, const struct layout *l
         r = chunk_info(ctxt, l, i, &chunk, &x, &y);
         if (r == EXR_ERR_SUCCESS)
             r = decode_chunk(ctxt, &chunk, x, l->storage == EXR_STORAGE_SCANLINE ? chunk.start_y : y,
-                             &decode, &started, rgb, l->window);
+                             &decode, &d, &started, rgb, l->window);
     }
     if (started)
         exr_decoding_destroy(ctxt, &decode);
@@ -383,8 +409,14 @@ static bool read_part(exr_const_context_t ctxt, float **out, int *width, int *he
         return failed(f, false, "out of memory");
     r = read_chunks(ctxt, &layout, rgb);
     bool ok = r == EXR_ERR_SUCCESS;
-    if (!ok)
+    if (r == EXR_ERR_FEATURE_NOT_IMPLEMENTED) {
+        int major = 0, minor = 0, patch = 0;
+        exr_get_library_version(&major, &minor, &patch, NULL);
+        failed(f, false, "%s compression cannot be decoded by OpenEXR %d.%d.%d's C library",
+               compression_name(layout.compression), major, minor, patch);
+    } else if (!ok) {
         failed(f, true, "cannot decode the pixels");
+    }
     for (size_t i = 0; ok && i < count; i++)
         if (!isfinite(rgb[i]))
             ok = failed(f, false, "non-finite pixel value");
