@@ -378,10 +378,10 @@ static bool failed(struct failure *f, bool quote, const char *format, ...)
     return false;
 }
 
-/* Reads the first part of the opened file into a new buffer: the header's checks, every chunk's
- * stored size, then the pixels. */
-static bool read_part(exr_const_context_t ctxt, float **out, int *width, int *height,
-                      struct failure *f)
+/* Reads the first part of the opened file into a new buffer: the header's checks (the size
+ * before any pixel buffer exists), every chunk's stored size, then the pixels. */
+static bool read_part(exr_const_context_t ctxt, int want_width, int want_height, float **out,
+                      int *width, int *height, struct failure *f)
 {
     exr_storage_t storage;
     exr_attr_box2i_t window;
@@ -394,6 +394,9 @@ static bool read_part(exr_const_context_t ctxt, float **out, int *width, int *he
         return failed(f, true, "no data window");
     if (!window_size(window, width, height))
         return failed(f, false, "bad or too large data window");
+    if (want_width && (*width != want_width || *height != want_height))
+        return failed(f, false, "the image is %dx%d, not the %dx%d needed", *width, *height,
+                      want_width, want_height);
     if ((reason = check_channels(ctxt)) != NULL)
         return failed(f, false, "%s", reason);
     if (!get_layout(ctxt, storage, window, &layout))
@@ -428,7 +431,8 @@ static bool read_part(exr_const_context_t ctxt, float **out, int *width, int *he
     return true;
 }
 
-bool ao_exr_read(const char *path, float **rgb, int *width, int *height)
+bool ao_exr_read(const char *path, int want_width, int want_height, float **rgb, int *width,
+                 int *height)
 {
     struct stream s = {.message = ""};
     char *data;
@@ -447,7 +451,7 @@ bool ao_exr_read(const char *path, float **rgb, int *width, int *height)
     struct failure f = {"", false};
     int w = 0, h = 0;
     bool ok = exr_start_read(&ctxt, path, &init) == EXR_ERR_SUCCESS
-                  ? read_part(ctxt, rgb, &w, &h, &f)
+                  ? read_part(ctxt, want_width, want_height, rgb, &w, &h, &f)
                   : failed(&f, true, "not a readable OpenEXR file");
     if (ctxt)
         exr_finish(&ctxt);

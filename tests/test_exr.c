@@ -1,7 +1,7 @@
 /* exr.c through image.h: aoview's EXR round trip and header attributes, and reading what other
  * tools write — half or float, scanline or tiled, RGB or RGBA, a data window not at the origin,
  * every compression — made here with OpenEXRCore itself; malformed files each refused in one
- * line. With the argument "tools", the
+ * line; a reference of the wrong size refused from its header. With the argument "tools", the
  * same files and exrmaketiled's (OpenEXR's C++ library) are checked against that library's own
  * decoding instead (exit 77 when exrmaketiled is not installed). */
 #include <stdarg.h>
@@ -15,6 +15,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -55,6 +56,7 @@ struct spec {
     bool alpha;
     int x0, y0, width, height;
     exr_pixel_type_t alpha_type;   /* the A channel's type, when alpha */
+    bool constant;                 /* rgb is one value for every pixel and channel */
 };
 
 /* The library's compressor, run by compress_or_store. */
@@ -143,9 +145,10 @@ static bool write_exr(const char *path, const float *rgb, const struct spec *sp)
                                    ? (size_t)ty * 8 * width + (size_t)tx * 16
                                    : (size_t)(chunk.start_y - sp->y0) * width;
                 ch->encode_from_ptr = name[0] == 'A' ? (const uint8_t *)&half
+                                      : sp->constant ? (const uint8_t *)rgb
                                                      : (const uint8_t *)(rgb + 3 * first + k);
-                ch->user_pixel_stride = name[0] == 'A' ? 0 : 12;
-                ch->user_line_stride = name[0] == 'A' ? 0 : 12 * width;
+                ch->user_pixel_stride = name[0] == 'A' || sp->constant ? 0 : 12;
+                ch->user_line_stride = name[0] == 'A' || sp->constant ? 0 : 12 * width;
                 ch->user_bytes_per_element = 4;
                 ch->user_data_type = EXR_PIXEL_FLOAT;
             }
@@ -240,8 +243,9 @@ static void test_variants(void **state)
     free(rgb);
 }
 
-/* Reads path with stderr captured: it must fail with one line holding message. */
-static void expect_refused(const char *path, const char *message)
+/* Reads path (at width x height when width is not 0) with stderr captured: it must fail with one
+ * line holding message. */
+static void expect_refused_sized(const char *path, int width, int height, const char *message)
 {
     FILE *capture = tmpfile();
     assert_non_null(capture);
@@ -250,7 +254,8 @@ static void expect_refused(const char *path, const char *message)
     dup2(fileno(capture), STDERR_FILENO);
     float *rgb = NULL;
     int w, h;
-    bool ok = ao_image_read_linear(path, &rgb, &w, &h);
+    bool ok = width ? ao_image_read_linear_sized(path, width, height, &rgb)
+                    : ao_image_read_linear(path, &rgb, &w, &h);
     fflush(stderr);
     dup2(saved, STDERR_FILENO);
     close(saved);
@@ -262,6 +267,12 @@ static void expect_refused(const char *path, const char *message)
     if (ok || !strstr(err, message) || strchr(err, '\n') != err + n - 1)
         fail_msg("%s: expected one line with '%s', got ok=%d '%s'", path, message, ok, err);
     free(rgb);
+}
+
+/* Reads path with stderr captured: it must fail with one line holding message. */
+static void expect_refused(const char *path, const char *message)
+{
+    expect_refused_sized(path, 0, 0, message);
 }
 
 /* Truncations and byte flips of a valid file, a non-EXR file, a missing one. */
@@ -537,6 +548,59 @@ static void test_dwa_refused(void **state)
     }
 }
 
+/* ------------------------------------------------------------------ the size a caller needs */
+
+/* ao_image_read_linear_sized: the right size reads; another is refused in one line naming both
+ * sizes, for EXR and PFM; and a 16384x4096 ZIP EXR of about 800 KB (800 MB of pixels) is refused
+ * from its header alone, its peak memory growing by less than 64 MB (a child process measures). */
+static void test_sized(void **state)
+{
+    (void)state;
+    float *rgb = pattern(), *got = NULL;
+    char exr[512], pfm[512];
+    snprintf(exr, sizeof exr, "%s", in_dir("sized.exr"));
+    snprintf(pfm, sizeof pfm, "%s", in_dir("sized.pfm"));
+    assert_true(ao_image_write_linear(exr, rgb, W, H, NULL, 0));
+    assert_true(ao_image_write_pfm(pfm, rgb, W, H));
+    assert_true(ao_image_read_linear_sized(exr, W, H, &got));
+    free(got);
+    assert_true(ao_image_read_linear_sized(pfm, W, H, &got));
+    free(got);
+    expect_refused_sized(exr, W + 1, H, "sized.exr: the image is 37x21, not the 38x21 needed");
+    expect_refused_sized(pfm, W, H - 1, "sized.pfm: the image is 37x21, not the 37x20 needed");
+    free(rgb);
+
+    /* The large file: 256 ZIP blocks of 16 constant rows, one shared value. */
+    const char *big = in_dir("big.exr");
+    static const float grey = 0.25f;
+    struct spec sp = {.storage = EXR_STORAGE_SCANLINE, .type = EXR_PIXEL_HALF,
+                      .compression = EXR_COMPRESSION_ZIP, .linear = EXR_PERCEPTUALLY_LINEAR,
+                      .width = 16384, .height = 4096, .constant = true};
+    write_exr(big, &grey, &sp);
+    long size = file_size(big);
+    assert_true(size < 2 * 1024 * 1024);
+    fflush(stderr);
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) {
+        struct rusage before, after;
+        getrusage(RUSAGE_SELF, &before);
+        int null = open("/dev/null", O_WRONLY);
+        dup2(null, STDERR_FILENO);
+        float *pixels = NULL;
+        bool read = ao_image_read_linear_sized(big, 640, 480, &pixels);
+        getrusage(RUSAGE_SELF, &after);
+        _exit(read ? 2 : after.ru_maxrss - before.ru_maxrss < 64 * 1024 ? 0 : 3);
+    }
+    int status;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status));
+    if (WEXITSTATUS(status) != 0)
+        fail_msg("%s (%ld bytes): %s", big, size,
+                 WEXITSTATUS(status) == 2 ? "read at 640x480" : "peak memory grew by 64 MB or more");
+    expect_refused_sized(big, 640, 480, "big.exr: the image is 16384x4096, not the 640x480 needed");
+}
+
 /* ------------------------------------------------------ against OpenEXR's C++ library */
 
 /* Runs a shell command made from format; its exit status. */
@@ -678,6 +742,7 @@ int main(int argc, char **argv)
         cmocka_unit_test(test_malformed),
         cmocka_unit_test(test_compressions),
         cmocka_unit_test(test_dwa_refused),
+        cmocka_unit_test(test_sized),
     };
     const struct CMUnitTest tool_tests[] = {
         cmocka_unit_test(test_tools_own_files),
