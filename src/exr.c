@@ -7,6 +7,7 @@
 
 #include <errno.h>
 #include <math.h>
+#include <stdarg.h>
 #include <stdint.h>
 #include <stdlib.h>
 #include <string.h>
@@ -159,6 +160,14 @@ bool ao_exr_emit(FILE *f, const char *path, const float *rgb, int width, int hei
 
 /* ------------------------------------------------------------------ reading */
 
+/* The compression's name as OpenEXR's tools spell it (exrheader, exrmaketiled -z). */
+static const char *compression_name(exr_compression_t compression)
+{
+    static const char *const names[] = {"none", "rle", "zips", "zip", "piz",
+                                        "pxr24", "b44", "b44a", "dwaa", "dwab"};
+    return (unsigned)compression < sizeof names / sizeof *names ? names[compression] : "unknown";
+}
+
 /* Which of R, G, B (0, 1, 2) a channel name is, or -1 for any other channel (A, Z, layers). */
 static int rgb_index(const char *name)
 {
@@ -187,11 +196,114 @@ static const char *check_channels(exr_const_context_t ctxt)
                       : "no R, G and B channels (greyscale, YC and layered images are not supported)";
 }
 
+/* The part's chunks in file order: blocks of scanlines, or the tiles of level 0 row by row. */
+struct layout {
+    exr_storage_t storage;
+    exr_compression_t compression;
+    exr_attr_box2i_t window;
+    int32_t step_x, step_y;      /* a tile's size, or the window's width and the lines per block */
+    int64_t columns, count;      /* chunks per row of chunks, and in all */
+};
+
+/* Reads the layout from the header; false if the library cannot say. */
+static bool get_layout(exr_const_context_t ctxt, exr_storage_t storage, exr_attr_box2i_t window,
+                       struct layout *l)
+{
+    *l = (struct layout){.storage = storage, .window = window};
+    int64_t width = (int64_t)window.max.x - window.min.x + 1;
+    int64_t height = (int64_t)window.max.y - window.min.y + 1;
+    if (exr_get_compression(ctxt, 0, &l->compression) != EXR_ERR_SUCCESS)
+        return false;
+    if (storage == EXR_STORAGE_SCANLINE) {
+        l->step_x = (int32_t)width;
+        if (exr_get_scanlines_per_chunk(ctxt, 0, &l->step_y) != EXR_ERR_SUCCESS)
+            return false;
+    } else if (exr_get_tile_sizes(ctxt, 0, 0, 0, &l->step_x, &l->step_y) != EXR_ERR_SUCCESS) {
+        return false;
+    }
+    if (l->step_x < 1 || l->step_y < 1)
+        return false;
+    l->columns = (width + l->step_x - 1) / l->step_x;
+    l->count = l->columns * ((height + l->step_y - 1) / l->step_y);
+    return true;
+}
+
+/* Reads the header of chunk i (not its data) and the pixel position of its top-left corner (a
+ * tile's chunk info gives tile numbers, not pixels). */
+static exr_result_t chunk_info(exr_const_context_t ctxt, const struct layout *l, int64_t i,
+                               exr_chunk_info_t *chunk, int64_t *x, int64_t *y)
+{
+    int64_t column = i % l->columns, row = i / l->columns;
+    *x = l->window.min.x + column * l->step_x;
+    *y = l->window.min.y + row * l->step_y;
+    if (l->storage == EXR_STORAGE_SCANLINE)
+        return exr_read_scanline_chunk_info(ctxt, 0, (int)*y, chunk);
+    return exr_read_tile_chunk_info(ctxt, 0, (int)column, (int)row, 0, 0, chunk);
+}
+
+/* Checks every chunk's stored size, read from the chunk headers alone, against the bytes its
+ * pixels take uncompressed (which the library derives from the header, not from the chunk): an
+ * uncompressed chunk must store exactly that many, a compressed one from 1 to that many (as many
+ * means stored uncompressed, as writers do when compression would not shrink a chunk). So no
+ * pixel is decoded from bytes the file does not hold, and nothing is allocated for the pixels
+ * before the file is known to hold them all. False with the reason in why. */
+static bool check_chunks(exr_const_context_t ctxt, const struct layout *l, char *why,
+                         size_t why_size, exr_result_t *result)
+{
+    for (int64_t i = 0; i < l->count; i++) {
+        exr_chunk_info_t chunk;
+        int64_t x, y;
+        if ((*result = chunk_info(ctxt, l, i, &chunk, &x, &y)) != EXR_ERR_SUCCESS) {
+            snprintf(why, why_size, "cannot decode the pixels");
+            return false;
+        }
+        bool raw = l->compression == EXR_COMPRESSION_NONE;
+        if (raw ? chunk.packed_size == chunk.unpacked_size
+                : chunk.packed_size >= 1 && chunk.packed_size <= chunk.unpacked_size)
+            continue;
+        char where[64];
+        if (l->storage == EXR_STORAGE_SCANLINE && chunk.height == 1)
+            snprintf(where, sizeof where, "the chunk of row %d", chunk.start_y);
+        else if (l->storage == EXR_STORAGE_SCANLINE)
+            snprintf(where, sizeof where, "the chunk of rows %d to %d", chunk.start_y,
+                     chunk.start_y + chunk.height - 1);
+        else
+            snprintf(where, sizeof where, "tile (%lld, %lld)", (long long)(i % l->columns),
+                     (long long)(i / l->columns));
+        snprintf(why, why_size, "%s stores %llu bytes%s%s%s where its pixels need %s%llu", where,
+                 (unsigned long long)chunk.packed_size, raw ? "" : " of ",
+                 raw ? "" : compression_name(l->compression), raw ? "" : " data",
+                 raw ? "" : "1 to ", (unsigned long long)chunk.unpacked_size);
+        return false;
+    }
+    return true;
+}
+
+/* The library's decompressor for the part, wrapped by decompress (through decoding_user_data). */
+struct decompressor {
+    exr_result_t (*run)(exr_decode_pipeline_t *decode);
+};
+
+/* Leaves a chunk stored uncompressed (as many bytes stored as its pixels take) as it is, and
+ * decompresses any other. OpenEXRCore 3.1.5 points the unpacked buffer at such a chunk's bytes
+ * but still runs its B44 and B44A decoders over them in place, which puts float channels' rows
+ * (and any partial tile's pixels) in the wrong place; OpenEXR's C++ library, which writes such
+ * chunks, reads them as they are. */
+static exr_result_t decompress(exr_decode_pipeline_t *decode)
+{
+    const struct decompressor *d = decode->decoding_user_data;
+    if (decode->chunk.packed_size == decode->chunk.unpacked_size &&
+        decode->unpacked_buffer == decode->packed_buffer)
+        return EXR_ERR_SUCCESS;
+    return d->run(decode);
+}
+
 /* Decodes one chunk's R, G and B into rgb (the data window's top-left at rgb[0]), as floats; the
- * chunk's top-left pixel is (x, y) (a tile's chunk info gives tile numbers, not pixels). */
+ * chunk's top-left pixel is (x, y). */
 static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_t *chunk,
                                  int64_t x, int64_t y, exr_decode_pipeline_t *decode,
-                                 bool *started, float *rgb, exr_attr_box2i_t window)
+                                 struct decompressor *d, bool *started, float *rgb,
+                                 exr_attr_box2i_t window)
 {
     int width = window.max.x - window.min.x + 1;
     exr_result_t r = *started ? exr_decoding_update(ctxt, 0, chunk, decode)
@@ -210,117 +322,148 @@ static exr_result_t decode_chunk(exr_const_context_t ctxt, const exr_chunk_info_
         channel->user_data_type = EXR_PIXEL_FLOAT;
     }
     r = exr_decoding_choose_default_routines(ctxt, 0, decode);
+    if (r == EXR_ERR_SUCCESS && decode->decompress_fn && decode->decompress_fn != decompress) {
+        d->run = decode->decompress_fn;
+        decode->decompress_fn = decompress;
+        decode->decoding_user_data = d;
+    }
     return r == EXR_ERR_SUCCESS ? exr_decoding_run(ctxt, 0, decode) : r;
 }
 
-/* Every chunk of the part: scanline blocks, or the tiles of level 0. */
-static exr_result_t read_chunks(exr_const_context_t ctxt, exr_storage_t storage, float *rgb,
-                                exr_attr_box2i_t window)
+/* Every chunk of the part into rgb. */
+static exr_result_t read_chunks(exr_const_context_t ctxt, const struct layout *l, float *rgb)
 {
     exr_decode_pipeline_t decode = EXR_DECODE_PIPELINE_INITIALIZER;
+    struct decompressor d = {NULL};
     bool started = false;
-    exr_chunk_info_t chunk;
     exr_result_t r = EXR_ERR_SUCCESS;
-    if (storage == EXR_STORAGE_SCANLINE) {
-        int32_t lines;
-        r = exr_get_scanlines_per_chunk(ctxt, 0, &lines);
-        for (int64_t y = window.min.y; r == EXR_ERR_SUCCESS && y <= window.max.y; y += lines) {
-            r = exr_read_scanline_chunk_info(ctxt, 0, (int)y, &chunk);
-            if (r == EXR_ERR_SUCCESS)
-                r = decode_chunk(ctxt, &chunk, window.min.x, chunk.start_y, &decode, &started,
-                                 rgb, window);
-        }
-    } else {
-        int32_t tile_width = 1, tile_height = 1;
-        r = exr_get_tile_sizes(ctxt, 0, 0, 0, &tile_width, &tile_height);
-        if (r == EXR_ERR_SUCCESS && (tile_width < 1 || tile_height < 1))
-            r = EXR_ERR_INVALID_ATTR;
-        int64_t columns = ((int64_t)window.max.x - window.min.x + tile_width) / tile_width;
-        int64_t rows = ((int64_t)window.max.y - window.min.y + tile_height) / tile_height;
-        for (int ty = 0; r == EXR_ERR_SUCCESS && ty < rows; ty++) {
-            for (int tx = 0; r == EXR_ERR_SUCCESS && tx < columns; tx++) {
-                r = exr_read_tile_chunk_info(ctxt, 0, tx, ty, 0, 0, &chunk);
-                if (r == EXR_ERR_SUCCESS)
-                    r = decode_chunk(ctxt, &chunk, window.min.x + (int64_t)tx * tile_width,
-                                     window.min.y + (int64_t)ty * tile_height, &decode, &started,
-                                     rgb, window);
-            }
-        }
+    for (int64_t i = 0; r == EXR_ERR_SUCCESS && i < l->count; i++) {
+        exr_chunk_info_t chunk;
+        int64_t x, y;
+        r = chunk_info(ctxt, l, i, &chunk, &x, &y);
+        if (r == EXR_ERR_SUCCESS)
+            r = decode_chunk(ctxt, &chunk, x, l->storage == EXR_STORAGE_SCANLINE ? chunk.start_y : y,
+                             &decode, &d, &started, rgb, l->window);
     }
     if (started)
         exr_decoding_destroy(ctxt, &decode);
     return r;
 }
 
-/* Opens the in-memory file and reads its first part into a new buffer; NULL with the reason. */
-static float *decode_file(struct stream *s, const char *path, int *width, int *height,
-                          const char **why)
+/* The header's data window as width and height, or false if it is empty or past the limits. */
+static bool window_size(exr_attr_box2i_t window, int *width, int *height)
 {
-    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
-    init.error_handler_fn = on_error;
-    init.user_data = s;
-    init.read_fn = read_at;
-    init.size_fn = size_of;
-    init.max_image_width = init.max_image_height = AO_IMAGE_MAX_SIDE;
-    init.max_tile_width = init.max_tile_height = AO_IMAGE_MAX_SIDE;
-    init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
-    exr_context_t ctxt = NULL;
-    exr_storage_t storage;
-    exr_attr_box2i_t window;
-    float *rgb = NULL;
-    *why = NULL;
-    if (exr_start_read(&ctxt, path, &init) != EXR_ERR_SUCCESS)
-        *why = "not a readable OpenEXR file";
-    else if (exr_get_storage(ctxt, 0, &storage) != EXR_ERR_SUCCESS ||
-             (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED))
-        *why = "deep images are not supported";
-    else if (exr_get_data_window(ctxt, 0, &window) != EXR_ERR_SUCCESS)
-        *why = "no data window";
-    else if ((int64_t)window.max.x - window.min.x + 1 < 1 ||
-             (int64_t)window.max.x - window.min.x + 1 > AO_IMAGE_MAX_SIDE ||
-             (int64_t)window.max.y - window.min.y + 1 < 1 ||
-             (int64_t)window.max.y - window.min.y + 1 > AO_IMAGE_MAX_SIDE ||
-             ((int64_t)window.max.x - window.min.x + 1) * ((int64_t)window.max.y - window.min.y + 1) >
-                 AO_IMAGE_MAX_PIXELS)
-        *why = "bad or too large data window";
-    else if ((*why = check_channels(ctxt)) == NULL) {
-        *width = window.max.x - window.min.x + 1;
-        *height = window.max.y - window.min.y + 1;
-        size_t count = (size_t)*width * (size_t)*height * 3;
-        if (!(rgb = calloc(count, sizeof *rgb)))
-            *why = "out of memory";
-        else if (read_chunks(ctxt, storage, rgb, window) != EXR_ERR_SUCCESS)
-            *why = "cannot decode the pixels";
-        for (size_t i = 0; !*why && i < count; i++)
-            if (!isfinite(rgb[i]))
-                *why = "non-finite pixel value";
-    }
-    if (ctxt)
-        exr_finish(&ctxt);
-    if (*why) {
-        free(rgb);
-        return NULL;
-    }
-    return rgb;
+    int64_t w = (int64_t)window.max.x - window.min.x + 1, h = (int64_t)window.max.y - window.min.y + 1;
+    if (w < 1 || w > AO_IMAGE_MAX_SIDE || h < 1 || h > AO_IMAGE_MAX_SIDE || w * h > AO_IMAGE_MAX_PIXELS)
+        return false;
+    *width = (int)w;
+    *height = (int)h;
+    return true;
 }
 
-bool ao_exr_read(const char *path, float **rgb, int *width, int *height)
+/* Why a read failed: the reason, and whether the library's first message belongs after it. */
+struct failure {
+    char why[200];
+    bool quote;
+};
+
+/* Sets the reason (a printf format) and returns false. */
+static bool failed(struct failure *f, bool quote, const char *format, ...)
+{
+    va_list args;
+    va_start(args, format);
+    vsnprintf(f->why, sizeof f->why, format, args);
+    va_end(args);
+    f->quote = quote;
+    return false;
+}
+
+/* Reads the first part of the opened file into a new buffer: the header's checks (the size
+ * before any pixel buffer exists), every chunk's stored size, then the pixels. */
+static bool read_part(exr_const_context_t ctxt, int want_width, int want_height, float **out,
+                      int *width, int *height, struct failure *f)
+{
+    exr_storage_t storage;
+    exr_attr_box2i_t window;
+    struct layout layout;
+    const char *reason;
+    if (exr_get_storage(ctxt, 0, &storage) != EXR_ERR_SUCCESS ||
+        (storage != EXR_STORAGE_SCANLINE && storage != EXR_STORAGE_TILED))
+        return failed(f, true, "deep images are not supported");
+    if (exr_get_data_window(ctxt, 0, &window) != EXR_ERR_SUCCESS)
+        return failed(f, true, "no data window");
+    if (!window_size(window, width, height))
+        return failed(f, false, "bad or too large data window");
+    if (want_width && (*width != want_width || *height != want_height))
+        return failed(f, false, "the image is %dx%d, not the %dx%d needed", *width, *height,
+                      want_width, want_height);
+    if ((reason = check_channels(ctxt)) != NULL)
+        return failed(f, false, "%s", reason);
+    if (!get_layout(ctxt, storage, window, &layout))
+        return failed(f, true, "bad compression or tile description");
+    exr_result_t r = EXR_ERR_SUCCESS;
+    if (!check_chunks(ctxt, &layout, f->why, sizeof f->why, &r)) {
+        f->quote = r != EXR_ERR_SUCCESS;
+        return false;
+    }
+    size_t count = (size_t)*width * (size_t)*height * 3;
+    float *rgb = calloc(count, sizeof *rgb);
+    if (!rgb)
+        return failed(f, false, "out of memory");
+    r = read_chunks(ctxt, &layout, rgb);
+    bool ok = r == EXR_ERR_SUCCESS;
+    if (r == EXR_ERR_FEATURE_NOT_IMPLEMENTED) {
+        int major = 0, minor = 0, patch = 0;
+        exr_get_library_version(&major, &minor, &patch, NULL);
+        failed(f, false, "%s compression cannot be decoded by OpenEXR %d.%d.%d's C library",
+               compression_name(layout.compression), major, minor, patch);
+    } else if (!ok) {
+        failed(f, true, "cannot decode the pixels");
+    }
+    for (size_t i = 0; ok && i < count; i++)
+        if (!isfinite(rgb[i]))
+            ok = failed(f, false, "non-finite pixel value");
+    if (!ok) {
+        free(rgb);
+        return false;
+    }
+    *out = rgb;
+    return true;
+}
+
+bool ao_exr_read(const char *path, int want_width, int want_height, float **rgb, int *width,
+                 int *height)
 {
     struct stream s = {.message = ""};
     char *data;
     if (!ao_file_read(path, &data, &s.size))
         return false;
     s.data = data;
-    const char *why;
-    float *pixels = decode_file(&s, path, width, height, &why);
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = on_error;
+    init.user_data = &s;
+    init.read_fn = read_at;
+    init.size_fn = size_of;
+    init.max_image_width = init.max_image_height = AO_IMAGE_MAX_SIDE;
+    init.max_tile_width = init.max_tile_height = AO_IMAGE_MAX_SIDE;
+    init.flags = EXR_CONTEXT_FLAG_DISABLE_CHUNK_RECONSTRUCTION;
+    exr_context_t ctxt = NULL;
+    struct failure f = {"", false};
+    int w = 0, h = 0;
+    bool ok = exr_start_read(&ctxt, path, &init) == EXR_ERR_SUCCESS
+                  ? read_part(ctxt, want_width, want_height, rgb, &w, &h, &f)
+                  : failed(&f, true, "not a readable OpenEXR file");
+    if (ctxt)
+        exr_finish(&ctxt);
     free(data);
-    if (!pixels) {
-        if (s.message[0])
-            fprintf(stderr, "%s: %s (%s)\n", path, why, s.message);
+    if (!ok) {
+        if (f.quote && s.message[0])
+            fprintf(stderr, "%s: %s (%s)\n", path, f.why, s.message);
         else
-            fprintf(stderr, "%s: %s\n", path, why);
+            fprintf(stderr, "%s: %s\n", path, f.why);
         return false;
     }
-    *rgb = pixels;
+    *width = w;
+    *height = h;
     return true;
 }

@@ -15,9 +15,13 @@ bool ao_exr_emit(FILE *f, const char *path, const float *rgb, int width, int hei
                  const struct ao_image_note *notes, size_t note_count);
 
 /* Reads the first part of an EXR file (half or float channels R, G, B and optionally A, which is
- * ignored; scanline or tiled) into a malloc'd top-to-bottom RGB float buffer the caller frees.
- * Refuses images larger than AO_IMAGE_MAX_SIDE/_PIXELS and non-finite pixels; on failure prints
- * one line naming path and returns false. Any thread. */
-bool ao_exr_read(const char *path, float **rgb, int *width, int *height);
+ * ignored; scanline or tiled; any compression the library decodes) into a malloc'd top-to-bottom
+ * RGB float buffer the caller frees. When want_width is not 0, a file whose header states another
+ * size than want_width x want_height is refused before any pixel buffer exists. Refuses images
+ * larger than AO_IMAGE_MAX_SIDE/_PIXELS, chunks storing more or fewer bytes than their pixels
+ * take (checked for every chunk before the pixels are allocated) and non-finite pixels; on
+ * failure prints one line naming path and returns false. Any thread. */
+bool ao_exr_read(const char *path, int want_width, int want_height, float **rgb, int *width,
+                 int *height);
 
 #endif

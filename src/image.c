@@ -313,7 +313,9 @@ static float *read_pixels(FILE *f, int width, int height, bool little_endian, st
     return rgb;
 }
 
-bool ao_image_read_pfm(const char *path, float **rgb, int *width, int *height)
+/* Reads a PFM file; when want_width is not 0, one of another size is refused after its header. */
+static bool read_pfm(const char *path, int want_width, int want_height, float **rgb, int *width,
+                     int *height)
 {
     /* Non-blocking, so that opening a FIFO returns at once; only regular files are read. */
     int fd = open(path, O_RDONLY | O_NONBLOCK);
@@ -334,8 +336,16 @@ bool ao_image_read_pfm(const char *path, float **rgb, int *width, int *height)
     struct failure why = {NULL, 0};
     bool little_endian;
     int w, h;
-    float *pixels = read_header(f, &w, &h, &little_endian, &why)
-                        ? read_pixels(f, w, h, little_endian, &why) : NULL;
+    float *pixels = NULL;
+    if (read_header(f, &w, &h, &little_endian, &why)) {
+        if (want_width && (w != want_width || h != want_height)) {
+            fclose(f);
+            fprintf(stderr, "%s: the image is %dx%d, not the %dx%d needed\n", path, w, h,
+                    want_width, want_height);
+            return false;
+        }
+        pixels = read_pixels(f, w, h, little_endian, &why);
+    }
     fclose(f);
     if (!pixels) {
         report(path, why.reason, why.err);
@@ -347,10 +357,23 @@ bool ao_image_read_pfm(const char *path, float **rgb, int *width, int *height)
     return true;
 }
 
+bool ao_image_read_pfm(const char *path, float **rgb, int *width, int *height)
+{
+    return read_pfm(path, 0, 0, rgb, width, height);
+}
+
 bool ao_image_read_linear(const char *path, float **rgb, int *width, int *height)
 {
-    return ao_image_has_extension(path, ".exr") ? ao_exr_read(path, rgb, width, height)
-                                                : ao_image_read_pfm(path, rgb, width, height);
+    return ao_image_has_extension(path, ".exr") ? ao_exr_read(path, 0, 0, rgb, width, height)
+                                                : read_pfm(path, 0, 0, rgb, width, height);
+}
+
+bool ao_image_read_linear_sized(const char *path, int width, int height, float **rgb)
+{
+    assert(width > 0 && height > 0);
+    int w, h;
+    return ao_image_has_extension(path, ".exr") ? ao_exr_read(path, width, height, rgb, &w, &h)
+                                                : read_pfm(path, width, height, rgb, &w, &h);
 }
 
 bool ao_image_read_png(const char *path, uint8_t **rgb, int *width, int *height)

@@ -43,6 +43,11 @@ bool ao_image_write_linear(const char *path, const float *rgb, int width, int he
  * top-to-bottom RGB float buffer the caller frees; on failure prints one line and returns false. */
 bool ao_image_read_linear(const char *path, float **rgb, int *width, int *height);
 
+/* Reads a linear image as ao_image_read_linear does, which must be width x height pixels (both
+ * above 0): a file whose header states another size is refused, in one line naming it and both
+ * sizes, before its pixels are read or any buffer for them exists. For --reference. */
+bool ao_image_read_linear_sized(const char *path, int width, int height, float **rgb);
+
 /* True when path ends in ext, ignoring case. */
 bool ao_image_has_extension(const char *path, const char *ext);
 

@@ -83,6 +83,25 @@ refuse 1 "exr_size_lies.exr: not a readable OpenEXR file" --reference "$data/exr
 refuse 1 "exr_window_overflow.exr: not a readable OpenEXR file" --reference "$data/exr_window_overflow.exr" "$root/assets/scenes/spheres.scene"
 refuse 1 "exr_chunk_lies.exr: cannot decode the pixels (Corrupt chunk offset table" --size 8x6 \
   --reference "$data/exr_chunk_lies.exr" "$root/assets/scenes/spheres.scene"
+# EXR chunks storing fewer or more bytes than their pixels take (made by tests/exr_hostile.py):
+# each refused from the chunk headers, before any pixel buffer exists. Without the check the
+# short rows and the short last tile were read from memory never written (status 0), and the
+# one 100-byte tile of 16384x4096 pixels took 1.2 GB before its size was refused.
+python3 "$root/tests/exr_hostile.py" . || fail "tests/exr_hostile.py failed"
+spheres=$root/assets/scenes/spheres.scene
+refuse 1 "exr_rows_short.exr: the chunk of row 0 stores 12 bytes where its pixels need 96" \
+  --size 8x6 --reference exr_rows_short.exr "$spheres"
+refuse 1 "exr_rows_long.exr: cannot decode the pixels (Preparing to read scanline 0 (chunk 0), found corrupt leader: packed data size says 192, must be between 0 and 96)" \
+  --size 8x6 --reference exr_rows_long.exr "$spheres"
+refuse 1 "exr_tile_short.exr: tile (0, 0) stores 100 bytes where its pixels need 402653184" \
+  --size 8x6 --reference exr_tile_short.exr "$spheres"
+refuse 1 "exr_last_tile_short.exr: tile (1, 1) stores 3000 bytes where its pixels need 3072" \
+  --size 32x32 --reference exr_last_tile_short.exr "$spheres"
+refuse 1 "exr_zip_long.exr: the chunk of rows 0 to 5 stores 618 bytes of zip data where its pixels need 1 to 576" \
+  --size 8x6 --reference exr_zip_long.exr "$spheres"
+refuse 1 "exr_zip_empty.exr: cannot decode the pixels (Invalid packed size of 0)" \
+  --size 8x6 --reference exr_zip_empty.exr "$spheres"
+rm -f exr_*.exr
 # One mesh of 600 triangles under 65536 nodes: 39 million triangles from a 1 MB file.
 python3 - <<'PY'
 import base64, json, struct

@@ -14,7 +14,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     fuzz_write_file(path, data, size);
     float *rgb = NULL;
     int width = 0, height = 0;
-    if (ao_exr_read(path, &rgb, &width, &height)) {
+    if (ao_exr_read(path, 0, 0, &rgb, &width, &height)) {
         const char *broken = NULL;
         if (width < 1 || height < 1 || width > AO_IMAGE_MAX_SIDE || height > AO_IMAGE_MAX_SIDE ||
             (long long)width * height > AO_IMAGE_MAX_PIXELS)
