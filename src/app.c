@@ -161,21 +161,6 @@ bool ao_app_start_watcher(struct ao_app *app, struct ao_render *render)
     return true;
 }
 
-/* Reads --reference and checks it matches the image size. */
-static float *load_reference(const char *path, int width, int height)
-{
-    float *rgb = NULL;
-    int w, h;
-    if (!ao_image_read_linear(path, &rgb, &w, &h))
-        return NULL;
-    if (w != width || h != height) {
-        fprintf(stderr, "--reference: %s is %dx%d but the image is %dx%d\n", path, w, h, width, height);
-        free(rgb);
-        return NULL;
-    }
-    return rgb;
-}
-
 int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_render_config *config,
                 struct ao_settings *settings)
 {
@@ -184,7 +169,7 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
         return AO_EXIT_RUNTIME;
     int width = opts->width ? opts->width : app->scene.width ? app->scene.width : 640;
     int height = opts->height ? opts->height : app->scene.height ? app->scene.height : 480;
-    if (opts->reference_path && !(app->reference = load_reference(opts->reference_path, width, height)))
+    if (opts->reference_path && !ao_image_read_linear_sized(opts->reference_path, width, height, &app->reference))
         return AO_EXIT_RUNTIME;
     app->reference_width = width;
     app->reference_height = height;

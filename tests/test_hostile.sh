@@ -94,13 +94,17 @@ refuse 1 "exr_rows_short.exr: the chunk of row 0 stores 12 bytes where its pixel
 refuse 1 "exr_rows_long.exr: cannot decode the pixels (Preparing to read scanline 0 (chunk 0), found corrupt leader: packed data size says 192, must be between 0 and 96)" \
   --size 8x6 --reference exr_rows_long.exr "$spheres"
 refuse 1 "exr_tile_short.exr: tile (0, 0) stores 100 bytes where its pixels need 402653184" \
-  --size 8x6 --reference exr_tile_short.exr "$spheres"
+  --size 16384x4096 --reference exr_tile_short.exr "$spheres"
 refuse 1 "exr_last_tile_short.exr: tile (1, 1) stores 3000 bytes where its pixels need 3072" \
   --size 32x32 --reference exr_last_tile_short.exr "$spheres"
 refuse 1 "exr_zip_long.exr: the chunk of rows 0 to 5 stores 618 bytes of zip data where its pixels need 1 to 576" \
   --size 8x6 --reference exr_zip_long.exr "$spheres"
 refuse 1 "exr_zip_empty.exr: cannot decode the pixels (Invalid packed size of 0)" \
   --size 8x6 --reference exr_zip_empty.exr "$spheres"
+# A reference of another size is refused from its header, before its pixels are read (a small ZIP
+# file of 16384x4096 pixels once cost 800 MB before its size was compared).
+python3 -c "import sys; sys.path.insert(0, '$root/tests'); import exr_hostile as e; open('exr_big_zip.exr', 'wb').write(e.scanline_file(16384, 4096, e.HALF, e.ZIP, [(16 * k, b'x' * 64) for k in range(256)]))"
+refuse 1 "exr_big_zip.exr: the image is 16384x4096, not the 8x6 needed" --size 8x6 --reference exr_big_zip.exr "$spheres"
 rm -f exr_*.exr
 # One mesh of 600 triangles under 65536 nodes: 39 million triangles from a 1 MB file.
 python3 - <<'PY'
@@ -197,7 +201,7 @@ spheres=$root/assets/scenes/spheres.scene
 refuse 1 "size_overflow.pfm: bad or too large width and height" --reference "$data/size_overflow.pfm" "$spheres"
 refuse 1 "size_pixels.pfm: bad or too large width and height" --reference "$data/size_pixels.pfm" "$spheres"
 refuse 1 "size_negative.pfm: bad or too large width and height" --reference "$data/size_negative.pfm" "$spheres"
-refuse 1 "claims_pixels.pfm: truncated pixel data" --reference "$data/claims_pixels.pfm" "$spheres"
+refuse 1 "claims_pixels.pfm: truncated pixel data" --size 8192x8192 --reference "$data/claims_pixels.pfm" "$spheres"
 refuse 1 "fifo.pfm: not a regular file" --reference fifo.pfm "$spheres"
 
 # ---- the largest --spp accepted: 2^30 samples run (cut short after 4 s) without overflow.
