@@ -14,6 +14,7 @@
 #include "cli.h"
 #include "cluster.h"
 #include "config.h"
+#include "image.h"
 #include "window.h"
 
 /* How long rank 0 waits for the other ranks to answer after an interruption: mpirun sends SIGTERM
@@ -137,7 +138,7 @@ static int interrupted(struct ao_app *app, struct ao_cluster *cluster, const str
     if (missing[0])
         snprintf(why, sizeof why, "rank %s lost (killed or crashed), stopped", missing);
     else
-        snprintf(why, sizeof why, "interrupted by %s", sig == SIGINT ? "SIGINT" : "SIGTERM");
+        snprintf(why, sizeof why, "interrupted by %s", ao_app_signal_name(sig));
     const struct ao_frame *frame = ao_render_take_frame(app->render);
     if (!frame)
         fprintf(stderr, "\naoview: %s before the first pass was merged: nothing written\n", why);
@@ -168,6 +169,9 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool
         mine.quiet = mine.headless = true, mine.stats_path = NULL, mine.reference_path = NULL, mine.output = NULL;
     struct ao_render_config config;
     struct ao_settings settings;
+    /* Rank 0's -o before loading, so that a run never renders for nothing. */
+    if (!ao_cluster_agree(rank != 0 || !mine.headless || ao_image_check_output(mine.output ? mine.output : "aoview.png")))
+        return AO_EXIT_RUNTIME;
     int status = load(app, &mine, rank, &config, &settings);
     if (status)
         return status;
@@ -178,10 +182,11 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool
         return AO_EXIT_RUNTIME;
     config.share = ao_cluster_share(cluster);
     app->render = ao_render_create(&config, &settings);
-    if (!ao_cluster_agree(app->render && ao_app_start_watcher(app, app->render))) {
+    if (!ao_cluster_agree(app->render != NULL)) {
         ao_cluster_destroy(cluster);
         return AO_EXIT_RUNTIME;
     }
+    ao_app_watch(app, app->render);
 
     /* Rank 0's window, or headless (also where no window can be opened): the other ranks follow
      * rank 0's passes until its render thread ends theirs. */
@@ -214,6 +219,8 @@ int main(int argc, char **argv)
 {
     /* Before MPI starts its threads, so that they all inherit the mask. */
     struct ao_app app = {0};
+    if (!ao_app_begin())
+        return AO_EXIT_RUNTIME;
     ao_app_block_signals(&app);
     int rank, size;
     if (!ao_cluster_init(&argc, &argv, &rank, &size))
@@ -221,13 +228,17 @@ int main(int argc, char **argv)
     struct ao_options opts;
     int status = parse(argc, argv, rank, &opts);
     if (status || opts.help || opts.version) {
-        if (!status && rank == 0)
-            fputs(opts.help ? ao_cli_usage() : "aoview-mpi " AO_VERSION "\n", stdout);
+        if (!status && rank == 0 && !ao_app_print(opts.help ? ao_cli_usage() : "aoview-mpi " AO_VERSION "\n"))
+            status = AO_EXIT_RUNTIME;
         ao_cluster_finalize();
         return status;
     }
+    if (!ao_cluster_agree(ao_app_start_watcher(&app, rank != 0))) {
+        ao_cluster_finalize();
+        return AO_EXIT_RUNTIME;
+    }
     bool clean = true;
-    status = ao_app_finish(&app, &opts, run(&app, &opts, rank, &clean));
+    status = ao_app_finish(&app, run(&app, &opts, rank, &clean));
     if (clean)
         ao_cluster_finalize();
     return status;
