@@ -210,6 +210,10 @@ static int run(struct app *app, const struct ao_options *opts)
             return run_compare(app, opts, &config, &settings);
         }
     }
+    /* A PNG that could not be drawn is refused now rather than after the render. */
+    const char *output = opts->output ? opts->output : "aoview.png";
+    if (ao_image_has_extension(output, ".png") && !ao_headless_check_room(output, config.width, config.height))
+        return AO_EXIT_RUNTIME;
     atomic_store(&base->interrupt.graceful, true);
     int sig;
     bool finished = ao_app_wait(base, &sig);
