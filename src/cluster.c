@@ -42,6 +42,7 @@ struct ao_cluster {
     int rank, size;
     MPI_Comm claims, passes, control;
     atomic_bool stopping;
+    atomic_int interrupted;  /* rank 0: another rank that said it was interrupted, or -1 */
     bool closed;             /* rank 0: it gave up the pass (a restart or stop); nothing is handed
                                 out until the next pass begins */
     bool open;               /* rank 0: from a pass's begin (or its giving up) to its merge, when
@@ -238,7 +239,8 @@ static void serve_claims(struct ao_cluster *c)
  * end; while its threads claim, the server looks only every CHUNK_SECONDS, as long as a chunk
  * lasts at least, since each of its wake-ups interrupts a render thread (on a virtual machine, at
  * a cost of 3 % of rank 0's time when it looked every 1 ms). Between passes, when no request can
- * come, it sleeps until the next pass opens. */
+ * come, it sleeps until the next pass opens. A rank interrupted by itself (ao_cluster_answer)
+ * would leave rank 0 waiting for it at the pass's end: the server stops the cluster then. */
 static void *serve(void *arg)
 {
     struct ao_cluster *c = arg;
@@ -252,6 +254,13 @@ static void *serve(void *arg)
         bool served = serve_pending(c), claiming = c->claiming;
         c->claiming = false;
         pthread_mutex_unlock(&c->lock);
+        int answered = 0;
+        MPI_Status status;
+        MPI_Iprobe(MPI_ANY_SOURCE, TAG_ANSWER, c->control, &answered, &status);
+        if (answered) { /* left for ao_cluster_missing to receive */
+            atomic_store(&c->interrupted, status.MPI_SOURCE);
+            ao_cluster_stop(c);
+        }
         pause = claiming ? (long)(CHUNK_SECONDS * 1e9) : served ? POLL_FIRST_NS
                                                     : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
         sleep_ns(pause);
@@ -522,6 +531,7 @@ struct ao_cluster *ao_cluster_create(void)
     pthread_mutex_init(&c->lock, NULL);
     pthread_cond_init(&c->opened, NULL);
     atomic_init(&c->stopping, false);
+    atomic_init(&c->interrupted, -1);
     c->share = (struct ao_render_share){.begin = begin_pass, .claim = claim, .merge = merge, .end = end_run,
                                         .follows = c->rank != 0, .user = c};
     const char *delay = getenv("AO_MPI_TEST_DELAY_US");
@@ -560,9 +570,17 @@ void ao_cluster_stop(struct ao_cluster *cluster)
     pthread_mutex_unlock(&cluster->lock);
 }
 
-void ao_cluster_answer(struct ao_cluster *cluster)
+void ao_cluster_answer(struct ao_cluster *cluster, int sig)
 {
-    MPI_Send(&cluster->rank, 1, MPI_INT, 0, TAG_ANSWER, cluster->control);
+    MPI_Send(&sig, 1, MPI_INT, 0, TAG_ANSWER, cluster->control);
+}
+
+int ao_cluster_interrupted(struct ao_cluster *cluster, int *sig)
+{
+    int rank = atomic_load(&cluster->interrupted);
+    if (sig)
+        *sig = rank > 0 && cluster->pending[rank] == MPI_REQUEST_NULL ? cluster->answers[rank] : 0;
+    return rank;
 }
 
 void ao_cluster_missing(struct ao_cluster *cluster, double seconds, char *out, size_t size)
