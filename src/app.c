@@ -2,18 +2,22 @@
 #include "app.h"
 
 #include <errno.h>
+#include <fcntl.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
 #include "config.h"
+#include "file.h"
 #include "headless.h"
 #include "heatmap.h"
 #include "image.h"
 #include "notes.h"
+#include "text.h"
 
 /* The headless progress bar redraws at most this often (and once more at the end). */
 static const double BAR_SECONDS = 0.1;
@@ -52,22 +56,43 @@ static void draw_bar(struct ao_reporter *rep, const struct ao_frame_info *info)
         fputc('\n', stderr);
 }
 
+/* Says once that writing --stats failed. */
+static void stats_failed(struct ao_stats *st)
+{
+    char name[AO_TEXT_SIZE];
+    if (!st->failed)
+        fprintf(stderr, "%s: write failed\n", ao_text_escape(st->path, name, sizeof name));
+    st->failed = true;
+}
+
+/* Before the first row: empties a regular file (a FIFO or device has nothing to empty) and writes
+ * the header. */
+static void start_stats(struct ao_stats *st)
+{
+    struct stat status;
+    int fd = fileno(st->file);
+    if (fstat(fd, &status) != 0 || (S_ISREG(status.st_mode) && ftruncate(fd, 0) != 0) ||
+        fputs(st->header, st->file) < 0)
+        stats_failed(st);
+}
+
 void ao_app_on_pass(const struct ao_frame_info *info, void *user)
 {
     struct ao_reporter *rep = user;
-    if (rep->stats && !rep->stats_failed) {
+    struct ao_stats *st = rep->stats;
+    if (st && !atomic_exchange(&st->started, true))
+        start_stats(st);
+    if (st && !st->failed) {
         if (rep->side)
-            fprintf(rep->stats, "%s,", rep->side);
-        fprintf(rep->stats, "%u,%u,%.6f,%llu,%llu,%.3f", info->pass, info->spp, info->seconds,
+            fprintf(st->file, "%s,", rep->side);
+        fprintf(st->file, "%u,%u,%.6f,%llu,%llu,%.3f", info->pass, info->spp, info->seconds,
                 (unsigned long long)info->eye_rays, (unsigned long long)info->shadow_rays,
                 ao_app_mrays_per_second(info));
         if (!isnan(info->rmse))
-            fprintf(rep->stats, ",%.9g", info->rmse);
-        fprintf(rep->stats, ",%.3f,%.6g,%.4f\n", info->mean_spp, info->error, info->converged);
-        if (fflush(rep->stats) != 0) {
-            fprintf(stderr, "%s: write failed\n", rep->stats_path);
-            rep->stats_failed = true;
-        }
+            fprintf(st->file, ",%.9g", info->rmse);
+        fprintf(st->file, ",%.3f,%.6g,%.4f\n", info->mean_spp, info->error, info->converged);
+        if (fflush(st->file) != 0)
+            stats_failed(st);
     }
     if (rep->progress)
         draw_bar(rep, info);
@@ -117,42 +142,95 @@ bool ao_app_write_output(const char *path, const struct ao_frame *frame, const c
                                  notes.count);
 }
 
+bool ao_app_begin(void)
+{
+    /* A write to a closed socket or pipe (an X server killed under the window, a --stats FIFO
+     * whose reader left, stderr read by a program that quit) then fails and is reported, instead
+     * of killing aoview silently. */
+    signal(SIGPIPE, SIG_IGN);
+    for (int fd = 0; fd <= 2; fd++) {
+        if (fcntl(fd, F_GETFD) >= 0 || errno != EBADF)
+            continue;
+        int null = open("/dev/null", fd == 0 ? O_WRONLY : O_RDONLY); /* the lowest free: fd */
+        if (null != fd) {
+            fprintf(stderr, "aoview: cannot open /dev/null: %s\n", strerror(errno));
+            return false;
+        }
+    }
+    return true;
+}
+
+bool ao_app_print(const char *text)
+{
+    if (fputs(text, stdout) >= 0 && fflush(stdout) == 0)
+        return true;
+    fprintf(stderr, "aoview: cannot write to standard output: %s\n", strerror(errno));
+    return false;
+}
+
+const char *ao_app_signal_name(int sig)
+{
+    return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "a signal";
+}
+
+/* Ends the process at once with 128 + sig: removes the temporary files of writes in progress and
+ * a --stats file this run created and wrote no row into; with `say`, one line first (write(2):
+ * the main thread may hold stderr's lock). */
+static void end_at_once(const struct ao_interrupt *in, int sig, bool say)
+{
+    ao_image_discard_temporaries();
+    const struct ao_stats *st = in->stats;
+    if (st && atomic_load(&st->created) && !atomic_load(&st->started))
+        unlink(st->path);
+    if (say) {
+        char line[96];
+        int n = snprintf(line, sizeof line, "aoview: interrupted by %s before rendering: nothing written\n",
+                         ao_app_signal_name(sig));
+        if (write(STDERR_FILENO, line, (size_t)n) < 0) {
+            /* nowhere left to say it */
+        }
+    }
+    _exit(128 + sig);
+}
+
 static void *watch_signals(void *arg)
 {
     struct ao_interrupt *in = arg;
     int sig;
     if (sigwait(&in->signals, &sig) != 0)
         return NULL;
-    if (!atomic_load(&in->graceful))
-        _exit(128 + sig);
+    struct ao_render *render = atomic_load(&in->render);
+    if (!render || !atomic_load(&in->graceful))
+        end_at_once(in, sig, !atomic_load(&in->rendering) && !in->silent);
     atomic_store(&in->caught, sig);
-    if (in->render)
-        ao_render_stop(in->render);
+    ao_render_stop(render);
     if (sigwait(&in->signals, &sig) == 0)
-        _exit(128 + sig);
+        end_at_once(in, sig, false);
     return NULL;
 }
 
 /* Their disposition goes back to default first: a shell starts background jobs with SIGINT
- * ignored, and an ignored signal never reaches sigwait. */
+ * ignored, and an ignored signal never reaches sigwait. SIGHUP ignored stays so: nohup asked for
+ * the run to outlive the terminal. */
 void ao_app_block_signals(struct ao_app *app)
 {
     struct ao_interrupt *in = &app->interrupt;
+    struct sigaction hup;
     signal(SIGINT, SIG_DFL);
     signal(SIGTERM, SIG_DFL);
     sigemptyset(&in->signals);
     sigaddset(&in->signals, SIGINT);
     sigaddset(&in->signals, SIGTERM);
+    if (sigaction(SIGHUP, NULL, &hup) == 0 && hup.sa_handler != SIG_IGN)
+        sigaddset(&in->signals, SIGHUP);
     pthread_sigmask(SIG_BLOCK, &in->signals, NULL);
-    /* A write to a closed socket or pipe (an X server killed under the window, a --stats FIFO
-     * whose reader left) then fails and is reported, instead of killing aoview silently. */
-    signal(SIGPIPE, SIG_IGN);
 }
 
-bool ao_app_start_watcher(struct ao_app *app, struct ao_render *render)
+bool ao_app_start_watcher(struct ao_app *app, bool silent)
 {
     pthread_t thread;
-    app->interrupt.render = render;
+    app->interrupt.silent = silent;
+    app->interrupt.stats = &app->stats;
     if (pthread_create(&thread, NULL, watch_signals, &app->interrupt) != 0) {
         fprintf(stderr, "aoview: could not start the signal watcher thread\n");
         return false;
@@ -161,10 +239,30 @@ bool ao_app_start_watcher(struct ao_app *app, struct ao_render *render)
     return true;
 }
 
+void ao_app_watch(struct ao_app *app, struct ao_render *render)
+{
+    atomic_store(&app->interrupt.render, render);
+    atomic_store(&app->interrupt.rendering, true);
+}
+
 int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_render_config *config,
                 struct ao_settings *settings)
 {
+    /* Stats file, before the scene: one that cannot be written is refused before a long load. */
+    if (opts->stats_path) {
+        bool created;
+        if (!(app->stats.file = ao_file_open_output(opts->stats_path, "--stats", &created)))
+            return AO_EXIT_RUNTIME;
+        app->stats.path = opts->stats_path;
+        atomic_store(&app->stats.created, created);
+        snprintf(app->stats.header, sizeof app->stats.header,
+                 "%spass,spp,seconds,eye_rays,shadow_rays,mrays_per_s%s,mean_spp,error,converged\n",
+                 opts->compare ? "side," : "", opts->reference_path ? ",rmse" : "");
+        app->reporter.stats = &app->stats;
+    }
+
     /* Scene, size, tracer. */
+    char name[AO_TEXT_SIZE];
     if (!ao_scene_load(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE))
         return AO_EXIT_RUNTIME;
     int width = opts->width ? opts->width : app->scene.width ? app->scene.width : 640;
@@ -177,20 +275,10 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
         return AO_EXIT_RUNTIME;
     if (app->scene.degenerate_count && !opts->quiet)
         fprintf(stderr, "aoview: skipped %zu degenerate triangles\n", app->scene.degenerate_count);
+    ao_text_escape(app->scene.name, name, sizeof name);
     if (!opts->quiet)
-        fprintf(stderr, "aoview: %s: %zu triangles, %zu spheres, traced by %s\n", app->scene.name,
+        fprintf(stderr, "aoview: %s: %zu triangles, %zu spheres, traced by %s\n", name,
                 app->scene.triangle_count, app->scene.sphere_count, ao_tracer_backend(app->tracer));
-
-    /* Stats file. */
-    app->reporter.stats_path = opts->stats_path;
-    if (opts->stats_path) {
-        if (!(app->reporter.stats = fopen(opts->stats_path, "w"))) {
-            fprintf(stderr, "--stats: cannot write %s: %s\n", opts->stats_path, strerror(errno));
-            return AO_EXIT_RUNTIME;
-        }
-        fprintf(app->reporter.stats, "%spass,spp,seconds,eye_rays,shadow_rays,mrays_per_s%s,mean_spp,error,converged\n",
-                opts->compare ? "side," : "", app->reference ? ",rmse" : "");
-    }
 
     /* Renderer. */
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
@@ -210,7 +298,7 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
                                      .shading = opts->shading};
     struct ao_view view;
     if (!ao_camera_view(&settings->camera, width, height, &view)) {
-        fprintf(stderr, "%s: the camera cannot form an image\n", app->scene.name);
+        fprintf(stderr, "%s: the camera cannot form an image\n", name);
         return AO_EXIT_RUNTIME;
     }
     return 0;
@@ -224,8 +312,14 @@ bool ao_app_run_window(struct ao_app *app, const struct ao_options *opts, const 
         *status = result == AO_WINDOW_OK ? 0 : AO_EXIT_RUNTIME;
         return true;
     }
+    const char *output = opts->output ? opts->output : "aoview.png";
+    char name[AO_TEXT_SIZE];
+    if (!ao_image_check_output(output)) {
+        *status = AO_EXIT_RUNTIME;
+        return true;
+    }
     fprintf(stderr, "aoview: no display available; rendering headless to %s\n",
-            opts->output ? opts->output : "aoview.png");
+            ao_text_escape(output, name, sizeof name));
     return false;
 }
 
@@ -240,29 +334,37 @@ int ao_app_write(struct ao_app *app, const struct ao_options *opts, const struct
                  bool last_row, int status)
 {
     const char *output = opts->output ? opts->output : "aoview.png";
+    const char *bar = app->reporter.drawn_at > 0.0 ? "\n" : ""; /* ends the progress bar's line */
+    if (why && frame && frame->info.spp == 0) {
+        fprintf(stderr, "%saoview: %s before the first pass ended: nothing written\n", bar, why);
+        return status;
+    }
     if (why && frame) {
-        fprintf(stderr, "\naoview: %s at %u spp\n", why, frame->info.spp);
+        fprintf(stderr, "%saoview: %s at %u spp\n", bar, why, frame->info.spp);
         if (last_row)
             ao_app_on_pass(&frame->info, &app->reporter);
     }
     const float *difference = opts->view == AO_VIEW_MODE_DIFFERENCE ? app->reference : NULL;
     if (!frame || !ao_app_write_output(output, frame, app->scene.name, opts->seed, difference))
         return AO_EXIT_RUNTIME;
+    char name[AO_TEXT_SIZE];
     if (!opts->quiet)
-        fprintf(stderr, "aoview: wrote %s (%u spp, %.2f s, %.1f Mrays/s)\n", output, frame->info.spp,
-                frame->info.seconds, ao_app_mrays_per_second(&frame->info));
+        fprintf(stderr, "aoview: wrote %s (%u spp, %.2f s, %.1f Mrays/s)\n", ao_text_escape(output, name, sizeof name),
+                frame->info.spp, frame->info.seconds, ao_app_mrays_per_second(&frame->info));
     return status;
 }
 
-int ao_app_finish(struct ao_app *app, const struct ao_options *opts, int status)
+int ao_app_finish(struct ao_app *app, int status)
 {
     ao_render_destroy(app->render);
     app->render = NULL;
-    if (app->reporter.stats && fclose(app->reporter.stats) != 0 && !app->reporter.stats_failed) {
-        fprintf(stderr, "%s: write failed\n", opts->stats_path);
-        app->reporter.stats_failed = true;
-    }
-    if (app->reporter.stats_failed && status == 0)
+    struct ao_stats *st = &app->stats;
+    if (st->file && fclose(st->file) != 0)
+        stats_failed(st);
+    if (st->file && atomic_load(&st->created) && !atomic_load(&st->started))
+        unlink(st->path);
+    st->file = NULL;
+    if (st->failed && status == 0)
         status = AO_EXIT_RUNTIME;
     ao_tracer_destroy(app->tracer);
     ao_scene_finish(&app->scene);

@@ -1,5 +1,6 @@
-/* What aoview's front ends share around a renderer: loading the scene, tracer and reference from
- * the options, the --stats rows and the progress bar, SIGINT/SIGTERM, and writing the output. */
+/* What aoview's front ends share around a renderer: the process's standard descriptors, loading
+ * the scene, tracer and reference from the options, the --stats rows and the progress bar,
+ * SIGINT/SIGTERM/SIGHUP, and writing the output. */
 #ifndef AO_APP_H
 #define AO_APP_H
 
@@ -18,30 +19,46 @@
 /* Exit statuses besides 0 and 128 + signal. */
 enum { AO_EXIT_RUNTIME = 1, AO_EXIT_USAGE = 2 };
 
+/* The --stats file, shared by the reporters that write rows into it. It is opened before loading
+ * without truncating it; the first row truncates it and writes the header, so that a run that
+ * finishes no pass leaves an existing file as it was, and removes one it created. */
+struct ao_stats {
+    FILE *file;
+    const char *path;
+    atomic_bool created;   /* this run created the file */
+    atomic_bool started;   /* the first row came (truncated, header written) */
+    bool failed;           /* a write failed, and was said */
+    char header[128];
+};
+
 /* What the per-pass callback (ao_app_on_pass) reports to. */
 struct ao_reporter {
-    FILE *stats;
-    const char *stats_path;
+    struct ao_stats *stats;   /* NULL: no rows */
     const char *side;      /* --compare's "A" or "B": the stats rows' first column; NULL: none */
     struct ao_render *_Atomic render;   /* --compare: the side's renderer, stopped at stop_at */
     double stop_at;        /* --compare: seconds whose nearest pass end ends the side; 0: none */
     double pass_end;       /* seconds at the end of the previous pass */
     atomic_bool progress;  /* a progress bar on stderr (a terminal, not --quiet); set by main while
                               the render thread reads it (the window's no-display fallback) */
-    bool stats_failed;
     struct ao_progress eta;   /* the bar's time-left estimate */
     double drawn_at;          /* monotonic seconds of the bar's last redraw; 0: never */
     void (*notify)(void);     /* called after each pass (waking a window); NULL: none */
 };
 
-/* SIGINT/SIGTERM: the first stops the renderer at the next tile so that the front end writes what
- * it has (graceful), or exits at once; a second exits at once. The signals are blocked in every
- * thread and taken by a watcher thread with sigwait, so nothing runs in a signal handler. */
+/* SIGINT/SIGTERM/SIGHUP: while loading (before ao_app_watch), the first exits at once with one
+ * line; then it stops the renderer at the next tile so that the front end writes what it has
+ * (graceful), or exits at once; a second exits at once. Exiting at once removes the temporary
+ * files of writes in progress and a --stats file this run created and wrote no row into; the
+ * status is 128 + the signal. The signals are blocked in every thread and taken by a watcher
+ * thread with sigwait, so nothing runs in a signal handler. */
 struct ao_interrupt {
     sigset_t signals;
-    struct ao_render *render;
+    struct ao_render *_Atomic render;  /* the renderer a graceful signal stops */
+    atomic_bool rendering;   /* ao_app_watch was called: loading is over */
     atomic_bool graceful;    /* headless: stop and write; in the window: exit as by default */
     atomic_int caught;
+    bool silent;             /* no line when a signal ends loading (aoview-mpi's other ranks) */
+    const struct ao_stats *stats;
 };
 
 /* Everything a front end owns around its renderer; zero-initialise, release with ao_app_finish. */
@@ -52,17 +69,31 @@ struct ao_app {
     float *reference;
     int reference_width, reference_height;
     struct ao_reporter reporter;
+    struct ao_stats stats;
     struct ao_interrupt interrupt;
 };
 
-/* Blocks SIGINT and SIGTERM in the calling thread and every thread it starts from now on, and
- * ignores SIGPIPE (a write to a closed pipe fails and is reported). Call before any thread starts,
- * Embree's included. */
+/* First thing in main: ignores SIGPIPE (a write to a closed pipe fails and is reported), and opens
+ * /dev/null onto whichever of descriptors 0-2 is closed, so that no file opened later becomes
+ * stdout or stderr; for reading on 1 and 2 (writing on 0), so that using them fails as before.
+ * False after one line (to stderr, if it is open) when /dev/null cannot be opened. */
+bool ao_app_begin(void);
+
+/* Writes text (--help, --version) to stdout and flushes it; false after one line on stderr when
+ * it cannot (a full disk, a closed stdout). Main thread. */
+bool ao_app_print(const char *text);
+
+/* "SIGINT", "SIGTERM" or "SIGHUP" (the signals the watcher takes). */
+const char *ao_app_signal_name(int sig);
+
+/* Blocks SIGINT, SIGTERM and SIGHUP (unless SIGHUP is ignored, as nohup leaves it) in the calling
+ * thread and every thread it starts from now on. Call before any thread starts, Embree's
+ * included. */
 void ao_app_block_signals(struct ao_app *app);
 
-/* Loads the scene, --reference and tracer, opens --stats with its header, and fills in the renderer's
- * config (its on_pass reporting to app->reporter) and initial settings; 0, or AO_EXIT_RUNTIME
- * after one message. The progress bar is left off. Main thread. */
+/* Opens --stats (struct ao_stats), loads the scene, --reference and tracer, and fills in the
+ * renderer's config (its on_pass reporting to app->reporter) and initial settings; 0, or
+ * AO_EXIT_RUNTIME after one message. The progress bar is left off. Main thread. */
 int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_render_config *config,
                 struct ao_settings *settings);
 
@@ -75,9 +106,13 @@ void ao_app_on_preview(const struct ao_frame_info *info, void *user);
 /* Mega-rays (eye and shadow) per second of the frame's run. Pure. */
 double ao_app_mrays_per_second(const struct ao_frame_info *info);
 
-/* Starts the thread that takes the blocked signals for render (NULL: none to stop); false with a
- * message when it cannot. */
-bool ao_app_start_watcher(struct ao_app *app, struct ao_render *render);
+/* Starts the thread that takes the blocked signals (struct ao_interrupt), before loading; silent:
+ * no line when a signal ends the loading. False with a message when it cannot. */
+bool ao_app_start_watcher(struct ao_app *app, bool silent);
+
+/* Loading is over: from now on a signal stops render (NULL: none to stop, the signal exits at
+ * once) when app->interrupt.graceful is set. Main thread. */
+void ao_app_watch(struct ao_app *app, struct ao_render *render);
 
 /* Writes frame to path: PFM or EXR (linear; EXR with the settings in its header) or PNG (through the
  * display code; with a difference reference, the difference view's heat map); false after one
@@ -87,7 +122,8 @@ bool ao_app_write_output(const char *path, const struct ao_frame *frame, const c
 
 /* Runs the window on app->render with info until the user quits: true, *status the exit status.
  * False where no window can be opened, after one line saying that the run goes on headless to -o
- * (aoview.png by default), as SPEC.md wants of a machine without a display. Main thread. */
+ * (aoview.png by default), as SPEC.md wants of a machine without a display; true with *status
+ * AO_EXIT_RUNTIME after one line when that -o cannot be written. Main thread. */
 bool ao_app_run_window(struct ao_app *app, const struct ao_options *opts, const struct ao_window_info *info,
                        int *status);
 
@@ -97,13 +133,15 @@ bool ao_app_wait(struct ao_app *app, int *sig);
 
 /* Writes -o from frame (NULL: none to write, a failure); after an interruption, `why` (what
  * stopped the run) is printed with frame's spp first, and with `last_row` the frame is added as a
- * last --stats row (the render thread must have been joined). Returns the exit status, `status`
- * when everything was written. Main thread. */
+ * last --stats row (the render thread must have been joined); a frame of 0 spp (interrupted
+ * before its first pass ended) is not written, and existing files are left alone. Returns the
+ * exit status, `status` when everything was written (or nothing was to be). Main thread. */
 int ao_app_write(struct ao_app *app, const struct ao_options *opts, const struct ao_frame *frame, const char *why,
                  bool last_row, int status);
 
-/* Destroys the renderer, closes --stats (a failed write turns a status of 0 into AO_EXIT_RUNTIME),
- * frees the rest; returns the status. */
-int ao_app_finish(struct ao_app *app, const struct ao_options *opts, int status);
+/* Destroys the renderer, closes --stats (a failed write turns a status of 0 into AO_EXIT_RUNTIME;
+ * a file this run created and wrote no row into is removed), frees the rest; returns the
+ * status. */
+int ao_app_finish(struct ao_app *app, int status);
 
 #endif

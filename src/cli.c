@@ -2,6 +2,7 @@
 #include "cli.h"
 
 #include "image.h"
+#include "text.h"
 
 #include <ctype.h>
 #include <inttypes.h>
@@ -12,6 +13,10 @@
 #include <strings.h>
 
 enum { MAX_SPP = 1 << 30, MAX_SPPPP = 65536, MAX_THREADS = 256 };
+
+/* A value from argv as a message quotes it: escaped onto one line (text.h), in a buffer that lives
+ * until the end of the enclosing block, cut to fit the message. */
+#define SHOWN(value) ao_text_escape((value), (char[200]){0}, 200)
 
 enum option_id {
     OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
@@ -157,7 +162,7 @@ static bool parse_count(const char *name, const char *value, uint64_t lo, uint64
     if (parse_u64(value, value + strlen(value), out) && *out >= lo && *out <= hi)
         return true;
     snprintf(msg, msg_size, "%s: expected a whole number from %" PRIu64 " to %" PRIu64 ", got '%s'",
-             name, lo, hi, value);
+             name, lo, hi, SHOWN(value));
     return false;
 }
 
@@ -175,7 +180,7 @@ static bool parse_size(const char *name, const char *value, struct ao_options *o
     }
     snprintf(msg, msg_size,
              "%s: expected WxH with sides from 1 to %d and at most %d pixels, got '%s'", name,
-             AO_IMAGE_MAX_SIDE, AO_IMAGE_MAX_PIXELS, value);
+             AO_IMAGE_MAX_SIDE, AO_IMAGE_MAX_PIXELS, SHOWN(value));
     return false;
 }
 
@@ -188,7 +193,7 @@ static bool parse_distance(const char *name, const char *value, float *out, char
         *out = d;
         return true;
     }
-    snprintf(msg, msg_size, "%s: expected a finite number greater than 0, got '%s'", name, value);
+    snprintf(msg, msg_size, "%s: expected a finite number greater than 0, got '%s'", name, SHOWN(value));
     return false;
 }
 
@@ -201,7 +206,7 @@ static bool parse_fraction(const char *name, const char *value, double *out, cha
         *out = e;
         return true;
     }
-    snprintf(msg, msg_size, "%s: expected a relative error greater than 0 and at most 1, got '%s'", name, value);
+    snprintf(msg, msg_size, "%s: expected a relative error greater than 0 and at most 1, got '%s'", name, SHOWN(value));
     return false;
 }
 
@@ -215,7 +220,7 @@ static bool parse_seconds(const char *name, const char *value, double *out, char
         return true;
     }
     snprintf(msg, msg_size, "%s: expected seconds greater than 0 and at most %.0f, got '%s'", name, MAX_SECONDS,
-             value);
+             SHOWN(value));
     return false;
 }
 
@@ -234,7 +239,7 @@ static bool parse_path(const char *name, const char *value, bool image, const ch
         return true;
     }
     snprintf(msg, msg_size, "%s: expected a file name%s, got '%s'", name,
-             image ? " ending in .png, .pfm or .exr" : "", value);
+             image ? " ending in .png, .pfm or .exr" : "", SHOWN(value));
     return false;
 }
 
@@ -243,7 +248,7 @@ static bool parse_sampling(const char *name, const char *value, enum ao_sampling
 {
     if (ao_sampling_parse(value, out))
         return true;
-    snprintf(msg, msg_size, "%s: expected uniform, hemisphere or cosine, got '%s'", name, value);
+    snprintf(msg, msg_size, "%s: expected uniform, hemisphere or cosine, got '%s'", name, SHOWN(value));
     return false;
 }
 
@@ -266,7 +271,7 @@ static bool parse_choice(const char *name, const char *value, const char *const 
         used += (size_t)snprintf(msg + used, msg_size - used, "%s%s", choices[k],
                                  k + 2 < n ? ", " : k + 2 == n ? " or " : "");
     if (used < msg_size)
-        snprintf(msg + used, msg_size - used, ", got '%s'", value);
+        snprintf(msg + used, msg_size - used, ", got '%s'", SHOWN(value));
     return false;
 }
 
@@ -311,7 +316,7 @@ static bool parse_compare(const char *name, const char *value, struct ao_options
         return true;
     snprintf(msg, msg_size,
              "%s: expected two configurations A,B, each a sampling mode with optional +random|+sobol and "
-             "+aa|+noaa (e.g. uniform,cosine), got '%s'", name, value);
+             "+aa|+noaa (e.g. uniform,cosine), got '%s'", name, SHOWN(value));
     return false;
 }
 
@@ -425,11 +430,13 @@ static bool parse_option(int argc, char **argv, int *i, struct ao_options *opts,
     size_t name_len = eq ? (size_t)(eq - arg) : strlen(arg);
     const struct option_spec *spec = find_option(arg, name_len);
     if (!spec) {
-        snprintf(msg, msg_size, "unknown option '%.*s'", (int)name_len, arg);
+        char name[200];
+        snprintf(name, sizeof name, "%.*s", (int)name_len, arg);
+        snprintf(msg, msg_size, "unknown option '%s'", SHOWN(name));
         return false;
     }
     if (!spec->has_value && eq) {
-        snprintf(msg, msg_size, "%s: takes no value, got '%s'", spec->name, eq + 1);
+        snprintf(msg, msg_size, "%s: takes no value, got '%s'", spec->name, SHOWN(eq + 1));
         return false;
     }
     const char *value = eq ? eq + 1 : NULL;
@@ -456,8 +463,8 @@ bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, siz
             if (!parse_option(argc, argv, &i, opts, msg, msg_size))
                 return false;
         } else if (opts->scene_path) {
-            snprintf(msg, msg_size, "unexpected argument '%s': the scene is already '%s'", arg,
-                     opts->scene_path);
+            snprintf(msg, msg_size, "unexpected argument '%s': the scene is already '%s'", SHOWN(arg),
+                     SHOWN(opts->scene_path));
             return false;
         } else {
             opts->scene_path = arg;

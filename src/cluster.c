@@ -25,6 +25,8 @@ enum { TAG_REQUEST = 1, TAG_GRANT, TAG_SUMS, TAG_ANSWER };
  * rank 0 may be paused or done, for as long as its window stays open. */
 static const long SPIN_NS = 200000, POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000, POLL_IDLE_NS = 20000000,
                   IDLE_AFTER_NS = 50000000;
+/* How often rank 0's claim server looks for an interrupted rank's answer between passes. */
+static const long ANSWER_POLL_NS = 100000000;
 
 /* Rank 0 grants a rank 1 / (CHUNKS x ranks) of the entries still to hand out, so that chunks
  * shrink as the pass runs out: a rank holds at most two chunks (the one it traces and the next,
@@ -42,6 +44,7 @@ struct ao_cluster {
     int rank, size;
     MPI_Comm claims, passes, control;
     atomic_bool stopping;
+    atomic_int interrupted;  /* rank 0: another rank that said it was interrupted, or -1 */
     bool closed;             /* rank 0: it gave up the pass (a restart or stop); nothing is handed
                                 out until the next pass begins */
     bool open;               /* rank 0: from a pass's begin (or its giving up) to its merge, when
@@ -238,20 +241,39 @@ static void serve_claims(struct ao_cluster *c)
  * end; while its threads claim, the server looks only every CHUNK_SECONDS, as long as a chunk
  * lasts at least, since each of its wake-ups interrupts a render thread (on a virtual machine, at
  * a cost of 3 % of rank 0's time when it looked every 1 ms). Between passes, when no request can
- * come, it sleeps until the next pass opens. */
+ * come, it sleeps until the next pass opens, waking every ANSWER_POLL_NS: a rank interrupted by
+ * itself (ao_cluster_answer) would leave rank 0 waiting for it for ever, at the pass's end or for
+ * the sums of a chunk it did not finish, and the server stops the cluster when one answers. */
 static void *serve(void *arg)
 {
     struct ao_cluster *c = arg;
     long pause = POLL_FIRST_NS;
     while (!atomic_load_explicit(&c->stopping, memory_order_relaxed)) {
         pthread_mutex_lock(&c->lock);
-        if (!c->open) /* the next pass's first requests come as soon as it opens */
+        bool open = c->open, served = false, claiming = false;
+        if (!open && !atomic_load(&c->stopping)) { /* the next pass's first requests come as soon as it opens */
+            struct timespec until;
+            clock_gettime(CLOCK_REALTIME, &until);
+            until.tv_nsec += ANSWER_POLL_NS;
+            until.tv_sec += until.tv_nsec / 1000000000L;
+            until.tv_nsec %= 1000000000L;
+            pthread_cond_timedwait(&c->opened, &c->lock, &until);
             pause = POLL_FIRST_NS;
-        while (!c->open && !atomic_load(&c->stopping))
-            pthread_cond_wait(&c->opened, &c->lock);
-        bool served = serve_pending(c), claiming = c->claiming;
-        c->claiming = false;
+        } else if (open) {
+            served = serve_pending(c);
+            claiming = c->claiming;
+            c->claiming = false;
+        }
         pthread_mutex_unlock(&c->lock);
+        int answered = 0;
+        MPI_Status status;
+        MPI_Iprobe(MPI_ANY_SOURCE, TAG_ANSWER, c->control, &answered, &status);
+        if (answered) { /* left for ao_cluster_missing to receive */
+            atomic_store(&c->interrupted, status.MPI_SOURCE);
+            ao_cluster_stop(c);
+        }
+        if (!open)
+            continue;
         pause = claiming ? (long)(CHUNK_SECONDS * 1e9) : served ? POLL_FIRST_NS
                                                     : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
         sleep_ns(pause);
@@ -529,6 +551,7 @@ struct ao_cluster *ao_cluster_create(void)
     pthread_mutex_init(&c->lock, NULL);
     pthread_cond_init(&c->opened, NULL);
     atomic_init(&c->stopping, false);
+    atomic_init(&c->interrupted, -1);
     c->share = (struct ao_render_share){.begin = begin_pass, .states = pass_states, .claim = claim, .merge = merge,
                                         .end = end_run,
                                         .follows = c->rank != 0, .user = c};
@@ -568,9 +591,17 @@ void ao_cluster_stop(struct ao_cluster *cluster)
     pthread_mutex_unlock(&cluster->lock);
 }
 
-void ao_cluster_answer(struct ao_cluster *cluster)
+void ao_cluster_answer(struct ao_cluster *cluster, int sig)
 {
-    MPI_Send(&cluster->rank, 1, MPI_INT, 0, TAG_ANSWER, cluster->control);
+    MPI_Send(&sig, 1, MPI_INT, 0, TAG_ANSWER, cluster->control);
+}
+
+int ao_cluster_interrupted(struct ao_cluster *cluster, int *sig)
+{
+    int rank = atomic_load(&cluster->interrupted);
+    if (sig)
+        *sig = rank > 0 && cluster->pending[rank] == MPI_REQUEST_NULL ? cluster->answers[rank] : 0;
+    return rank;
 }
 
 void ao_cluster_missing(struct ao_cluster *cluster, double seconds, char *out, size_t size)

@@ -39,8 +39,13 @@ const struct ao_render_share *ao_cluster_share(struct ao_cluster *cluster);
  * Any thread. */
 void ao_cluster_stop(struct ao_cluster *cluster);
 
-/* After an interruption, ranks other than 0: tells rank 0 this rank is alive. */
-void ao_cluster_answer(struct ao_cluster *cluster);
+/* After an interruption by sig, ranks other than 0: tells rank 0 this rank is alive, and was
+ * interrupted (rank 0 stops the cluster when it was not itself). */
+void ao_cluster_answer(struct ao_cluster *cluster, int sig);
+
+/* Rank 0: the first other rank that was interrupted while rank 0 was not (the cluster stopped
+ * then), or -1; *sig (unless NULL) its signal once ao_cluster_missing took its answer, else 0. */
+int ao_cluster_interrupted(struct ao_cluster *cluster, int *sig);
 
 /* After an interruption, rank 0: waits up to `seconds` for every other rank's answer and writes
  * the ranks that did not answer ("2", "1, 3") into out, "" when all did. */

@@ -2,12 +2,18 @@
 
 #include <dlfcn.h>
 #include <pthread.h>
+#include <stdatomic.h>
+#include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include "display.h"
 #include "glapi.h"
 #include "hud.h"
+#include "text.h"
 
 #include <GL/osmesa.h>
 
@@ -37,6 +43,7 @@ static struct {
     get_proc_address_fn get_proc_address;
     destroy_context_fn destroy_context;
     char error[512];     /* why loading failed; empty once loaded */
+    atomic_bool tried;   /* load ran: the library is mapped, or will not be */
 } osmesa;
 static pthread_once_t osmesa_once = PTHREAD_ONCE_INIT;
 
@@ -64,6 +71,7 @@ static bool find(void *library, const char *name, void *function)
  * dlerror's reasons (each name's, or the missing function's) in osmesa.error. Runs once. */
 static void load(void)
 {
+    atomic_store(&osmesa.tried, true);
     void *library = NULL;
     for (size_t i = 0; !library && i < sizeof library_names / sizeof *library_names; i++)
         if (!(library = dlopen(library_names[i], RTLD_NOW | RTLD_LOCAL)))
@@ -76,6 +84,45 @@ static void load(void)
           find(library, "OSMesaGetProcAddress", &osmesa.get_proc_address) &&
           find(library, "OSMesaDestroyContext", &osmesa.destroy_context)))
         dlclose(library);
+}
+
+/* The address space that drawing one PNG through OSMesa takes beyond what aoview holds, measured
+ * with Mesa 22.3's llvmpipe (VmPeak over the write, 64x48 to 7680x4320, 0 to 16 llvmpipe
+ * threads): loading libOSMesa and LLVM 181 MB; a context and its draw about 140 MB; each
+ * llvmpipe thread 144 MB (its stack and malloc arena); the texture, framebuffer and read-back
+ * 16-21 bytes a pixel. Rounded up here, so that a limit leaving less is refused in one line:
+ * Mesa does not check all its allocations, and under `ulimit -v` a 4K PNG crashed inside
+ * OSMesaCreateContextAttribs. */
+static const double LOAD_MB = 192, CONTEXT_MB = 160, THREAD_MB = 150, PIXEL_BYTES = 24;
+/* llvmpipe's most threads (LP_MAX_THREADS is 16 in Mesa 22, 32 in later ones). */
+enum { MOST_LLVMPIPE_THREADS = 32 };
+
+/* The threads llvmpipe will start: LP_NUM_THREADS, else one a core. */
+static long llvmpipe_threads(void)
+{
+    const char *set = getenv("LP_NUM_THREADS");
+    long threads = set && *set ? strtol(set, NULL, 10) : sysconf(_SC_NPROCESSORS_ONLN);
+    return threads < 0 ? 0 : threads > MOST_LLVMPIPE_THREADS ? MOST_LLVMPIPE_THREADS : threads;
+}
+
+/* Under a limit on the address space (ulimit -v), whether what drawing a width x height PNG takes
+ * is left of it, tried by allocating that much (untouched, so it costs no memory) and freeing it;
+ * false after one line. Without a limit, true: address space is not what runs out first. */
+static bool room_to_draw(const char *name, int width, int height)
+{
+    struct rlimit limit;
+    if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY)
+        return true;
+    double mb = (atomic_load(&osmesa.tried) ? 0.0 : LOAD_MB) + CONTEXT_MB + THREAD_MB * (double)llvmpipe_threads() +
+                PIXEL_BYTES * (double)width * (double)height / (1 << 20);
+    void *room = (double)SIZE_MAX / (1 << 20) > mb ? malloc((size_t)(mb * (1 << 20))) : NULL;
+    free(room);
+    if (room)
+        return true;
+    fprintf(stderr, "aoview: %s: drawing a %dx%d PNG through OSMesa takes about %.0f MB of address space more "
+                    "than the limit leaves (ulimit -v %llu)\n", name, width, height, mb,
+            (unsigned long long)(limit.rlim_cur / 1024));
+    return false;
 }
 
 /* What the display draws over the image before read-back: a heat map's colour bar, or labels. */
@@ -106,9 +153,13 @@ static void draw_overlay(void *user, int width, int height)
 /* Writes rgb as ao_headless_write_png does, with overlay drawn over it unless overlay is NULL. */
 static bool write_png(const char *path, const float *rgb, int width, int height, struct overlay *overlay)
 {
+    char name[AO_TEXT_SIZE];
+    ao_text_escape(path, name, sizeof name);
+    if (!room_to_draw(name, width, height))
+        return false;
     pthread_once(&osmesa_once, load);
     if (osmesa.error[0]) {
-        fprintf(stderr, "aoview: %s: cannot load OSMesa (%s)\n", path, osmesa.error);
+        fprintf(stderr, "aoview: %s: cannot load OSMesa (%s)\n", name, osmesa.error);
         return false;
     }
 
@@ -122,7 +173,7 @@ static bool write_png(const char *path, const float *rgb, int width, int height,
     };
     OSMesaContext context = osmesa.create_context_attribs(attribs, NULL);
     if (!context) {
-        fprintf(stderr, "aoview: %s: no OpenGL 3.3 core context from OSMesa\n", path);
+        fprintf(stderr, "aoview: %s: no OpenGL 3.3 core context from OSMesa\n", name);
         return false;
     }
 
@@ -131,7 +182,7 @@ static bool write_png(const char *path, const float *rgb, int width, int height,
     unsigned char buffer[4];
     bool ok = osmesa.make_current(context, buffer, GL_UNSIGNED_BYTE, 1, 1);
     if (!ok)
-        fprintf(stderr, "aoview: %s: cannot make the OSMesa context current\n", path);
+        fprintf(stderr, "aoview: %s: cannot make the OSMesa context current\n", name);
 
     struct ao_glapi gl;
     struct ao_display *display = NULL;
@@ -144,6 +195,12 @@ static bool write_png(const char *path, const float *rgb, int width, int height,
     ao_display_destroy(display);
     osmesa.destroy_context(context);
     return ok;
+}
+
+bool ao_headless_check_room(const char *path, int width, int height)
+{
+    char name[AO_TEXT_SIZE];
+    return room_to_draw(ao_text_escape(path, name, sizeof name), width, height);
 }
 
 bool ao_headless_write_png(const char *path, const float *rgb, int width, int height)

@@ -7,6 +7,12 @@
 
 #include "heatmap.h"
 
+/* Under a limit on the address space (ulimit -v), whether drawing a width x height PNG through
+ * OSMesa fits in what is left of it (its needs measured with Mesa 22.3, rounded up; Mesa does not
+ * survive running out); false after one line naming path. Each write checks it first; a front end
+ * asks before rendering, its renderer allocated. Any thread. */
+bool ao_headless_check_room(const char *path, int width, int height);
+
 /* Renders rgb (linear, width x height, top row first) through the display shader in an OSMesa
  * core-profile context, reads it back and writes path as PNG; false with one message on failure,
  * libOSMesa not loading included (it is opened at the first call and kept). Any one thread at a

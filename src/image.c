@@ -6,7 +6,9 @@
 #include <ctype.h>
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -20,6 +22,7 @@
 #include <stb_image_write.h>
 
 #include "exr.h"
+#include "text.h"
 
 static_assert(sizeof(float) == 4 && sizeof(uint32_t) == 4, "PFM needs 32-bit IEEE floats");
 
@@ -52,10 +55,12 @@ void ao_image_encode_srgb8(const float *linear, size_t count, uint8_t *out)
 
 static void report(const char *path, const char *reason, int err)
 {
+    char name[AO_TEXT_SIZE];
+    ao_text_escape(path, name, sizeof name);
     if (err)
-        fprintf(stderr, "%s: %s (%s)\n", path, reason, strerror(err));
+        fprintf(stderr, "%s: %s (%s)\n", name, reason, strerror(err));
     else
-        fprintf(stderr, "%s: %s\n", path, reason);
+        fprintf(stderr, "%s: %s\n", name, reason);
 }
 
 static bool fail(struct failure *out, const char *reason, int err)
@@ -65,41 +70,142 @@ static bool fail(struct failure *out, const char *reason, int err)
     return false;
 }
 
-/* Creates "<path>.tmp.<pid>.<n>" exclusively with mode 0666 less the umask (mkstemp would force
- * 0600 onto the final file); on success *tmp is a malloc'd name the caller frees. */
-static FILE *create_temp(const char *path, char **tmp)
+/* The temporary files being written, which ao_image_discard_temporaries removes: a slot holds a
+ * name from just before the file is created until it is renamed or removed, under temps_lock. */
+enum { TEMP_SLOTS = 8 };
+static pthread_mutex_t temps_lock = PTHREAD_MUTEX_INITIALIZER;
+static char *temps[TEMP_SLOTS];
+
+/* The longest file name in the directory of path (NAME_MAX where it cannot be asked). */
+static size_t name_max(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    long max = -1;
+    if (!slash) {
+        max = pathconf(".", _PC_NAME_MAX);
+    } else if (slash == path) {
+        max = pathconf("/", _PC_NAME_MAX);
+    } else {
+        char *dir = strndup(path, (size_t)(slash - path));
+        if (dir)
+            max = pathconf(dir, _PC_NAME_MAX);
+        free(dir);
+    }
+    return max > 0 ? (size_t)max : NAME_MAX;
+}
+
+/* "<path>.tmp.<pid>.<n>" in path's directory, its file name part cut (at a UTF-8 character) so
+ * that the whole stays within name_max bytes; malloc'd, NULL when out of memory. */
+static char *temp_name(const char *path, unsigned n)
+{
+    char suffix[48];
+    int suffix_len = snprintf(suffix, sizeof suffix, ".tmp.%ld.%u", (long)getpid(), n);
+    const char *slash = strrchr(path, '/');
+    size_t dir = slash ? (size_t)(slash + 1 - path) : 0, base = strlen(path + dir), max = name_max(path);
+    size_t keep = base + (size_t)suffix_len <= max ? base : max > (size_t)suffix_len ? max - (size_t)suffix_len : 0;
+    while (keep > 0 && keep < base && ((unsigned char)path[dir + keep] & 0xc0) == 0x80)
+        keep--;
+    char *tmp = malloc(dir + keep + (size_t)suffix_len + 1);
+    if (tmp)
+        sprintf(tmp, "%.*s%s", (int)(dir + keep), path, suffix);
+    return tmp;
+}
+
+/* Renames the temporary file in slot onto path (NULL: removes it) and forgets it; 0, or the errno
+ * of a failed rename (the file is then removed). */
+static int finish_temp(int slot, const char *path)
+{
+    pthread_mutex_lock(&temps_lock);
+    char *tmp = temps[slot];
+    int err = path && rename(tmp, path) != 0 ? errno : 0;
+    if (!path || err)
+        unlink(tmp);
+    temps[slot] = NULL;
+    pthread_mutex_unlock(&temps_lock);
+    free(tmp);
+    return err;
+}
+
+/* Creates a temporary file for path (temp_name) exclusively with mode 0666 less the umask (mkstemp
+ * would force 0600 onto the final file) and records it in *slot of temps; NULL with errno set. */
+static FILE *create_temp(const char *path, int *slot)
 {
     static atomic_uint counter;
-    size_t size = strlen(path) + 64;
-    *tmp = malloc(size);
-    if (!*tmp)
-        return NULL;
     int fd = -1;
-    for (int attempt = 0; fd < 0 && attempt < 100; attempt++) {
-        snprintf(*tmp, size, "%s.tmp.%ld.%u", path, (long)getpid(), atomic_fetch_add(&counter, 1));
-        fd = open(*tmp, O_WRONLY | O_CREAT | O_EXCL, 0666);
-        if (fd < 0 && errno != EEXIST)
-            break;
+    pthread_mutex_lock(&temps_lock);
+    for (*slot = 0; *slot < TEMP_SLOTS && temps[*slot]; ++*slot) {
     }
-    FILE *f = fd < 0 ? NULL : fdopen(fd, "wb");
-    if (fd >= 0 && !f) {
-        int err = errno;
+    int err = *slot < TEMP_SLOTS ? EEXIST : EBUSY;  /* EBUSY: more writes at once than aoview makes */
+    for (int attempt = 0; fd < 0 && err == EEXIST && attempt < 100; attempt++) {
+        char *tmp = temp_name(path, atomic_fetch_add(&counter, 1));
+        if (!tmp) {
+            err = ENOMEM;
+            break;
+        }
+        temps[*slot] = tmp;
+        if ((fd = open(tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666)) < 0) {
+            err = errno;
+            temps[*slot] = NULL;
+            free(tmp);
+        }
+    }
+    pthread_mutex_unlock(&temps_lock);
+    if (fd < 0) {
+        errno = err;
+        return NULL;
+    }
+    FILE *f = fdopen(fd, "wb");
+    if (!f) {
+        err = errno;
         close(fd);
-        unlink(*tmp);
+        finish_temp(*slot, NULL);
         errno = err;
     }
     return f;
+}
+
+void ao_image_discard_temporaries(void)
+{
+    pthread_mutex_lock(&temps_lock); /* kept: no write may begin or end after this */
+    for (int k = 0; k < TEMP_SLOTS; k++)
+        if (temps[k])
+            unlink(temps[k]);
+}
+
+bool ao_image_check_output(const char *path)
+{
+    const char *slash = strrchr(path, '/');
+    size_t base = strlen(slash ? slash + 1 : path), max = name_max(path);
+    struct stat st;
+    if (base > max) {
+        char reason[64];
+        snprintf(reason, sizeof reason, "file name longer than %zu bytes", max);
+        report(path, reason, 0);
+        return false;
+    }
+    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
+        report(path, "is a directory", 0);
+        return false;
+    }
+    int slot;
+    FILE *f = create_temp(path, &slot);
+    if (!f) {
+        report(path, "cannot create a file in its directory", errno);
+        return false;
+    }
+    fclose(f);
+    finish_temp(slot, NULL);
+    return true;
 }
 
 /* Runs emit on a temporary file, syncs it and renames it over path; reports any failure once. */
 static bool write_atomically(const char *path, bool (*emit)(FILE *f, const struct raster *r),
                              const struct raster *r)
 {
-    char *tmp = NULL;
-    FILE *f = create_temp(path, &tmp);
+    int slot;
+    FILE *f = create_temp(path, &slot);
     if (!f) {
         report(path, "cannot create temporary file", errno);
-        free(tmp);
         return false;
     }
     bool ok = emit(f, r) && fflush(f) == 0 && fsync(fileno(f)) == 0;
@@ -109,15 +215,12 @@ static bool write_atomically(const char *path, bool (*emit)(FILE *f, const struc
         err = errno;
     }
     const char *reason = ok ? NULL : "cannot write";
-    if (ok && rename(tmp, path) != 0) {
+    if (!ok)
+        finish_temp(slot, NULL);
+    else if ((err = finish_temp(slot, path)) != 0)
         reason = "cannot rename temporary file into place";
-        err = errno;
-    }
-    if (reason) {
-        unlink(tmp);
+    if (reason)
         report(path, reason, err);
-    }
-    free(tmp);
     return !reason;
 }
 
@@ -381,7 +484,8 @@ bool ao_image_read_png(const char *path, uint8_t **rgb, int *width, int *height)
     int w, h, channels;
     uint8_t *pixels = stbi_load(path, &w, &h, &channels, 3);
     if (!pixels) {
-        fprintf(stderr, "%s: cannot read PNG (%s)\n", path, stbi_failure_reason());
+        char name[AO_TEXT_SIZE];
+        fprintf(stderr, "%s: cannot read PNG (%s)\n", ao_text_escape(path, name, sizeof name), stbi_failure_reason());
         return false;
     }
     *rgb = pixels;

@@ -1,5 +1,7 @@
 /* Image files: PNG (8-bit sRGB), PFM and OpenEXR (linear float RGB) writing, reading for tests
- * and references, and the sRGB transfer curve shared with the display shader. */
+ * and references, and the sRGB transfer curve shared with the display shader. Writes go to a
+ * temporary file "<name>.tmp.<pid>.<n>" beside the target (the name part cut to fit the file
+ * system's longest name) that is renamed into place. */
 #ifndef AO_IMAGE_H
 #define AO_IMAGE_H
 
@@ -15,6 +17,15 @@ float ao_image_srgb_encode(float linear);
 
 /* Encodes count linear floats to 8-bit sRGB, rounding to nearest (the display shader's curve). */
 void ao_image_encode_srgb8(const float *linear, size_t count, uint8_t *out);
+
+/* Checks that an image can be written to path before it is made: its name fits the file system,
+ * it is not a directory, and a temporary file can be created beside it (and is removed again);
+ * false after one line naming path. Any thread. */
+bool ao_image_check_output(const char *path);
+
+/* Removes the temporary files of the writes in progress (in any thread); for a process about to
+ * _exit: no write can begin or end afterwards (they wait for ever). */
+void ao_image_discard_temporaries(void);
 
 /* Writes an RGB8 PNG, rows top to bottom, via a temporary file renamed into place; on failure
  * prints one line naming path and returns false. */

@@ -14,6 +14,7 @@
 #include "config.h"
 #include "headless.h"
 #include "image.h"
+#include "text.h"
 #include "window.h"
 
 /* Everything main owns, released in one place. */
@@ -34,7 +35,9 @@ static bool side_path(const char *path, const char *side, char *out, size_t size
     size_t stem = strlen(path) - 4;
     if ((size_t)snprintf(out, size, "%.*s-%s%s", (int)stem, path, side, path + stem) < size)
         return true;
-    fprintf(stderr, "--output: %s: too long a name for --compare's -%s file\n", path, side);
+    char name[AO_TEXT_SIZE];
+    fprintf(stderr, "--output: %s: too long a name for --compare's -%s file\n", ao_text_escape(path, name, sizeof name),
+            side);
     return false;
 }
 
@@ -56,7 +59,8 @@ static bool write_compare(const char *path, const struct app *app, const struct 
     size_t row = 2 * (size_t)width;
     float *both = malloc(3 * sizeof *both * row * (size_t)height);
     if (!both) {
-        fprintf(stderr, "aoview: %s: out of memory\n", path);
+        char name[AO_TEXT_SIZE];
+        fprintf(stderr, "aoview: %s: out of memory\n", ao_text_escape(path, name, sizeof name));
         return false;
     }
     char text[2][160];
@@ -119,18 +123,37 @@ static int run_compare(struct app *app, const struct ao_options *opts, const str
     }
     if (!write_compare(output, app, opts, info, width, height))
         return AO_EXIT_RUNTIME;
-    char a[4096], b[4096];
+    char a[4096], b[4096], shown[2][AO_TEXT_SIZE];
     if (!opts->quiet && ao_image_has_extension(output, ".png"))
-        fprintf(stderr, "aoview: wrote %s\n", output);
+        fprintf(stderr, "aoview: wrote %s\n", ao_text_escape(output, shown[0], sizeof shown[0]));
     else if (!opts->quiet && side_path(output, side_names[0], a, sizeof a) && side_path(output, side_names[1], b, sizeof b))
-        fprintf(stderr, "aoview: wrote %s and %s\n", a, b);
+        fprintf(stderr, "aoview: wrote %s and %s\n", ao_text_escape(a, shown[0], sizeof shown[0]),
+                ao_text_escape(b, shown[1], sizeof shown[1]));
     return 0;
+}
+
+/* Headless: the files -o names can be written (--compare's linear output: each side's), checked
+ * before loading, so that a run never renders for nothing; false after one line. */
+static bool check_outputs(const struct ao_options *opts)
+{
+    const char *output = opts->output ? opts->output : "aoview.png";
+    if (!opts->headless)
+        return true;
+    if (!opts->compare || ao_image_has_extension(output, ".png"))
+        return ao_image_check_output(output);
+    char file[4096];
+    for (int k = 0; k < 2; k++)
+        if (!side_path(output, side_names[k], file, sizeof file) || !ao_image_check_output(file))
+            return false;
+    return true;
 }
 
 static int run(struct app *app, const struct ao_options *opts)
 {
     struct ao_app *base = &app->base;
     ao_app_block_signals(base);
+    if (!ao_app_start_watcher(base, false) || !check_outputs(opts))
+        return AO_EXIT_RUNTIME;
     struct ao_render_config config;
     struct ao_settings settings;
     int status = ao_app_load(base, opts, &config, &settings);
@@ -139,8 +162,10 @@ static int run(struct app *app, const struct ao_options *opts)
     bool window = !opts->headless;
     base->reporter.progress = !opts->quiet && !window && isatty(STDERR_FILENO);
     base->reporter.notify = ao_window_notify;
-    if (opts->compare && !window)
-        return ao_app_start_watcher(base, NULL) ? run_compare(app, opts, &config, &settings) : AO_EXIT_RUNTIME;
+    if (opts->compare && !window) {
+        ao_app_watch(base, NULL);
+        return run_compare(app, opts, &config, &settings);
+    }
 
     /* The window's renderer. With --compare it renders side A, paused while the window compares,
      * and the stats rows come from the sides; without, V's sides write none (the header has no
@@ -162,8 +187,9 @@ static int run(struct app *app, const struct ao_options *opts)
         first.aa = opts->sides[0].aa;
         first.paused = true;
     }
-    if (!(base->render = ao_render_create(&single, &first)) || !ao_app_start_watcher(base, base->render))
+    if (!(base->render = ao_render_create(&single, &first)))
         return AO_EXIT_RUNTIME;
+    ao_app_watch(base, base->render);
 
     /* Window, or headless output (also where no window can be opened). */
     if (window) {
@@ -187,13 +213,17 @@ static int run(struct app *app, const struct ao_options *opts)
             return run_compare(app, opts, &config, &settings);
         }
     }
+    /* A PNG that could not be drawn is refused now rather than after the render. */
+    const char *output = opts->output ? opts->output : "aoview.png";
+    if (ao_image_has_extension(output, ".png") && !ao_headless_check_room(output, settings.width, settings.height))
+        return AO_EXIT_RUNTIME;
     atomic_store(&base->interrupt.graceful, true);
     int sig;
     bool finished = ao_app_wait(base, &sig);
     if (!finished && !sig)
         return AO_EXIT_RUNTIME;
     char why[64];
-    snprintf(why, sizeof why, "interrupted by %s", sig == SIGINT ? "SIGINT" : "SIGTERM");
+    snprintf(why, sizeof why, "interrupted by %s", ao_app_signal_name(sig));
     const struct ao_frame *frame = finished ? ao_render_take_frame(base->render) : ao_render_resolve_stopped(base->render);
     return ao_app_write(base, opts, frame, finished ? NULL : why, true, finished ? 0 : 128 + sig);
 }
@@ -202,18 +232,17 @@ int main(int argc, char **argv)
 {
     struct ao_options opts;
     char message[512];
+    if (!ao_app_begin())
+        return AO_EXIT_RUNTIME;
     if (!ao_cli_parse(argc, argv, &opts, message, sizeof message)) {
         fprintf(stderr, "aoview: %s (try --help)\n", message);
         return AO_EXIT_USAGE;
     }
-    if (opts.help || opts.version) {
-        fputs(opts.help ? ao_cli_usage() : "aoview " AO_VERSION "\n", stdout);
-        return 0;
-    }
+    if (opts.help || opts.version)
+        return ao_app_print(opts.help ? ao_cli_usage() : "aoview " AO_VERSION "\n") ? 0 : AO_EXIT_RUNTIME;
     struct app app = {0};
     int status = run(&app, &opts);
-    app.base.reporter.stats_failed |= app.side_reporters[0].stats_failed || app.side_reporters[1].stats_failed;
-    status = ao_app_finish(&app.base, &opts, status);
+    status = ao_app_finish(&app.base, status);
     free(app.sides[0]);
     free(app.sides[1]);
     return status;

@@ -14,6 +14,7 @@
 #include "cli.h"
 #include "cluster.h"
 #include "config.h"
+#include "image.h"
 #include "window.h"
 
 /* How long rank 0 waits for the other ranks to answer after an interruption: mpirun sends SIGTERM
@@ -120,28 +121,38 @@ static int load(struct ao_app *app, const struct ao_options *opts, int rank, str
     return AO_EXIT_USAGE;
 }
 
-/* After an interruption: the other ranks tell rank 0 they are alive; rank 0 names those that did
- * not answer (lost: killed or crashed, which made mpirun stop the job) and writes the image of
- * the last merged pass, the newest frame published (the render thread may be in a tile for long:
- * mpirun's SIGKILL does not wait for it; its --stats row is written). */
+/* After an interruption: the other ranks tell rank 0 they are alive and by which signal; rank 0
+ * names those that did not answer (lost: killed or crashed, which made mpirun stop the job), or
+ * the rank interrupted while rank 0 was not (a signal to that rank alone, which stopped rank 0's
+ * cluster), and writes the image of the last merged pass, the newest frame published (the render
+ * thread may be in a tile for long: mpirun's SIGKILL does not wait for it; its --stats row is
+ * written). sig: rank 0's own signal, 0 when it has none (yet). */
 static int interrupted(struct ao_app *app, struct ao_cluster *cluster, const struct ao_options *opts, int rank,
                        int sig)
 {
     if (rank != 0) {
-        ao_cluster_answer(cluster);
+        ao_cluster_answer(cluster, sig);
         sleep(LINGER_SECONDS);
         return 128 + sig;
     }
     char missing[256], why[320];
     ao_cluster_missing(cluster, ANSWER_SECONDS, missing, sizeof missing);
-    if (missing[0])
+    int alone_sig, alone = ao_cluster_interrupted(cluster, &alone_sig);
+    if (!sig) /* mpirun's SIGTERM to every rank may reach rank 0 after another rank's answer */
+        sig = atomic_load(&app->interrupt.caught);
+    int status = missing[0] ? AO_EXIT_RUNTIME : 128 + sig;
+    if (!sig && alone > 0) {
+        snprintf(why, sizeof why, "rank %d interrupted by %s, stopped", alone, ao_app_signal_name(alone_sig));
+        status = alone_sig > 0 ? 128 + alone_sig : AO_EXIT_RUNTIME;
+    } else if (missing[0]) {
         snprintf(why, sizeof why, "rank %s lost (killed or crashed), stopped", missing);
-    else
-        snprintf(why, sizeof why, "interrupted by %s", sig == SIGINT ? "SIGINT" : "SIGTERM");
+    } else {
+        snprintf(why, sizeof why, "interrupted by %s", ao_app_signal_name(sig));
+    }
     const struct ao_frame *frame = ao_render_take_frame(app->render);
     if (!frame)
         fprintf(stderr, "\naoview: %s before the first pass was merged: nothing written\n", why);
-    return ao_app_write(app, opts, frame, why, false, missing[0] || !frame ? AO_EXIT_RUNTIME : 128 + sig);
+    return ao_app_write(app, opts, frame, why, false, !frame ? AO_EXIT_RUNTIME : status);
 }
 
 /* Rank 0: shows the window until the user quits; false where no window can be opened (after one
@@ -170,6 +181,9 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool
         mine.quiet = mine.headless = true, mine.stats_path = NULL, mine.reference_path = NULL, mine.output = NULL;
     struct ao_render_config config;
     struct ao_settings settings;
+    /* Rank 0's -o before loading, so that a run never renders for nothing. */
+    if (!ao_cluster_agree(rank != 0 || !mine.headless || ao_image_check_output(mine.output ? mine.output : "aoview.png")))
+        return AO_EXIT_RUNTIME;
     int status = load(app, &mine, rank, &config, &settings);
     if (status)
         return status;
@@ -180,10 +194,11 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool
         return AO_EXIT_RUNTIME;
     config.share = ao_cluster_share(cluster);
     app->render = ao_render_create(&config, &settings);
-    if (!ao_cluster_agree(app->render && ao_app_start_watcher(app, app->render))) {
+    if (!ao_cluster_agree(app->render != NULL)) {
         ao_cluster_destroy(cluster);
         return AO_EXIT_RUNTIME;
     }
+    ao_app_watch(app, app->render);
 
     /* Rank 0's window, or headless (also where no window can be opened): the other ranks follow
      * rank 0's passes until its render thread ends theirs. */
@@ -195,7 +210,8 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool
         if (!finished && (sig || rank == 0)) {
             *clean = false;
             ao_cluster_stop(cluster);
-            return sig ? interrupted(app, cluster, &mine, rank, sig) : AO_EXIT_RUNTIME;
+            bool alone = rank == 0 && ao_cluster_interrupted(cluster, NULL) > 0;
+            return sig || alone ? interrupted(app, cluster, &mine, rank, sig) : AO_EXIT_RUNTIME;
         }
     }
     if (rank == 0)
@@ -216,6 +232,8 @@ int main(int argc, char **argv)
 {
     /* Before MPI starts its threads, so that they all inherit the mask. */
     struct ao_app app = {0};
+    if (!ao_app_begin())
+        return AO_EXIT_RUNTIME;
     ao_app_block_signals(&app);
     int rank, size;
     if (!ao_cluster_init(&argc, &argv, &rank, &size))
@@ -223,13 +241,17 @@ int main(int argc, char **argv)
     struct ao_options opts;
     int status = parse(argc, argv, rank, &opts);
     if (status || opts.help || opts.version) {
-        if (!status && rank == 0)
-            fputs(opts.help ? ao_cli_usage() : "aoview-mpi " AO_VERSION "\n", stdout);
+        if (!status && rank == 0 && !ao_app_print(opts.help ? ao_cli_usage() : "aoview-mpi " AO_VERSION "\n"))
+            status = AO_EXIT_RUNTIME;
         ao_cluster_finalize();
         return status;
     }
+    if (!ao_cluster_agree(ao_app_start_watcher(&app, rank != 0))) {
+        ao_cluster_finalize();
+        return AO_EXIT_RUNTIME;
+    }
     bool clean = true;
-    status = ao_app_finish(&app, &opts, run(&app, &opts, rank, &clean));
+    status = ao_app_finish(&app, run(&app, &opts, rank, &clean));
     if (clean)
         ao_cluster_finalize();
     return status;

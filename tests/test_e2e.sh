@@ -42,6 +42,9 @@ done
 "$bin" --headless -q --size 32x24 --spp 10 --spppp 4 --stats stats.csv --reference bunny.pfm.ref \
   "$root/assets/scenes/bunny.scene" -o x.pfm 2>/dev/null && fail "a missing --reference was accepted"
 "$bin" --headless -q --size 32x24 --spp 64 --spppp 64 "$root/assets/scenes/bunny.scene" -o ref.pfm
+# An existing, longer stats.csv: opened without truncating (so that a run that finishes no pass
+# leaves it alone), it must be emptied at the first row, not overwritten in place.
+python3 -c "open('stats.csv', 'w').write('old row\n' * 1000)"
 "$bin" --headless -q --size 32x24 --spp 10 --spppp 4 --adaptive off --stats stats.csv --reference ref.pfm \
   "$root/assets/scenes/bunny.scene" -o x.pfm || fail "stats run failed"
 python3 - <<'PY' || fail "stats.csv is malformed"
@@ -125,6 +128,9 @@ expect_error 2 --shading --shading smooth
 expect_error 2 --time --time 0
 expect_error 2 --time --time -3
 expect_error 1 nowhere.scene nowhere.scene
+rm -f new.csv
+expect_error 1 nowhere.scene --stats new.csv nowhere.scene
+[ -e new.csv ] && fail "a run that failed to load left the --stats file it created"
 expect_error 1 "$root/assets" "$root/assets"
 printf 'camera eye 0 1 4 target 0 0 0\nsphere center 0 0 0 radius -1\n' > neg.scene
 expect_error 1 neg.scene:2: neg.scene

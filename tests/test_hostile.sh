@@ -204,6 +204,96 @@ refuse 1 "size_negative.pfm: bad or too large width and height" --reference "$da
 refuse 1 "claims_pixels.pfm: truncated pixel data" --size 8192x8192 --reference "$data/claims_pixels.pfm" "$spheres"
 refuse 1 "fifo.pfm: not a regular file" --reference fifo.pfm "$spheres"
 
+# ---- outputs, standard descriptors and quoted names (the front end)
+# front WANT TEXT OUTPUT ARGS...: aoview ARGS (cut short after 30 s) must exit WANT with one stderr
+# line holding TEXT, leaving no OUTPUT and no temporary file. Runs that would render for long
+# (--spp 100000000) show that the refusal comes before the render.
+# With run set, it runs "${run[@]}" ARGS instead.
+long=(--headless -q --spp 100000000 --size 320x240 "$root/assets/scenes/spheres.scene")
+run=()
+front() {
+  local want=$1 text=$2 output=$3
+  shift 3
+  rm -f err.txt
+  timeout -s KILL 30 "${run[@]:-$bin}" "$@" 2>err.txt >/dev/null
+  local got=$?
+  if [ "$got" != "$want" ]; then fail "$* exited $got, expected $want: $(head -c 300 err.txt)"
+  elif [ "$(wc -l < err.txt)" != 1 ]; then fail "$*: expected one stderr line, got: $(head -c 600 err.txt)"
+  elif ! grep -qF -- "$text" err.txt; then fail "$*: message lacks '$text': $(cat err.txt)"
+  elif [ -n "$output" ] && [ -e "$output" ]; then fail "$*: left $output"
+  elif [ -n "$(find . -name '*.tmp.*')" ]; then fail "$*: left a temporary file: $(find . -name '*.tmp.*')"
+  else
+    refused=$((refused + 1))
+    echo "refused: $(cat err.txt)"
+  fi
+}
+# -o where nothing can be written, found before loading and rendering
+front 1 "nodir/x.png: cannot create a file in its directory (No such file or directory)" nodir/x.png -o nodir/x.png "${long[@]}"
+touch plain
+front 1 "plain/x.pfm: cannot create a file in its directory (Not a directory)" plain/x.pfm -o plain/x.pfm "${long[@]}"
+mkdir -p ro dir.png
+if [ "$(id -u)" = 0 ]; then ro=/sys; else chmod 555 ro; ro=ro; fi  # root writes any directory but /sys
+front 1 "$ro/x.exr: cannot create a file in its directory" "$ro/x.exr" -o "$ro/x.exr" "${long[@]}"
+front 1 "dir.png: is a directory" "" -o dir.png "${long[@]}"
+name255=$(printf 'n%.0s' $(seq 251)).pfm
+front 1 "${name255}x.pfm: file name longer than 255 bytes" "${name255}x.pfm" -o "${name255}x.pfm" "${long[@]}"
+front 1 "nodir/c-A.pfm: cannot create a file in its directory" "" -o nodir/c.pfm --compare uniform,cosine --time 100 "${long[@]}"
+# a name of 255 bytes, the most the file system takes, is written (its temporary name is cut)
+rm -f err.txt
+"$bin" --headless -q --spp 1 --size 16x12 -o "$name255" "$root/assets/scenes/spheres.scene" 2>err.txt
+status=$?
+[ "$status" = 0 ] && [ -s "$name255" ] && [ ! -s err.txt ] || fail "a 255-byte -o name: status $status: $(cat err.txt)"
+[ -n "$(find . -name '*.tmp.*')" ] && fail "a 255-byte -o name left a temporary file"
+rm -f "$name255"
+# user text with newlines and escape sequences is quoted escaped, on one line
+front 1 'new\nline/x.png: cannot create a file in its directory' "" -o $'new\nline/x.png' "${long[@]}"
+front 2 "--spp: expected a whole number from 1 to 1073741824, got '1\n2'" "" --spp $'1\n2' "${long[@]}"
+front 2 "unknown option '--a\x1b[2Jb'" "" $'--a\e[2Jb' "${long[@]}"
+front 1 '--stats: cannot write no\ndir/s.csv: No such file or directory' "" --stats $'no\ndir/s.csv' "${long[@]}"
+front 1 'no\nfile.pfm: cannot open (No such file or directory)' "" --reference $'no\nfile.pfm' "${long[@]}"
+# --stats to a FIFO that nobody reads: refused after waiting 2 s for a reader (it blocked for ever)
+mkfifo stats.fifo
+front 1 "--stats: cannot write stats.fifo: a FIFO that no process reads" "" --stats stats.fifo "${long[@]}"
+rm -f stats.fifo
+# stderr closed: --stats must not become descriptor 2, or the "wrote" line lands in the CSV
+rm -f closed.csv closed.pfm
+"$bin" --headless --size 16x12 --spp 2 --stats closed.csv -o closed.pfm "$root/assets/scenes/spheres.scene" 2>&-
+status=$?
+[ "$status" = 0 ] || fail "stderr closed: exit status $status"
+grep -v '^[0-9a-z_,.]*$' closed.csv && fail "stderr closed: --stats holds more than CSV"
+[ "$(wc -l < closed.csv)" = 3 ] || fail "stderr closed: --stats holds $(wc -l < closed.csv) lines, expected 3"
+# --help and --version to a full or closed stdout: status 1 and one line (they exited 0)
+for case in "--help >/dev/full:No space left on device" "--version >&-:Bad file descriptor"; do
+  rm -f err.txt
+  eval "\"\$bin\" ${case%%:*} 2>err.txt"
+  status=$?
+  [ "$status" = 1 ] && [ "$(cat err.txt)" = "aoview: cannot write to standard output: ${case#*:}" ] ||
+    fail "${case%%:*}: status $status: $(cat err.txt)"
+done
+# a usage error with stderr a pipe nobody reads: status 2 (SIGPIPE killed it: 141)
+python3 - "$bin" <<'PY' || fail "a usage error to a broken stderr pipe did not exit 2"
+import os, subprocess, sys
+r, w = os.pipe()
+os.close(r)
+code = subprocess.run([sys.argv[1], '--bogus'], stderr=w).returncode
+print('usage error to a broken pipe: status', code)
+sys.exit(code != 2)
+PY
+# a 4K PNG under a 1 GB address-space limit: OSMesa would crash drawing it (status 139); it is
+# refused in one line before the render. A small PNG still fits. Not under the sanitizers, whose
+# shadow memory needs terabytes of address space.
+if [ "$limit_mb" = 200 ]; then
+  run=(bash -c 'ulimit -v 1000000 && exec "$0" "$@"' "$bin")
+  front 1 "4k.png: drawing a 3840x2160 PNG through OSMesa takes about" 4k.png -o 4k.png --threads 2 "${long[@]}" \
+    --size 3840x2160
+  run=()
+  rm -f small.png err.txt
+  (ulimit -v 1000000 && LP_NUM_THREADS=1 exec "$bin" --headless -q --spp 1 --size 64x48 -o small.png \
+    "$root/assets/scenes/spheres.scene") 2>err.txt
+  status=$?
+  [ "$status" = 0 ] && [ -s small.png ] || fail "a small PNG under ulimit -v 1000000: status $status: $(cat err.txt)"
+fi
+
 # ---- the largest --spp accepted: 2^30 samples run (cut short after 4 s) without overflow.
 "$bin" --headless -q --spp 1073741824 --spppp 65536 --size 4x4 --stats max.csv -o max.pfm \
   "$spheres" 2>err.txt &

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # aoview-mpi on localhost: the same image and --stats decisions as one aoview process for 2 and 3
 # ranks; a slowed rank takes fewer tiles; a killed rank and SIGINT to mpirun end the run with one
-# line and the image merged so far; rank 0's window under Xvfb drives every rank (keys and an
-# orbit give one process's image), quits cleanly, and without a display the run goes headless.
-# Usage: test_mpi.sh equal|slow|killed|sigint|window
+# line and the image merged so far; so does SIGTERM to one rank other than 0, promptly, naming it;
+# rank 0's window under Xvfb drives every rank (keys and an orbit give one process's image), quits
+# cleanly, and without a display the run goes headless.
+# Usage: test_mpi.sh equal|slow|killed|sigint|term-rank|window
 set -u
 bin=${AO_BINARY:?AO_BINARY not set}
 mpi_bin=${AO_MPI_BINARY:?AO_MPI_BINARY not set}
@@ -156,7 +157,7 @@ drive() {
   quit "$name"
 }
 
-case ${1:?equal, slow, killed, sigint or window} in
+case ${1:?equal, slow, killed, sigint, term-rank or window} in
 equal)
   # The defaults (adaptive sampling, auto passes, Sobol) with a reference for the RMSE column.
   "$bin" --headless -q --size 160x120 --spp 64 --seed 7 -o ref.pfm || fail "reference failed"
@@ -206,6 +207,26 @@ sigint)
   grep -q "^aoview: interrupted by SIGTERM at [0-9]* spp" long.err || fail "no interruption line: $(cat long.err)"
   grep -q "lost" long.err && fail "a rank named lost after SIGINT: $(cat long.err)"
   complete_pfm long.pfm 96 64 || fail "no complete image after SIGINT: $(ls -A)"
+  ;;
+term-rank)
+  # SIGTERM to rank 2 alone: it tells rank 0, which stops, names it and writes what was merged.
+  # Before, rank 0 waited at the next merge until rank 2's linger ran out and mpirun ended the job
+  # (7 to 8 s), and its line named no rank.
+  start_long
+  victim=$(rank_pid "$long_pid" 2)
+  [ -n "$victim" ] || fail "rank 2 not found among mpirun's children"
+  start=$(date +%s%N)
+  kill -TERM "$victim"
+  wait "$long_pid"
+  status=$? elapsed_ms=$(( ($(date +%s%N) - start) / 1000000 ))
+  echo "SIGTERM to rank 2: status $status after $elapsed_ms ms"
+  [ "$status" = 143 ] || fail "SIGTERM to rank 2 ended the run with status $status, expected 143"
+  grep -q "^aoview: rank 2 interrupted by SIGTERM, stopped at [0-9]* spp" long.err \
+    || fail "no line naming rank 2: $(cat long.err)"
+  grep -q "lost" long.err && fail "a rank named lost after SIGTERM to rank 2: $(cat long.err)"
+  # LINGER_SECONDS is 5: a run that waits for it takes longer, whatever the machine.
+  [ "$elapsed_ms" -lt 4000 ] || fail "SIGTERM to rank 2 took $elapsed_ms ms to end the run"
+  complete_pfm long.pfm 96 64 || fail "no complete image after SIGTERM to rank 2: $(ls -A)"
   ;;
 window)
   spheres=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
