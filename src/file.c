@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -27,7 +28,7 @@ bool ao_file_read(const char *path, char **text, size_t *size)
     /* Non-blocking, so that opening a FIFO returns at once (to be refused below). */
     int fd = open(path, O_RDONLY | O_NONBLOCK);
     if (fd < 0) {
-        fprintf(stderr, "%s: cannot open: %s\n", path, strerror(errno));
+        ao_file_report("%s: cannot open: %s", path, strerror(errno));
         return false;
     }
     struct stat st;
@@ -46,10 +47,34 @@ bool ao_file_read(const char *path, char **text, size_t *size)
     else
         close(fd);
     if (reason) {
-        fprintf(stderr, "%s: %s\n", path, reason);
+        ao_file_report("%s: %s", path, reason);
         return false;
     }
     *size = (size_t)st.st_size;
     (*text)[*size] = '\0';
     return true;
+}
+
+void ao_file_report(const char *format, ...)
+{
+    /* Formatted, then escaped into a buffer four times as large (\xNN is four bytes for one), and
+     * written with one call so that lines of several threads do not interleave. */
+    char text[1024], line[4 * sizeof text + 2];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    size_t n = 0;
+    for (const unsigned char *p = (const unsigned char *)text; *p; p++) {
+        const char *name = *p == '\n' ? "\\n" : *p == '\r' ? "\\r" : *p == '\t' ? "\\t" : NULL;
+        if (name)
+            n += (size_t)snprintf(line + n, sizeof line - n, "%s", name);
+        else if (*p < 0x20 || *p == 0x7f)
+            n += (size_t)snprintf(line + n, sizeof line - n, "\\x%02x", *p);
+        else
+            line[n++] = (char)*p;
+    }
+    line[n++] = '\n';
+    line[n] = '\0';
+    fputs(line, stderr);
 }

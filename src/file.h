@@ -1,4 +1,4 @@
-/* Whole-file reading shared by the scene and mesh loaders. */
+/* Whole-file reading shared by the scene and mesh loaders, and the one-line reports they print. */
 #ifndef AO_FILE_H
 #define AO_FILE_H
 
@@ -9,5 +9,10 @@
  * length (without the NUL) in *size. Refuses directories, FIFOs and devices without blocking; on
  * failure prints one "path: reason" line to stderr and returns false. Any thread. */
 bool ao_file_read(const char *path, char **text, size_t *size);
+
+/* Prints the printf-formatted text and a newline to stderr as one line: control characters (a
+ * newline in a file name or a JSON string, an escape sequence in a scene token) are written as
+ * \n, \r, \t or \xNN, so that a report never spans lines or drives the terminal. Any thread. */
+void ao_file_report(const char *format, ...);
 
 #endif

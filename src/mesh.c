@@ -110,7 +110,7 @@ bool ao_mesh_compute_normals(struct ao_mesh *mesh)
 {
     if (compute_all_normals(mesh))
         return true;
-    fprintf(stderr, "out of memory computing mesh normals\n");
+    ao_file_report("out of memory computing mesh normals");
     return false;
 }
 

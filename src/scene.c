@@ -24,14 +24,18 @@ struct cursor {
     int next;
 };
 
+/* Reports "path:line: message" (or "path: message" at line 0) as one line; returns false. */
 static bool fail(const struct cursor *c, const char *fmt, ...)
 {
+    char message[512];
     va_list ap;
     va_start(ap, fmt);
-    fprintf(stderr, "%s:%d: ", c->path, c->line);
-    vfprintf(stderr, fmt, ap);
-    fputc('\n', stderr);
+    vsnprintf(message, sizeof message, fmt, ap);
     va_end(ap);
+    if (c->line)
+        ao_file_report("%s:%d: %s", c->path, c->line, message);
+    else
+        ao_file_report("%s: %s", c->path, message);
     return false;
 }
 
@@ -615,7 +619,7 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path)
         ok = add_albedo(s, ao_vec3_make(0.5f, 0.5f, 0.5f), &a) && add_triangles(s, &w, p, normals, 4, tris, 2, a);
     }
     if (!ok)
-        fprintf(stderr, "%s: out of memory\n", path);
+        ao_file_report("%s: out of memory", path);
     ok = ok && place(s, &w, &c);
     free(w.positions);
     if (!ok)
@@ -633,7 +637,7 @@ bool ao_scene_load(struct ao_scene *scene, const char *path)
     if (!ao_file_read(path, &text, &got))
         return false;
     if (strlen(text) != got) {
-        fprintf(stderr, "%s: not a text file (it contains a NUL byte)\n", path);
+        ao_file_report("%s: not a text file (it contains a NUL byte)", path);
         free(text);
         return false;
     }

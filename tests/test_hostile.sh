@@ -157,6 +157,14 @@ refuse 1 "fifo.scene: not a regular file" fifo.scene
 printf 'camera eye 0 1 4 target 0 0 0\nmesh fifo.obj\n' > mesh_fifo.scene
 refuse 1 "fifo.obj: not a regular file" mesh_fifo.scene
 
+# ---- control characters in names and values are escaped, so that each report stays one line
+refuse 1 'no\nfile.obj: cannot open' "$(printf 'no\nfile.obj')"
+printf 'camera eye 0 1 4 target 0 0 0\nmesh a\033[2Jb.obj\n' > escape.scene
+refuse 1 'a\x1b[2Jb.obj: cannot open' escape.scene
+printf '{"asset": {"version": "1.0\\nfake.gltf:1: a second line"}}' > version.gltf
+refuse 1 "version.gltf: glTF version '1.0\nfake.gltf:1: a s'" version.gltf
+rm -f escape.scene version.gltf
+
 # ---- image sizes whose pixel count overflows 32 or 64 bits, in the scene and on the command line
 refuse 1 "image_huge.scene:2: 'image'" "$data/image_huge.scene"
 refuse 1 "image_overflow.scene:2: 'image'" "$data/image_overflow.scene"

@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "file.h"
+
 /* Appends n elements and returns the first, or NULL when memory or size_t runs out. */
 void *ao_load_append(struct ao_load_array *a, size_t n)
 {
@@ -52,9 +54,9 @@ void ao_load_report(const char *path, size_t line, const char *format, ...)
     vsnprintf(message, sizeof message, format, args);
     va_end(args);
     if (line)
-        fprintf(stderr, "%s:%zu: %s\n", path, line, message);
+        ao_file_report("%s:%zu: %s", path, line, message);
     else
-        fprintf(stderr, "%s: %s\n", path, message);
+        ao_file_report("%s: %s", path, message);
 }
 
 /* Reports an allocation failure; returns false for the caller to pass on. */
