@@ -23,35 +23,58 @@ static const char *unreadable(const struct stat *st)
     return NULL;
 }
 
+/* Reads exactly length bytes from fd into data; false on an error or an early end. */
+static bool read_all(int fd, char *data, size_t length)
+{
+    while (length > 0) {
+        ssize_t got = read(fd, data, length < ((size_t)1 << 30) ? length : (size_t)1 << 30);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0)
+            return false;
+        data += got;
+        length -= (size_t)got;
+    }
+    return true;
+}
+
+bool ao_file_read_prefix(int fd, size_t length, char **data, const char **why)
+{
+    struct stat st;
+    *why = fstat(fd, &st) != 0 ? "cannot stat the file" : unreadable(&st);
+    if (!*why && (uintmax_t)st.st_size < length)
+        *why = "the file holds fewer bytes";
+    if (!*why && length == SIZE_MAX)
+        *why = "file too large";
+    if (!*why && !(*data = malloc(length + 1)))
+        *why = "out of memory";
+    if (!*why && !read_all(fd, *data, length)) {
+        free(*data);
+        *why = "read error";
+    }
+    if (*why)
+        return false;
+    (*data)[length] = '\0';
+    return true;
+}
+
 bool ao_file_read(const char *path, char **text, size_t *size)
 {
     /* Non-blocking, so that opening a FIFO returns at once (to be refused below). */
-    int fd = open(path, O_RDONLY | O_NONBLOCK);
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
         ao_file_report("%s: cannot open: %s", path, strerror(errno));
         return false;
     }
     struct stat st;
     const char *reason = fstat(fd, &st) != 0 ? "cannot stat the file" : unreadable(&st);
-    FILE *file = reason ? NULL : fdopen(fd, "rb");
-    if (!reason && !file)
-        reason = "cannot open";
-    if (!reason && !(*text = malloc((size_t)st.st_size + 1)))
-        reason = "out of memory";
-    if (!reason && fread(*text, 1, (size_t)st.st_size, file) != (size_t)st.st_size) {
-        free(*text);
-        reason = "read error";
-    }
-    if (file)
-        fclose(file);
-    else
-        close(fd);
+    if (!reason && ao_file_read_prefix(fd, (size_t)st.st_size, text, &reason))
+        *size = (size_t)st.st_size;
+    close(fd);
     if (reason) {
         ao_file_report("%s: %s", path, reason);
         return false;
     }
-    *size = (size_t)st.st_size;
-    (*text)[*size] = '\0';
     return true;
 }
 

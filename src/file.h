@@ -10,6 +10,11 @@
  * failure prints one "path: reason" line to stderr and returns false. Any thread. */
 bool ao_file_read(const char *path, char **text, size_t *size);
 
+/* Reads the first `length` bytes of the open file fd into a malloc'd buffer (a NUL after them)
+ * the caller frees. Refuses, before allocating, what is not a regular file or holds fewer bytes;
+ * then returns false with the reason in *why (static text) and prints nothing. Any thread. */
+bool ao_file_read_prefix(int fd, size_t length, char **data, const char **why);
+
 /* Prints the printf-formatted text and a newline to stderr as one line: control characters (a
  * newline in a file name or a JSON string, an escape sequence in a scene token) are written as
  * \n, \r, \t or \xNN, so that a report never spans lines or drives the terminal. Any thread. */

@@ -112,6 +112,57 @@ python3 -c "open('objects.gltf', 'w').write('{\"asset\": {\"version\": \"2.0\"},
 refuse 1 "objects.gltf: its JSON would take about 1740 MB to parse (more than 1024 MB)" objects.gltf
 rm -f instances.gltf primitives.gltf objects.gltf
 
+# ---- glTF buffers outside the model's folder. Relative URIs resolve in the model's folder and may
+# not leave it, also percent-encoded, through a symbolic link or as an absolute path (read when the
+# glTF is named without a directory); other schemes than data: are refused, an empty URI is named.
+mkdir -p model/sub secret
+python3 - <<'PY'
+import json, struct
+data = struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0)
+open('secret/s.bin', 'wb').write(data)
+open('model/sub/t.bin', 'wb').write(data)
+open('model/big.bin', 'wb').write(data)
+def gltf(name, uri, length=36):
+    doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0}],
+           'meshes': [{'primitives': [{'attributes': {'POSITION': 0}}]}],
+           'accessors': [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3'}],
+           'bufferViews': [{'buffer': 0, 'byteLength': 36}], 'buffers': [{'byteLength': length, 'uri': uri}]}
+    json.dump(doc, open('model/' + name, 'w'))
+for name, uri in [('up.gltf', '../secret/s.bin'), ('encoded.gltf', '%2e%2e/secret/s.bin'),
+                  ('deep.gltf', 'sub/..%2F..%2Fsecret/s.bin'), ('link.gltf', 'link.bin'),
+                  ('dlink.gltf', 'dlink/s.bin'), ('passwd.gltf', '/etc/passwd'),
+                  ('passwd_encoded.gltf', '%2Fetc%2Fpasswd'), ('scheme.gltf', 'file:///etc/passwd'),
+                  ('empty.gltf', ''), ('inside.gltf', 'sub/../sub/./t.bin'), ('big.gltf', 'big.bin')]:
+    gltf(name, uri)
+gltf('short.gltf', 'sub/t.bin', 37)
+PY
+ln -s ../secret/s.bin model/link.bin
+ln -s ../secret model/dlink
+refuse 1 "up.gltf: buffer 0 ('../secret/s.bin'): it leaves the model's folder" model/up.gltf
+refuse 1 "encoded.gltf: buffer 0 ('%2e%2e/secret/s.bin'): it leaves the model's folder" model/encoded.gltf
+refuse 1 "deep.gltf: buffer 0 ('sub/..%2F..%2Fsecret/s.bin'): it leaves the model's folder" model/deep.gltf
+refuse 1 "link.gltf: buffer 0 ('link.bin'): cannot open 'link.bin': a symbolic link" model/link.gltf
+refuse 1 "dlink.gltf: buffer 0 ('dlink/s.bin'): cannot open 'dlink': a symbolic link" model/dlink.gltf
+cd model
+refuse 1 "passwd.gltf: buffer 0 ('/etc/passwd'): an absolute path" passwd.gltf
+cd ..
+refuse 1 "passwd_encoded.gltf: buffer 0 ('%2Fetc%2Fpasswd'): an absolute path" model/passwd_encoded.gltf
+refuse 1 "scheme.gltf: buffer 0 ('file:///etc/passwd'): the URI scheme 'file:' is not supported" model/scheme.gltf
+refuse 1 "empty.gltf: buffer 0 (''): the URI is empty" model/empty.gltf
+refuse 1 "short.gltf: buffer 0 ('sub/t.bin'), byteLength 37: the file holds fewer bytes" model/short.gltf
+# What stays inside loads, and only byteLength bytes of a buffer file are read: 36 of a 1 GB file
+# (the triangle, then a sparse gigabyte), in the process's baseline of memory.
+truncate -s 1G model/big.bin
+for name in inside big; do
+  "$gnu_time" -f %M -o mem.txt "$bin" --headless -q --spp 1 --size 8x8 -o "$name.pfm" "model/$name.gltf" 2>err.txt
+  got=$? kb=$(tail -n 1 mem.txt)
+  if [ "$got" != 0 ] || [ -s err.txt ]; then fail "model/$name.gltf exited $got: $(head -c 300 err.txt)"
+  elif [ "$kb" -gt $((limit_mb * 1024 / 2)) ]; then fail "model/$name.gltf: peak memory $((kb / 1024)) MB"
+  else echo "loaded in $((kb / 1024)) MB: model/$name.gltf"; fi
+  rm -f "$name.pfm"
+done
+rm -rf model secret
+
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000
 python3 - "$big" <<'PY'

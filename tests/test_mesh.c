@@ -779,7 +779,7 @@ static const struct {
     {"bad_gltf_position_type.gltf", ": ", "componentType 5123; only float (5126)"},
     {"bad_gltf_index_count.gltf", ": ", "2 indices, not a whole number of triangles"},
     {"bad_gltf_mesh_index.gltf", ": ", "node 1: 'mesh' 7 is out of range (2 defined)"},
-    {"bad_gltf_uri.gltf", ": ", "uri 'http://example.com/x.bin' is not a relative file name"},
+    {"bad_gltf_uri.gltf", ": ", "buffer 0 ('http://example.com/x.bin'): the URI scheme 'http:' is not supported"},
     {"bad_gltf_base64.gltf", ": ", "buffer 0: bad base64 data"},
 };
 

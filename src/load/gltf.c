@@ -20,6 +20,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <json.h>
 
@@ -268,42 +269,27 @@ static bool decode_base64(const char *text, size_t n, unsigned char **out, size_
     return true;
 }
 
-/* The value of a hexadecimal digit, or -1. */
-static int hex_digit(char c)
+/* Reads byteLength bytes of the file a buffer's URI names inside the model's folder (uri.c). */
+static bool read_buffer_file(struct gltf *g, const char *where, const char *uri, uint64_t length,
+                             struct buffer *b)
 {
-    const char *digits = "0123456789abcdef";
-    const char *at = c ? strchr(digits, c | 0x20) : NULL;
-    return at ? (int)(at - digits) : -1;
+    char path[4096], why[160];
+    int fd;
+    if (!ao_load_uri_decode(uri, path, sizeof path, why, sizeof why) ||
+        !ao_load_uri_open(g->path, path, &fd, why, sizeof why))
+        return gltf_error(g, "%s ('%.60s'): %s", where, uri, why);
+    char *data = NULL;
+    const char *reason = length >= SIZE_MAX ? "byteLength too large" : NULL;
+    bool ok = !reason && ao_file_read_prefix(fd, (size_t)length, &data, &reason);
+    close(fd);
+    if (!ok)
+        return gltf_error(g, "%s ('%.60s'), byteLength %llu: %s", where, uri,
+                          (unsigned long long)length, reason);
+    b->data = b->owned = (unsigned char *)data;
+    return true;
 }
 
-/* The file a relative URI names, beside the glTF file, with %XX escapes decoded; NULL when the
- * URI has a scheme or memory runs out. */
-static char *uri_path(const char *gltf_path, const char *uri)
-{
-    const char *colon = strchr(uri, ':'), *slash = strchr(uri, '/');
-    if (colon && (!slash || colon < slash))
-        return NULL;
-    const char *base_end = strrchr(gltf_path, '/');
-    size_t base = base_end ? (size_t)(base_end - gltf_path) + 1 : 0;
-    char *path = malloc(base + strlen(uri) + 1);
-    if (!path)
-        return NULL;
-    memcpy(path, gltf_path, base);
-    char *out = path + base;
-    for (const char *p = uri; *p; p++) {
-        int hi = p[0] == '%' ? hex_digit(p[1]) : -1, lo = hi >= 0 ? hex_digit(p[2]) : -1;
-        if (lo >= 0) {
-            *out++ = (char)(hi << 4 | lo);
-            p += 2;
-        } else {
-            *out++ = *p;
-        }
-    }
-    *out = '\0';
-    return path;
-}
-
-/* Loads buffer i: the GLB's BIN chunk (no uri), a data URI or a file beside the glTF. */
+/* Loads buffer i: the GLB's BIN chunk (no uri), a data URI or a file in the glTF's folder. */
 static bool load_buffer(struct gltf *g, json_object *json, size_t i)
 {
     char where[64];
@@ -331,15 +317,9 @@ static bool load_buffer(struct gltf *g, json_object *json, size_t i)
             return gltf_error(g, "%s: bad base64 data (or out of memory)", where);
         b->data = b->owned;
     } else {
-        char *path = uri_path(g->path, uri);
-        if (!path)
-            return gltf_error(g, "%s: uri '%.60s' is not a relative file name", where, uri);
-        char *text;
-        bool ok = ao_file_read(path, &text, &size);
-        free(path);
-        if (!ok)
+        if (!read_buffer_file(g, where, uri, length, b))
             return false;
-        b->data = b->owned = (unsigned char *)text;
+        size = (size_t)length;
     }
     if (size < length)
         return gltf_error(g, "%s: byteLength %llu but only %zu bytes of data", where,

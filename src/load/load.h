@@ -80,6 +80,16 @@ bool ao_load_fan(struct ao_load_array *triangles, const struct ao_load_array *fa
 /* The unit vector along (x, y, z) in single precision, or zero when its length is zero. */
 struct ao_vec3 ao_load_unit(double x, double y, double z);
 
+/* Percent-decodes the URI of a glTF buffer (not a data: URI) into out, a file name of at most
+ * size - 1 bytes; false with the reason in why when it is empty, has a scheme, is absolute, holds
+ * a bad escape or %00, or does not fit. */
+bool ao_load_uri_decode(const char *uri, char *out, size_t size, char *why, size_t why_size);
+
+/* Opens the file at the decoded relative path inside the folder of the model at model_path into
+ * *fd (the caller closes it), following no symbolic link; false with the reason in why when the
+ * path leaves that folder or cannot be opened there. */
+bool ao_load_uri_open(const char *model_path, const char *relative, int *fd, char *why, size_t why_size);
+
 /* Common end of every loader: drops degenerate triangles, refuses a mesh without triangles and
  * computes the normals the file did not give (all when mesh->normals is NULL, else those
  * flagged in lacking, which may be NULL). */
