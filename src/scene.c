@@ -112,6 +112,18 @@ static struct dvec dvec_of(struct ao_vec3 v)
     return dvec_make(v.x, v.y, v.z);
 }
 
+/* The unit vector along v into *out; false when v is zero or not finite. Divided first by its
+ * largest component, so that no square overflows or vanishes. */
+static bool unit(struct dvec v, struct dvec *out)
+{
+    double big = fmax(fabs(v.x), fmax(fabs(v.y), fabs(v.z)));
+    if (!(big > 0.0) || !isfinite(v.x) || !isfinite(v.y) || !isfinite(v.z))
+        return false;
+    v = dvec_scale(v, 1.0 / big);
+    *out = dvec_scale(v, 1.0 / sqrt(dvec_dot(v, v)));
+    return true;
+}
+
 /* v narrowed to float. */
 static struct ao_vec3 narrow(struct dvec v)
 {
@@ -268,18 +280,24 @@ static struct dvec rotate(const struct transform *t, struct dvec v)
 }
 
 /* The mesh's world positions into *out (malloc'd; NULL when memory is short); its normals
- * transformed in place: the inverse transpose of the scale (1/s per axis), then the rotation. */
+ * transformed in place: the inverse transpose of the scale (1/s per axis), then the rotation. The
+ * inverse is taken as (sy sz, sx sz, sx sy) times the sign of sx sy sz, the same direction: no
+ * 1/s overflows for a tiny scale (which would make the normals NaN). */
 static bool transform_mesh(struct ao_mesh *m, const struct transform *t, struct dvec **out)
 {
     *out = m->vertex_count ? malloc(m->vertex_count * sizeof **out) : NULL;
     if (m->vertex_count && !*out)
         return false;
-    struct dvec inv = dvec_make(1.0 / t->scale.x, 1.0 / t->scale.y, 1.0 / t->scale.z);
+    struct dvec s = t->scale;
+    double sign = s.x * s.y * s.z < 0.0 ? -1.0 : 1.0;
+    struct dvec inv = dvec_make(sign * s.y * s.z, sign * s.x * s.z, sign * s.x * s.y);
     for (size_t i = 0; i < m->vertex_count; i++) {
         struct dvec p = dvec_of(m->positions[i]), n = dvec_of(m->normals[i]);
-        p = dvec_make(p.x * t->scale.x, p.y * t->scale.y, p.z * t->scale.z);
+        p = dvec_make(p.x * s.x, p.y * s.y, p.z * s.z);
         (*out)[i] = dvec_add(rotate(t, p), t->translate);
-        m->normals[i] = ao_vec3_normalize(narrow(rotate(t, dvec_make(n.x * inv.x, n.y * inv.y, n.z * inv.z))));
+        struct dvec u = {0};
+        unit(rotate(t, dvec_make(n.x * inv.x, n.y * inv.y, n.z * inv.z)), &u);   /* zero stays zero */
+        m->normals[i] = narrow(u);
     }
     return true;
 }
@@ -424,10 +442,8 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
         if (k == 2) {
             if (numbers(c, key, r, 4, 4) != 4)
                 return false;
-            double length = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-            if (!(length > 0.0) || !isfinite(length))
+            if (!unit(dvec_make(r[0], r[1], r[2]), &t.axis))
                 return fail(c, "'rotate': the axis must not be zero");
-            t.axis = dvec_scale(dvec_make(r[0], r[1], r[2]), 1.0 / length);
             t.cos_angle = cos(r[3] * PI / 180.0);
             t.sin_angle = sin(r[3] * PI / 180.0);
         }

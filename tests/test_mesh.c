@@ -710,6 +710,66 @@ static void test_gltf_no_scene(void **state)
     ao_mesh_finish(&mesh);
 }
 
+/* A one-triangle glTF, (0,0,0) (1,0,0) (0,1,0), under one node with the given transform members. */
+static void load_transformed_triangle(struct ao_mesh *mesh, const char *transform)
+{
+    char text[1024];
+    int n = snprintf(text, sizeof text,
+                     "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0, %s}],\n"
+                     " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}],\n"
+                     " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3,"
+                     " \"type\": \"VEC3\"}], \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}],\n"
+                     " \"buffers\": [{\"byteLength\": 36, \"uri\": \"data:application/gltf-buffer;base64,"
+                     "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}]}\n", transform);
+    load_ok(mesh, temp_file("transformed.gltf", text, (size_t)n));
+    assert_mesh_valid(mesh);
+    assert_int_equal(mesh->triangle_count, 1);
+}
+
+/* Quaternions of any nonzero length are normalized, also where their squares would overflow or
+ * vanish (1e200 gave an infinite length and a silent identity, 1e-200 a "zero quaternion"). */
+static void test_gltf_rotation_of_any_length(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_transformed_triangle(&mesh, "\"rotation\": [1e200, 0, 0, 0]");   /* 180 degrees about x */
+    assert_vec3_near(mesh.positions[1], 1, 0, 0);
+    assert_vec3_near(mesh.positions[2], 0, -1, 0);
+    ao_mesh_finish(&mesh);
+    load_transformed_triangle(&mesh, "\"rotation\": [0, 0, 0, 1e-200]");  /* the identity */
+    assert_vec3_near(mesh.positions[2], 0, 1, 0);
+    ao_mesh_finish(&mesh);
+    load_transformed_triangle(&mesh, "\"rotation\": [0, 0, 3, 3]");       /* 90 degrees about z */
+    assert_vec3_near(mesh.positions[1], 0, 1, 0);
+    assert_vec3_near(mesh.positions[2], -1, 0, 0);
+    ao_mesh_finish(&mesh);
+}
+
+/* A finite but huge matrix whose entries cancel on the triangle's plane: the triangle (0,0,0)
+ * (1,1,0) (0,0,1) with NORMAL along (1,-1,0) under rows (1, 0, 0), (H, 1 - H, 0), (H, -H, 1),
+ * H = 1e160. The positions stay finite, but the products of two entries overflow, and the normal
+ * transform came out NaN (inf - inf); assert_mesh_valid wants every normal finite, unit or zero. */
+static void test_gltf_huge_matrix_gives_finite_normals(void **state)
+{
+    (void)state;
+    static const char text[] =
+        "{\"asset\": {\"version\": \"2.0\"},\n"
+        " \"nodes\": [{\"mesh\": 0, \"matrix\": [1, 1e160, 1e160, 0, 0, -1e160, -1e160, 0, 0, 0, 1, 0,"
+        " 0, 0, 0, 1]}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1}}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "                {\"bufferView\": 0, \"byteOffset\": 36, \"componentType\": 5126, \"count\": 3,"
+        " \"type\": \"VEC3\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 72}],\n"
+        " \"buffers\": [{\"byteLength\": 72, \"uri\": \"data:application/gltf-buffer;base64,"
+        "AAAAAAAAAAAAAAAAAACAPwAAgD8AAAAAAAAAAAAAAAAAAIA/8wQ1P/MENb8AAAAA8wQ1P/MENb8AAAAA8wQ1P/MENb8AAAAA\"}]}\n";
+    struct ao_mesh mesh;
+    load_ok(&mesh, temp_file("huge_matrix.gltf", text, sizeof text - 1));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.triangle_count, 1);
+    ao_mesh_finish(&mesh);
+}
+
 /* ------------------------------------------------------------------ bad input */
 
 /* Each bad fixture, where its one error line must point, and what it must say. */
@@ -976,6 +1036,8 @@ int main(void)
         cmocka_unit_test(test_stl_binary),
         cmocka_unit_test(test_gltf_nodes),
         cmocka_unit_test(test_gltf_no_scene),
+        cmocka_unit_test(test_gltf_rotation_of_any_length),
+        cmocka_unit_test(test_gltf_huge_matrix_gives_finite_normals),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_unreadable_file),

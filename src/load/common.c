@@ -132,11 +132,14 @@ bool ao_load_fan(struct ao_load_array *triangles, const struct ao_load_array *fa
     return true;
 }
 
-/* The unit vector along (x, y, z) in single precision, or zero when its length is zero. */
+/* The unit vector along (x, y, z) in single precision, or zero when it is zero or not finite.
+ * Divided first by its largest component, so that squares neither overflow nor vanish. */
 struct ao_vec3 ao_load_unit(double x, double y, double z)
 {
-    double length = sqrt(x * x + y * y + z * z);
-    if (length == 0.0)
+    double big = fmax(fabs(x), fmax(fabs(y), fabs(z)));
+    if (!(big > 0.0) || !isfinite(x) || !isfinite(y) || !isfinite(z))
         return ao_vec3_make(0.0f, 0.0f, 0.0f);
+    x /= big, y /= big, z /= big;
+    double length = sqrt(x * x + y * y + z * z);
     return ao_vec3_make((float)(x / length), (float)(y / length), (float)(z / length));
 }

@@ -434,9 +434,15 @@ static bool local_matrix(const struct gltf *g, json_object *node, const char *wh
         (member(node, "rotation") && !numbers(g, node, "rotation", 4, where, q)) ||
         (member(node, "scale") && !numbers(g, node, "scale", 3, where, s)))
         return false;
-    double length = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(length > 0.0))
+    /* glTF asks for a unit quaternion; any other nonzero one is normalized, divided first by its
+     * largest component so that the squares can neither overflow (1e200 would give an infinite
+     * length and a silent identity) nor vanish (1e-200, a zero length). */
+    double big = fmax(fmax(fabs(q[0]), fabs(q[1])), fmax(fabs(q[2]), fabs(q[3])));
+    if (!(big > 0.0))
         return gltf_error(g, "%s: rotation is a zero quaternion", where);
+    for (int k = 0; k < 4; k++)
+        q[k] /= big;
+    double length = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     double x = q[0] / length, y = q[1] / length, z = q[2] / length, w = q[3] / length;
     double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w),
                    2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
@@ -499,6 +505,28 @@ static bool check_tree(struct gltf *g, size_t count)
 
 /* ------------------------------------------------------------------ instances */
 
+/* The cofactor matrix C(r, c) of the 3x3 part of the column-major m (M(r, c) = m[4c + r]) into cof,
+ * which maps normals as M's inverse transpose does up to the factor det M, and a number with the
+ * sign of det M (negative where M mirrors). Computed from M divided by its largest entry: neither
+ * direction nor sign depends on that scale, and no product of two entries can then overflow
+ * (a finite but huge matrix would give inf - inf = NaN normals) or vanish together. */
+static double normal_matrix(const double m[16], double cof[3][3])
+{
+    double big = 0.0, a[9];
+    for (int c = 0; c < 3; c++)
+        for (int r = 0; r < 3; r++)
+            big = fmax(big, fabs(m[4 * c + r]));
+    for (int c = 0; c < 3; c++)
+        for (int r = 0; r < 3; r++)
+            a[3 * c + r] = big > 0.0 ? m[4 * c + r] / big : 0.0;
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+            cof[r][c] = a[3 * c1 + r1] * a[3 * c2 + r2] - a[3 * c2 + r1] * a[3 * c1 + r2];
+        }
+    return a[0] * cof[0][0] + a[3] * cof[0][1] + a[6] * cof[0][2];
+}
+
 /* Appends one primitive under the world matrix m: positions and normals transformed, triangles
  * offset (and turned round where m mirrors). With count_only, adds its size to the totals. */
 static bool add_primitive(struct gltf *g, json_object *primitive, const double m[16],
@@ -534,22 +562,14 @@ static bool add_primitive(struct gltf *g, json_object *primitive, const double m
         return gltf_error(g, "more than %u vertices in all", AO_LOAD_NO_INDEX - 1);
     uint32_t base = (uint32_t)g->positions.count;
 
-    /* Vertices: p' = M (p, 1); n' along M's inverse transpose times n, which is the cofactor
-     * matrix of M's 3x3 part divided by its determinant (only the sign of that matters). */
+    /* Vertices: p' = M (p, 1); n' along M's inverse transpose times n (normal_matrix). */
     struct ao_vec3 *p = ao_load_append(&g->positions, positions.count);
     struct ao_vec3 *n = ao_load_append(&g->normals, positions.count);
     bool *lacking = ao_load_append(&g->lacking, positions.count);
     if (!p || !n || !lacking)
         return ao_load_out_of_memory(g->path);
-    double cof[3][3], det = 0.0;   /* cofactors C(r, c) of the 3x3 part, M(r, c) = m[4c + r] */
-    for (int r = 0; r < 3; r++)
-        for (int c = 0; c < 3; c++) {
-            int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-            cof[r][c] = m[4 * c1 + r1] * m[4 * c2 + r2] - m[4 * c2 + r1] * m[4 * c1 + r2];
-        }
-    for (int c = 0; c < 3; c++)
-        det += m[4 * c] * cof[0][c];
-    double sign = det < 0.0 ? -1.0 : 1.0;
+    double cof[3][3];
+    double det = normal_matrix(m, cof), sign = det < 0.0 ? -1.0 : 1.0;
     for (size_t i = 0; i < positions.count; i++) {
         double x = float_at(&positions, i, 0), y = float_at(&positions, i, 1);
         double z = float_at(&positions, i, 2);
@@ -687,6 +707,10 @@ static bool place_nodes(struct gltf *g, size_t node_count, const bool *is_root, 
         ok = local_matrix(g, node, where, local);
         if (ok)
             multiply(is_root[n] ? identity : g->world[g->parent[n]], local, g->world[n]);
+        for (int k = 0; ok && k < 16; k++)
+            if (!isfinite(g->world[n][k]))
+                ok = gltf_error(g, "%s: its transform overflows (an entry of its world matrix is "
+                                "not finite)", where);
         placed[n] = true;
         json_object *children = member(node, "children");
         for (size_t k = 0; ok && k < length_of(children); k++) {

@@ -77,7 +77,8 @@ bool ao_load_parse_float(struct ao_load_span s, float *out);
  * least 3) to triangles. */
 bool ao_load_fan(struct ao_load_array *triangles, const struct ao_load_array *face);
 
-/* The unit vector along (x, y, z) in single precision, or zero when its length is zero. */
+/* The unit vector along (x, y, z) in single precision, or zero when it is zero or not finite;
+ * exact-enough for any finite double components (no square overflows or vanishes). */
 struct ao_vec3 ao_load_unit(double x, double y, double z);
 
 /* Percent-decodes the URI of a glTF buffer (not a data: URI) into out, a file name of at most
