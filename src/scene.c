@@ -227,6 +227,7 @@ struct world {
     struct dvec eye, target;      /* the camera's, when has_camera */
     bool has_camera;
     int camera_line;
+    const char *extent_note;      /* what makes up the extent, for its message ("" in scene files) */
 };
 
 static bool add_albedo(struct ao_scene *s, struct ao_vec3 rho, uint32_t *index)
@@ -529,6 +530,73 @@ static bool bounds(const struct ao_scene *s, const struct world *w, struct dvec 
     return s->vertex_count + s->sphere_count > 0;
 }
 
+/* The sizes of scene that the renderer draws as it would the same scene at size 1 (scene.h's
+ * AO_SCENE_MIN_EXTENT and AO_SCENE_MAX_EXTENT; measured in docs/stability.md). It traces in single
+ * precision with flush-to-zero on, so each product it forms must stay between 2^-126 (below, it
+ * becomes 0) and 2^128 (above, infinite). With E the largest side of the box around the geometry,
+ * eye and target, every local coordinate is at most E (place()'s origin is in the box), and:
+ * - Above. A triangle in the box has edges of at most sqrt(3) E, so the unnormalized normal
+ *   Ng = e1 x e2 that either tracer returns is at most 3 E^2 long, and ao.c normalizes it through
+ *   |Ng|^2 <= 9 E^4 < 2^128: E < 2^32 / sqrt(3) = 2.48e9. The tracers' distance tests multiply Ng
+ *   by one more length (Embree's Pluecker depth 2 (v0 - o).Ng, the direct loops' w.N, at most
+ *   2 sqrt(3) E 3 E^2), which needs only E < 3.2e12; Embree's ray validity check (its assertion
+ *   `ray.valid()`: |org| and |dir| at most FLT_LARGE = 1.844e18, a tenth of sqrt(2^128)) only
+ *   E < 1.8e18. AO_SCENE_MAX_EXTENT = 2^31 = 2.15e9.
+ * - Below. Occlusion rays leave a surface lifted past the point's error bound, with a floor of
+ *   2^-100 where that bound is 0 (ao.h): on a facet in a coordinate plane through the local
+ *   origin, such as the ground y = 0 of most scenes. The same distance tests multiply that lift by
+ *   |Ng|; below 2^-126 the product flushes to 0, the ray meets its own facet at t = 0 and the
+ *   facet turns black. So |Ng| >= 2^-26, which a facet spanning the scene (|Ng| = E^2 for a
+ *   square) reaches at E = 2^-13 = 1.22e-4; AO_SCENE_MIN_EXTENT = 2^-12 = 2.44e-4 keeps a factor 2.
+ * The camera's eye and target are ray origins and directions: they belong to the box (Embree's
+ * check, and the depth test's o), and ao_camera_view squares their distance, which must therefore
+ * stay above 2^-63 (MIN_CAMERA_DISTANCE = 2^-60). Detail finer than the scene is not checked: a
+ * triangle whose |Ng| is below 2^-63 (edges of about 3e-10) is shaded with the eye-facing normal
+ * that stands in for degenerate ones, and a facet in a coordinate plane through the origin with
+ * |Ng| below 2^-26 occludes itself, whatever the scene's size. */
+static const double MIN_CAMERA_DISTANCE = 0x1p-60;
+
+/* The largest side of the box lo..hi. */
+static double largest_side(struct dvec lo, struct dvec hi)
+{
+    return fmax(hi.x - lo.x, fmax(hi.y - lo.y, hi.z - lo.z));
+}
+
+/* The box lo..hi grown to hold p. */
+static void grow(struct dvec *lo, struct dvec *hi, struct dvec p)
+{
+    *lo = dvec_make(fmin(lo->x, p.x), fmin(lo->y, p.y), fmin(lo->z, p.z));
+    *hi = dvec_make(fmax(hi->x, p.x), fmax(hi->y, p.y), fmax(hi->z, p.z));
+}
+
+/* Refuses a scene whose geometry (the box lo..hi, when any) or camera leaves the range derived
+ * above, with one line naming the size; false after reporting. */
+static bool check_range(const struct world *w, struct cursor *c, bool any, struct dvec lo, struct dvec hi)
+{
+    static const char range[] = "aoview renders scenes from %.3g to %.3g across (docs/stability.md)";
+    char message[256];
+    double size = any ? largest_side(lo, hi) : 0.0;
+    c->line = 0;
+    snprintf(message, sizeof message, range, AO_SCENE_MIN_EXTENT, AO_SCENE_MAX_EXTENT);
+    if (any && !(size >= AO_SCENE_MIN_EXTENT && size <= AO_SCENE_MAX_EXTENT))
+        return fail(c, "the scene is %.3g across%s; %s", size, w->extent_note, message);
+    if (!w->has_camera)
+        return true;
+    c->line = w->camera_line;
+    if (!any)
+        lo = hi = w->eye;
+    grow(&lo, &hi, w->eye);
+    grow(&lo, &hi, w->target);
+    if (!(largest_side(lo, hi) <= AO_SCENE_MAX_EXTENT))
+        return fail(c, "camera: with it the scene is %.3g across; %s", largest_side(lo, hi), message);
+    struct dvec d = dvec_sub(w->target, w->eye);
+    double big = fmax(fabs(d.x), fmax(fabs(d.y), fabs(d.z)));
+    if (big > 0.0 && big * sqrt(dvec_dot(dvec_scale(d, 1.0 / big), dvec_scale(d, 1.0 / big))) < MIN_CAMERA_DISTANCE)
+        return fail(c, "camera: eye and target are %.3g apart, closer than the %.3g aoview can aim by",
+                    big, MIN_CAMERA_DISTANCE);
+    return true;
+}
+
 /* Moves the scene from world space into its local frame and narrows it to float: every position,
  * sphere centre and the camera become world - origin, with the origin at the bounding box's centre,
  * so that float precision follows the scene's size rather than its distance from (0, 0, 0). Where
@@ -540,6 +608,8 @@ static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
 {
     struct dvec lo, hi, origin = {0};
     bool any = bounds(s, w, &lo, &hi);
+    if (!check_range(w, c, any, lo, hi))
+        return false;
     if (any && !(lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0 && lo.z <= 0.0 && hi.z >= 0.0))
         origin = dvec_scale(dvec_add(lo, hi), 0.5);
     s->origin[0] = origin.x, s->origin[1] = origin.y, s->origin[2] = origin.z;
@@ -579,7 +649,7 @@ bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
 {
     begin(scene, path);
     struct cursor c = {.path = path};
-    struct world w = {0};
+    struct world w = {.extent_note = ""};
     bool ok = true;
     char line[MAX_LINE + 2];
     for (const char *p = text; ok && *p;) {
@@ -609,7 +679,7 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path)
     struct ao_mesh m = {0};
     if (!ao_mesh_load(&m, path))
         return false;
-    struct world w = {0};
+    struct world w = {.extent_note = " (the mesh with its ground quad, 50 times as wide as the mesh)"};
     struct cursor c = {.path = path};
     struct transform identity = {.scale = dvec_make(1, 1, 1), .axis = dvec_make(0, 1, 0), .cos_angle = 1};
     struct dvec *positions = NULL, lo, hi;

@@ -13,6 +13,12 @@
 #include "camera.h"
 #include "vec3.h"
 
+/* The smallest and largest scene, as the largest side of the box around its geometry (and its
+ * camera, for the largest), that the renderer draws as the same scene at size 1; ao_scene_load
+ * and ao_scene_parse refuse others (derived in scene.c, measured in docs/stability.md). */
+#define AO_SCENE_MIN_EXTENT 0x1p-12
+#define AO_SCENE_MAX_EXTENT 0x1p31
+
 /* An analytic sphere with its diffuse albedo. */
 struct ao_sphere {
     struct ao_vec3 center;

@@ -163,6 +163,22 @@ for name in inside big; do
 done
 rm -rf model secret
 
+# ---- sizes the tracer cannot render: a mesh 1e18 across tripped Embree's assertion (status 134),
+# 1e14 rendered black, 1e20 blamed a camera the user never wrote, 1e-21 aborted too; a camera as
+# far out, or one aimed by a hair's breadth. The range is derived in src/scene.c.
+for size in 1e18 1e14 1e20 1e-21 1e9; do
+  printf 'v 0 0 0\nv %s 0 0\nv 0 %s 0\nv 0 0 %s\nf 1 2 3\nf 1 3 4\nf 1 4 2\n' $size $size $size > big.obj
+  across=$(python3 -c "print('%.3g' % (50 * $size))")
+  refuse 1 "big.obj: the scene is $across across (the mesh with its ground quad, 50 times as wide as the mesh); aoview renders scenes from 0.000244 to 2.15e+09 across" big.obj
+done
+printf 'camera eye 0 0 1e19 target 0 0 0\nquad corner -1 0 -1 edge1 0 0 2 edge2 2 0 0\n' > far.scene
+refuse 1 "far.scene:1: camera: with it the scene is 1e+19 across" far.scene
+printf 'camera eye 1e-20 0 0 target 0 0 0\nsphere center 0 0 0 radius 1\n' > aim.scene
+refuse 1 "aim.scene:1: camera: eye and target are 1e-20 apart" aim.scene
+printf 'camera eye 0 1 4 target 0 0 0\nsphere center 0 0 0 radius 1.5e9\n' > wide.scene
+refuse 1 "wide.scene: the scene is 3e+09 across; aoview renders" wide.scene
+rm -f big.obj far.scene aim.scene wide.scene
+
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000
 python3 - "$big" <<'PY'
