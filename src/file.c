@@ -58,7 +58,8 @@ bool ao_file_read_prefix(int fd, size_t length, char **data, const char **why)
     return true;
 }
 
-bool ao_file_read(const char *path, char **text, size_t *size)
+/* ao_file_read, charging budget first when there is one. */
+static bool read_file(const char *path, struct ao_budget *budget, char **text, size_t *size)
 {
     /* Non-blocking, so that opening a FIFO returns at once (to be refused below). */
     int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
@@ -68,14 +69,33 @@ bool ao_file_read(const char *path, char **text, size_t *size)
     }
     struct stat st;
     const char *reason = fstat(fd, &st) != 0 ? "cannot stat the file" : unreadable(&st);
+    uint64_t charge = reason ? 0 : (uint64_t)st.st_size + 1;
+    char why[200] = "";
+    bool taken = !reason && budget && ao_budget_take(budget, charge);
+    if (!reason && budget && !taken) {
+        ao_budget_explain(budget, charge, why, sizeof why);
+        reason = why;
+    }
     if (!reason && ao_file_read_prefix(fd, (size_t)st.st_size, text, &reason))
         *size = (size_t)st.st_size;
+    else if (taken)
+        ao_budget_give(budget, charge);
     close(fd);
-    if (reason) {
+    if (reason == why)
+        ao_file_report("%s: %llu bytes %s", path, (unsigned long long)st.st_size, why);
+    else if (reason)
         ao_file_report("%s: %s", path, reason);
-        return false;
-    }
-    return true;
+    return !reason;
+}
+
+bool ao_file_read(const char *path, char **text, size_t *size)
+{
+    return read_file(path, NULL, text, size);
+}
+
+bool ao_file_read_budget(const char *path, struct ao_budget *budget, char **text, size_t *size)
+{
+    return read_file(path, budget, text, size);
 }
 
 void ao_file_report(const char *format, ...)

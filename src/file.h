@@ -5,10 +5,17 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "budget.h"
+
 /* Reads the regular file at path into a malloc'd NUL-terminated buffer the caller frees, its
  * length (without the NUL) in *size. Refuses directories, FIFOs and devices without blocking; on
  * failure prints one "path: reason" line to stderr and returns false. Any thread. */
 bool ao_file_read(const char *path, char **text, size_t *size);
+
+/* ao_file_read charging the file's size plus one (the NUL) to budget before anything is allocated:
+ * a file that does not fit is refused, unread, with "path: N bytes need about ...". The caller
+ * gives the bytes back (ao_budget_give(budget, *size + 1)) once it frees the text. Any thread. */
+bool ao_file_read_budget(const char *path, struct ao_budget *budget, char **text, size_t *size);
 
 /* Reads the first `length` bytes of the open file fd into a malloc'd buffer (a NUL after them)
  * the caller frees. Refuses, before allocating, what is not a regular file or holds fewer bytes;

@@ -228,7 +228,21 @@ struct world {
     bool has_camera;
     int camera_line;
     const char *extent_note;      /* what makes up the extent, for its message ("" in scene files) */
+    struct ao_budget *budget;     /* charged for every element as it is added */
 };
+
+/* Charges an element of so many triangles (a sphere counts as one) and vertices to the budget;
+ * false after reporting at the cursor's line. */
+static bool charge(struct cursor *c, struct world *w, uint64_t triangles, uint64_t vertices, const char *what)
+{
+    uint64_t bytes = ao_budget_mesh(triangles, vertices);
+    if (ao_budget_take(w->budget, bytes))
+        return true;
+    char why[200];
+    ao_budget_explain(w->budget, bytes, why, sizeof why);
+    return fail(c, "%s: %llu triangles and %llu vertices %s", what, (unsigned long long)triangles,
+                (unsigned long long)vertices, why);
+}
 
 static bool add_albedo(struct ao_scene *s, struct ao_vec3 rho, uint32_t *index)
 {
@@ -378,6 +392,8 @@ static bool parse_sphere(struct cursor *c, struct ao_scene *s, struct world *w)
     sp.radius = (float)radius;
     if (!(sp.radius > 0.0f))
         return fail(c, "'radius' must be positive");
+    if (!charge(c, w, 1, 0, "sphere"))
+        return false;
     if (!resize(&s->spheres, s->sphere_count + 1, sizeof *s->spheres) ||
         !resize(&w->sphere_centers, s->sphere_count + 1, sizeof *w->sphere_centers))
         return fail(c, "out of memory");
@@ -414,6 +430,8 @@ static bool parse_quad(struct cursor *c, struct ao_scene *s, struct world *w)
     struct ao_vec3 normals[4] = {n, n, n, n};
     static const uint32_t tris[6] = {0, 1, 2, 0, 2, 3};
     uint32_t a;
+    if (!charge(c, w, 2, 4, "quad"))
+        return false;
     if (!add_albedo(s, rho, &a) || !add_triangles(s, w, p, normals, 4, tris, 2, a))
         return fail(c, "out of memory");
     return true;
@@ -454,8 +472,12 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
     if (t.scale.x == 0.0 || t.scale.y == 0.0 || t.scale.z == 0.0)
         return fail(c, "'scale' must not be zero");
     struct ao_mesh m = {0};
-    if (!ao_mesh_load(&m, path))
+    if (!ao_mesh_load_budget(&m, path, w->budget))
         return false;
+    if (!charge(c, w, m.triangle_count, m.vertex_count, path)) {
+        ao_mesh_finish(&m);
+        return false;
+    }
     struct dvec *positions = NULL;
     uint32_t a;
     bool ok = transform_mesh(&m, &t, &positions) && add_albedo(s, rho, &a) &&
@@ -645,11 +667,12 @@ static void begin(struct ao_scene *s, const char *path)
     s->ao_distance = INFINITY;
 }
 
-bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
+/* ao_scene_parse charging budget. */
+static bool parse_text(struct ao_scene *scene, const char *text, const char *path, struct ao_budget *budget)
 {
     begin(scene, path);
     struct cursor c = {.path = path};
-    struct world w = {.extent_note = ""};
+    struct world w = {.extent_note = "", .budget = budget};
     bool ok = true;
     char line[MAX_LINE + 2];
     for (const char *p = text; ok && *p;) {
@@ -672,15 +695,26 @@ bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
     return ok;
 }
 
+bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
+{
+    struct ao_budget budget = {AO_BUDGET_DEFAULT, 0};
+    return parse_text(scene, text, path, &budget);
+}
+
 /* A bare mesh: the mesh itself, a large ground quad under it, a camera framed on the mesh. */
-static bool load_bare_mesh(struct ao_scene *s, const char *path)
+static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budget *budget)
 {
     begin(s, path);
     struct ao_mesh m = {0};
-    if (!ao_mesh_load(&m, path))
-        return false;
-    struct world w = {.extent_note = " (the mesh with its ground quad, 50 times as wide as the mesh)"};
+    struct world w = {.extent_note = " (the mesh with its ground quad, 50 times as wide as the mesh)",
+                      .budget = budget};
     struct cursor c = {.path = path};
+    if (!ao_mesh_load_budget(&m, path, budget))
+        return false;
+    if (!charge(&c, &w, m.triangle_count + 2, m.vertex_count + 4, "the mesh and its ground")) {
+        ao_mesh_finish(&m);
+        return false;
+    }
     struct transform identity = {.scale = dvec_make(1, 1, 1), .axis = dvec_make(0, 1, 0), .cos_angle = 1};
     struct dvec *positions = NULL, lo, hi;
     uint32_t a;
@@ -715,19 +749,23 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path)
 
 bool ao_scene_load(struct ao_scene *scene, const char *path)
 {
+    return ao_scene_load_budget(scene, path, AO_BUDGET_DEFAULT);
+}
+
+bool ao_scene_load_budget(struct ao_scene *scene, const char *path, uint64_t budget_bytes)
+{
+    struct ao_budget budget = {budget_bytes, 0};
     memset(scene, 0, sizeof *scene);
     if (ao_mesh_is_mesh_path(path))
-        return load_bare_mesh(scene, path);
+        return load_bare_mesh(scene, path, &budget);
     char *text;
     size_t got;
-    if (!ao_file_read(path, &text, &got))
+    if (!ao_file_read_budget(path, &budget, &text, &got))
         return false;
-    if (strlen(text) != got) {
+    bool ok = strlen(text) == got;
+    if (!ok)
         ao_file_report("%s: not a text file (it contains a NUL byte)", path);
-        free(text);
-        return false;
-    }
-    bool ok = ao_scene_parse(scene, text, path);
+    ok = ok && parse_text(scene, text, path, &budget);
     free(text);
     return ok;
 }

@@ -97,7 +97,7 @@ doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0} for _ in range(65536)]
                     'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
 json.dump(doc, open('instances.gltf', 'w'))
 PY
-refuse 1 "instance its meshes into 39321600 triangles and 196608 vertices (more than 33554432, and more than 1836 bytes" instances.gltf
+refuse 1 "instances.gltf: 39321600 triangles and 196608 vertices need about 4.4 GiB, more than the" instances.gltf
 # One triangle as 10000 primitives of one mesh under 65536 nodes: counted once per mesh, so the
 # refusal takes a fraction of a second, not the hours of validating 655 million primitives.
 python3 - <<'PY'
@@ -106,10 +106,10 @@ doc = json.load(open('instances.gltf'))
 doc['meshes'] = [{'primitives': [{'attributes': {'POSITION': 0}}] * 10000}]
 json.dump(doc, open('primitives.gltf', 'w'))
 PY
-refuse 1 "instance its meshes into 655360000 triangles and 1966080000 vertices" primitives.gltf
+refuse 1 "primitives.gltf: 655360000 triangles and 1966080000 vertices need about 183.1 GiB" primitives.gltf
 # Two million empty objects in 6 MB of JSON: json-c would take 1.6 GB for them.
 python3 -c "open('objects.gltf', 'w').write('{\"asset\": {\"version\": \"2.0\"}, \"x\": [' + '{},' * 2000000 + '{}]}')"
-refuse 1 "objects.gltf: its JSON would take about 1740 MB to parse (more than 1024 MB)" objects.gltf
+refuse 1 "objects.gltf: parsing its JSON would need about 1.7 GiB, more than the 1018.3 MiB left of the scene budget (raise it with --scene-budget)" objects.gltf
 rm -f instances.gltf primitives.gltf objects.gltf
 
 # ---- glTF buffers outside the model's folder. Relative URIs resolve in the model's folder and may

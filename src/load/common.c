@@ -59,6 +59,19 @@ void ao_load_report(const char *path, size_t line, const char *format, ...)
         ao_file_report("%s: %s", path, message);
 }
 
+bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, const char *path,
+                  size_t line)
+{
+    uint64_t charge = ao_budget_mesh(triangles, vertices);
+    if (ao_budget_fits(budget, charge))
+        return true;
+    char why[200];
+    ao_budget_explain(budget, charge, why, sizeof why);
+    ao_load_report(path, line, "%llu triangles and %llu vertices %s", (unsigned long long)triangles,
+                   (unsigned long long)vertices, why);
+    return false;
+}
+
 /* Reports an allocation failure; returns false for the caller to pass on. */
 bool ao_load_out_of_memory(const char *path)
 {

@@ -10,11 +10,10 @@
  * a bufferView against its buffer, an accessor's last element against its bufferView, indices
  * against their vertex count. Integers are read only up to 2^53, so that sums of three of them and
  * products of one with a stride (at most 252) stay far below 2^64. Nodes must form trees: a node
- * with two parents, or a cycle, is refused before anything is traversed. JSON that would make
- * json-c allocate more than MAX_JSON_COST is refused before it is parsed. Instancing a mesh under
- * many nodes (or one accessor under many primitives) may not make the loaded mesh larger than
- * MAX_INSTANCED triangles or vertices unless its buffers hold that many, so a small file cannot
- * demand gigabytes. */
+ * with two parents, or a cycle, is refused before anything is traversed. Whatever the load holds
+ * is charged to the scene budget before it is allocated: the JSON tree json-c will build
+ * (estimated from the text, json_cost), each buffer, the per-node arrays, and the mesh its nodes
+ * instance, counted in a first pass, so that a small file cannot demand gigabytes. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -29,12 +28,8 @@
 
 /* Largest integer read from the JSON; see the header comment. */
 #define MAX_INTEGER 9007199254740992.0
-/* How many triangles or vertices instancing alone may produce (2^25; about 1 GB of mesh). */
-#define MAX_INSTANCED 33554432u
 /* JSON nesting depth accepted (glTF needs 6 or so; deep nesting is an attack on the parser). */
 #define MAX_DEPTH 64
-/* What json-c may allocate for a file's JSON, estimated before parsing (see json_cost). */
-#define MAX_JSON_COST (1024.0 * 1024 * 1024)
 
 /* GLB container constants: magic "glTF", chunk types "JSON" and "BIN\0". */
 enum { GLB_MAGIC = 0x46546C67, GLB_JSON = 0x4E4F534A, GLB_BIN = 0x004E4942, GLB_HEADER = 12 };
@@ -69,7 +64,8 @@ struct gltf {
     size_t *parent;               /* per node: its parent, or SIZE_MAX */
     double (*world)[16];          /* per node: its world matrix, column major */
     uint64_t triangles, vertices; /* totals of the instances found so far */
-    uint64_t buffer_bytes;        /* the sum of the buffers' lengths */
+    struct ao_budget *budget;     /* the scene budget */
+    uint64_t taken;               /* what this load took from it, given back at its end */
     struct mesh_size {
         uint64_t triangles, vertices;
         bool known;
@@ -88,6 +84,19 @@ static bool gltf_error(const struct gltf *g, const char *format, ...)
     va_end(args);
     ao_load_report(g->path, 0, "%s", message);
     return false;
+}
+
+/* Takes bytes from the scene budget for what the load holds until its end; else reports that
+ * `what` would need more than is left. */
+static bool take(struct gltf *g, uint64_t bytes, const char *what)
+{
+    if (ao_budget_take(g->budget, bytes)) {
+        g->taken += bytes;
+        return true;
+    }
+    char why[200];
+    ao_budget_explain(g->budget, bytes, why, sizeof why);
+    return gltf_error(g, "%s would %s", what, why);
 }
 
 /* ------------------------------------------------------------------ JSON access */
@@ -278,9 +287,14 @@ static bool read_buffer_file(struct gltf *g, const char *where, const char *uri,
     if (!ao_load_uri_decode(uri, path, sizeof path, why, sizeof why) ||
         !ao_load_uri_open(g->path, path, &fd, why, sizeof why))
         return gltf_error(g, "%s ('%.60s'): %s", where, uri, why);
-    char *data = NULL;
-    const char *reason = length >= SIZE_MAX ? "byteLength too large" : NULL;
-    bool ok = !reason && ao_file_read_prefix(fd, (size_t)length, &data, &reason);
+    char *data = NULL, what[100];
+    snprintf(what, sizeof what, "%s ('%.40s'), byteLength %llu,", where, uri, (unsigned long long)length);
+    if (length >= SIZE_MAX || !take(g, length + 1, what)) {
+        close(fd);
+        return length < SIZE_MAX || gltf_error(g, "%s: too large", what);
+    }
+    const char *reason = NULL;
+    bool ok = ao_file_read_prefix(fd, (size_t)length, &data, &reason);
     close(fd);
     if (!ok)
         return gltf_error(g, "%s ('%.60s'), byteLength %llu: %s", where, uri,
@@ -313,7 +327,12 @@ static bool load_buffer(struct gltf *g, json_object *json, size_t i)
         const char *comma = strchr(uri, ',');
         if (!comma || comma - uri < 12 || memcmp(comma - 7, ";base64", 7) != 0)
             return gltf_error(g, "%s: only base64 data URIs are supported", where);
-        if (!decode_base64(comma + 1, strlen(comma + 1), &b->owned, &size))
+        size_t digits = strlen(comma + 1);
+        char what[96];
+        snprintf(what, sizeof what, "%.64s's data URI", where);
+        if (!take(g, digits / 4 * 3 + 3, what))
+            return false;
+        if (!decode_base64(comma + 1, digits, &b->owned, &size))
             return gltf_error(g, "%s: bad base64 data (or out of memory)", where);
         b->data = b->owned;
     } else {
@@ -325,7 +344,6 @@ static bool load_buffer(struct gltf *g, json_object *json, size_t i)
         return gltf_error(g, "%s: byteLength %llu but only %zu bytes of data", where,
                           (unsigned long long)length, size);
     b->size = (size_t)length;
-    g->buffer_bytes += length;
     return true;
 }
 
@@ -727,23 +745,33 @@ static bool place_nodes(struct gltf *g, size_t node_count, const bool *is_root, 
 
 /* An upper estimate of json-c's memory for text: each '{' makes an object with a 16-entry hash
  * table (measured: 780 bytes), each '[' an array (150 bytes), and every other value, which
- * follows a ',' or ':', 70 to 110 bytes. A few MB of "{}," would otherwise take gigabytes. */
-static double json_cost(const char *text, size_t size)
+ * follows a ',' or ':', 70 to 110 bytes; a string's bytes are gathered in a buffer grown by
+ * doubling (less than twice their length) and then copied into the string (once more): 3 bytes
+ * per byte (measured: 1.9 for a 200 MB string). A few megabytes of "{}," would otherwise take
+ * gigabytes, and a 1 GB string 3 GB. */
+static uint64_t json_cost(const char *text, size_t size)
 {
-    double cost = 0.0;
-    for (size_t i = 0; i < size; i++)
-        cost += text[i] == '{' ? 800.0 : text[i] == '[' ? 160.0
-              : text[i] == ',' || text[i] == ':' ? 112.0 : 0.0;
+    uint64_t cost = 0;
+    bool in_string = false;
+    for (size_t i = 0; i < size; i++) {
+        char c = text[i];
+        if (in_string) {
+            i += c == '\\';   /* an escaped character, '"' too, stays in the string */
+            in_string = c != '"';
+            cost += 3;
+        } else {
+            in_string = c == '"';
+            cost += c == '{' ? 800 : c == '[' ? 160 : c == ',' || c == ':' ? 112 : 0;
+        }
+    }
     return cost;
 }
 
 /* Parses the JSON text into g->root; errors name the line. */
 static bool parse_json(struct gltf *g, const char *text, size_t size)
 {
-    double cost = json_cost(text, size);
-    if (cost > MAX_JSON_COST)
-        return gltf_error(g, "its JSON would take about %.0f MB to parse (more than %.0f MB)",
-                          cost / 1048576.0, MAX_JSON_COST / 1048576.0);
+    if (!take(g, json_cost(text, size), "parsing its JSON"))
+        return false;
     struct json_tokener *tokener = json_tokener_new_ex(MAX_DEPTH);
     if (!tokener)
         return ao_load_out_of_memory(g->path);
@@ -801,6 +829,11 @@ static bool read_scene(struct gltf *g)
         !array_member(g, g->root, "nodes", "file", &g->nodes, &node_count) ||
         !array_member(g, g->root, "buffers", "file", &buffers, &g->buffer_count))
         return false;
+    /* The per-node arrays (and the few bytes a buffer or a mesh needs), charged first. */
+    char what[64];
+    snprintf(what, sizeof what, "its %zu nodes", node_count);
+    if (!take(g, (uint64_t)node_count * AO_BUDGET_NODE + (uint64_t)(g->buffer_count + mesh_count) * 32, what))
+        return false;
     g->buffers = calloc(g->buffer_count ? g->buffer_count : 1, sizeof *g->buffers);
     g->parent = malloc((node_count ? node_count : 1) * sizeof *g->parent);
     g->world = malloc((node_count ? node_count : 1) * sizeof *g->world);
@@ -814,17 +847,11 @@ static bool read_scene(struct gltf *g)
     ok = ok && check_tree(g, node_count) && find_roots(g, node_count, is_root) &&
          place_nodes(g, node_count, is_root, placed);
 
-    /* First count (validating every accessor), then refuse what instancing blows up: without
-     * it, a triangle takes at least 3 bytes of buffer (uint8 indices) and a vertex 12, so more
-     * than that (and more than MAX_INSTANCED) comes from reusing data. Then fill. */
+    /* First count (validating every accessor), then refuse a mesh, as its nodes instance it,
+     * that does not fit in the budget beside what the load holds already. Then fill. */
     for (size_t i = 0; ok && i < node_count; i++)
         ok = !placed[i] || add_node_mesh(g, i, true);
-    if (ok && ((g->triangles > MAX_INSTANCED && g->triangles > g->buffer_bytes / 3) ||
-               (g->vertices > MAX_INSTANCED && g->vertices > g->buffer_bytes / 12)))
-        ok = gltf_error(g, "the scene's nodes instance its meshes into %llu triangles and %llu "
-                        "vertices (more than %u, and more than %llu bytes of buffers hold)",
-                        (unsigned long long)g->triangles, (unsigned long long)g->vertices,
-                        MAX_INSTANCED, (unsigned long long)g->buffer_bytes);
+    ok = ok && ao_load_fits(g->budget, g->triangles, g->vertices, g->path, 0);
     g->triangles = g->vertices = 0;
     for (size_t i = 0; ok && i < node_count; i++)
         ok = !placed[i] || add_node_mesh(g, i, false);
@@ -832,10 +859,12 @@ static bool read_scene(struct gltf *g)
     return ok;
 }
 
-bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size_t size)
+bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size_t size,
+                  struct ao_budget *budget)
 {
     struct gltf g = {
         .path = path,
+        .budget = budget,
         .positions = {.size = sizeof(struct ao_vec3)},
         .normals = {.size = sizeof(struct ao_vec3)},
         .lacking = {.size = sizeof(bool)},
@@ -871,5 +900,6 @@ bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size
     ao_load_free(&g.normals);
     ao_load_free(&g.lacking);
     ao_load_free(&g.indices);
+    ao_budget_give(budget, g.taken);
     return ok;
 }
