@@ -14,7 +14,7 @@
 
 /* What each element is charged, in bytes: peak memory per triangle and per vertex through loading,
  * the scene's arrays and Embree's BVH (measured: 114 and 55, docs/reliability.md), and per glTF
- * node (its world matrix, parent, flags and stack slot: 146). */
+ * node (its world matrix, parent, flags and stack slot: 146; charged with its JSON object). */
 enum { AO_BUDGET_TRIANGLE = 120, AO_BUDGET_VERTEX = 60, AO_BUDGET_NODE = 160 };
 
 /* A budget: its limit and what is charged now (never more than the limit). The caller owns it. */

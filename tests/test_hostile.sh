@@ -107,9 +107,10 @@ doc['meshes'] = [{'primitives': [{'attributes': {'POSITION': 0}}] * 10000}]
 json.dump(doc, open('primitives.gltf', 'w'))
 PY
 refuse 1 "primitives.gltf: 655360000 triangles and 1966080000 vertices need about 183.1 GiB" primitives.gltf
-# Two million empty objects in 6 MB of JSON: json-c would take 1.6 GB for them.
+# Two million empty objects in 6 MB of JSON: json-c would take 1.6 GB for them (each may be a node,
+# so each is charged a node's arrays too).
 python3 -c "open('objects.gltf', 'w').write('{\"asset\": {\"version\": \"2.0\"}, \"x\": [' + '{},' * 2000000 + '{}]}')"
-refuse 1 "objects.gltf: parsing its JSON would need about 1.7 GiB, more than the 1018.3 MiB left of the scene budget (raise it with --scene-budget)" objects.gltf
+refuse 1 "objects.gltf: parsing its JSON would need about 2.0 GiB, more than the 1018.3 MiB left of the scene budget (raise it with --scene-budget)" objects.gltf
 rm -f instances.gltf primitives.gltf objects.gltf
 
 # ---- glTF buffers outside the model's folder. Relative URIs resolve in the model's folder and may
@@ -178,6 +179,56 @@ refuse 1 "aim.scene:1: camera: eye and target are 1e-20 apart" aim.scene
 printf 'camera eye 0 1 4 target 0 0 0\nsphere center 0 0 0 radius 1.5e9\n' > wide.scene
 refuse 1 "wide.scene: the scene is 3e+09 across; aoview renders" wide.scene
 rm -f big.obj far.scene aim.scene wide.scene
+
+# ---- the scene budget (--scene-budget, default 1G): small files that asked for gigabytes. A 3 MB
+# glTF instancing a 512-triangle grid under 65536 nodes (2^25 triangles, 4.7 GB and 27 s before),
+# a scene naming a mesh three times, a million one-triangle nodes in 13 MB (1.1 GB before), a JSON
+# string (3 bytes a byte to parse), a 3 GB sparse file (read whole before); each is refused
+# before its memory is allocated, the sparse file unread. A budget raised far enough loads.
+python3 - <<'PY'
+import base64, json, struct
+n = 16
+pos = [c for j in range(n + 1) for i in range(n + 1) for c in (i * 2.0, ((i * 7 + j * 3) % 5) * 0.3, j * 2.0)]
+idx = [k for j in range(n) for i in range(n)
+       for a in [j * (n + 1) + i] for k in (a, a + 1, a + n + 1, a + 1, a + n + 2, a + n + 1)]
+data = struct.pack('<%df' % len(pos), *pos) + struct.pack('<%dH' % len(idx), *idx)
+def grid(name, nodes):
+    doc = {'asset': {'version': '2.0'},
+           'nodes': [{'mesh': 0, 'translation': [i % 256 * 40.0, 0.0, i // 256 * 40.0]} for i in range(nodes)],
+           'meshes': [{'primitives': [{'attributes': {'POSITION': 0}, 'indices': 1}]}],
+           'accessors': [{'bufferView': 0, 'componentType': 5126, 'count': (n + 1) ** 2, 'type': 'VEC3'},
+                         {'bufferView': 1, 'componentType': 5123, 'count': len(idx), 'type': 'SCALAR'}],
+           'bufferViews': [{'buffer': 0, 'byteLength': 4 * len(pos)},
+                           {'buffer': 0, 'byteOffset': 4 * len(pos), 'byteLength': 2 * len(idx)}],
+           'buffers': [{'byteLength': len(data),
+                        'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
+    json.dump(doc, open(name, 'w'), separators=(',', ':'))
+grid('instanced.gltf', 65536)
+grid('grid.gltf', 256)
+open('three.scene', 'w').write('camera eye 5000 3000 14000 target 5000 0 5000\n' +
+                               ''.join('mesh grid.gltf translate 0 %d 0\n' % (10 * k) for k in range(3)))
+tri = base64.b64encode(struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0)).decode()
+with open('million.gltf', 'w') as f:
+    f.write('{"asset": {"version": "2.0"}, "nodes": [' + ', '.join(['{"mesh": 0}'] * 1000000) + '], '
+            '"meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}], "accessors": [{"bufferView": 0, '
+            '"componentType": 5126, "count": 3, "type": "VEC3"}], "bufferViews": [{"buffer": 0, "byteLength": 36}], '
+            '"buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,' + tri + '"}]}')
+with open('string.gltf', 'w') as f:
+    f.write('{"asset": {"version": "2.0"}, "x": "' + 'a' * (64 << 20) + '"}')
+PY
+truncate -s 3G sparse.gltf
+refuse 1 "instanced.gltf: 33554432 triangles and 18939904 vertices need about 4.8 GiB, more than the" instanced.gltf
+refuse 1 "grid.gltf: 131072 triangles and 73984 vertices need about 19.2 MiB, more than the" --scene-budget 48M three.scene
+refuse 1 "million.gltf: parsing its JSON would need about 1.1 GiB, more than the 1011.6 MiB left of the scene budget (raise it with --scene-budget)" million.gltf
+refuse 1 "string.gltf: parsing its JSON would need about 192.0 MiB, more than the 64.0 MiB left" --scene-budget 128M string.gltf
+refuse 1 "sparse.gltf: 3221225472 bytes need about 3.0 GiB, more than the 1.0 GiB left of the scene budget (raise it with --scene-budget)" sparse.gltf
+refuse 1 "grid.gltf: 131072 triangles and 73984 vertices need about 19.2 MiB, more than the" --scene-budget 16M grid.gltf
+refuse 2 "--scene-budget: expected a size from 1M to 1024T (bytes, or a number with K, M, G or T), got '4P'" --scene-budget 4P grid.gltf
+"$gnu_time" -f %M -o mem.txt "$bin" --headless -q --spp 1 --size 8x8 --scene-budget 32M -o grid.pfm grid.gltf 2>err.txt
+got=$? kb=$(tail -n 1 mem.txt)
+if [ "$got" != 0 ] || [ -s err.txt ]; then fail "grid.gltf under --scene-budget 32M exited $got: $(head -c 300 err.txt)"
+else echo "loaded in $((kb / 1024)) MB: grid.gltf under --scene-budget 32M"; fi
+rm -f instanced.gltf grid.gltf three.scene million.gltf string.gltf sparse.gltf grid.pfm
 
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000

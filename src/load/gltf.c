@@ -743,12 +743,14 @@ static bool place_nodes(struct gltf *g, size_t node_count, const bool *is_root, 
 
 /* ------------------------------------------------------------------ the file */
 
-/* An upper estimate of json-c's memory for text: each '{' makes an object with a 16-entry hash
- * table (measured: 780 bytes), each '[' an array (150 bytes), and every other value, which
- * follows a ',' or ':', 70 to 110 bytes; a string's bytes are gathered in a buffer grown by
- * doubling (less than twice their length) and then copied into the string (once more): 3 bytes
- * per byte (measured: 1.9 for a 200 MB string). A few megabytes of "{}," would otherwise take
- * gigabytes, and a 1 GB string 3 GB. */
+/* An upper estimate of json-c's memory for text, and of the loader's per-node arrays: each '{'
+ * makes an object with a 16-entry hash table (measured: 780 bytes) and may be a node, for which
+ * read_scene keeps AO_BUDGET_NODE bytes more; each '[' an array (150 bytes), and every other
+ * value, which follows a ',' or ':', 70 to 110 bytes; a string's bytes are gathered in a buffer
+ * grown by doubling (less than twice their length) and then copied into the string (once more):
+ * 3 bytes per byte (measured: 1.9 for a 200 MB string). Charged before parsing, it keeps a few
+ * megabytes of "{}," from taking gigabytes, a 1 GB string 3 GB, and a million nodes from being
+ * parsed only to be refused. */
 static uint64_t json_cost(const char *text, size_t size)
 {
     uint64_t cost = 0;
@@ -761,7 +763,7 @@ static uint64_t json_cost(const char *text, size_t size)
             cost += 3;
         } else {
             in_string = c == '"';
-            cost += c == '{' ? 800 : c == '[' ? 160 : c == ',' || c == ':' ? 112 : 0;
+            cost += c == '{' ? 800 + AO_BUDGET_NODE : c == '[' ? 160 : c == ',' || c == ':' ? 112 : 0;
         }
     }
     return cost;
@@ -829,11 +831,8 @@ static bool read_scene(struct gltf *g)
         !array_member(g, g->root, "nodes", "file", &g->nodes, &node_count) ||
         !array_member(g, g->root, "buffers", "file", &buffers, &g->buffer_count))
         return false;
-    /* The per-node arrays (and the few bytes a buffer or a mesh needs), charged first. */
-    char what[64];
-    snprintf(what, sizeof what, "its %zu nodes", node_count);
-    if (!take(g, (uint64_t)node_count * AO_BUDGET_NODE + (uint64_t)(g->buffer_count + mesh_count) * 32, what))
-        return false;
+    /* The per-node, per-buffer and per-mesh arrays: each of those is a JSON object, whose charge
+     * (json_cost) covers them. */
     g->buffers = calloc(g->buffer_count ? g->buffer_count : 1, sizeof *g->buffers);
     g->parent = malloc((node_count ? node_count : 1) * sizeof *g->parent);
     g->world = malloc((node_count ? node_count : 1) * sizeof *g->world);
