@@ -2,7 +2,9 @@
 #include "budget.h"
 
 #include <assert.h>
+#include <stdbool.h>
 #include <stdio.h>
+#include <string.h>
 
 bool ao_budget_fits(const struct ao_budget *budget, uint64_t bytes)
 {
@@ -31,13 +33,13 @@ uint64_t ao_budget_mesh(uint64_t triangles, uint64_t vertices)
     return triangles * AO_BUDGET_TRIANGLE + vertices * AO_BUDGET_VERTEX;
 }
 
-/* bytes in binary units with one decimal, "512.0 MiB", "4.9 GiB". */
+/* bytes in binary units with one decimal, "512.0 MiB", "4.9 GiB"; below 1 KiB, exact. */
 static void format_size(uint64_t bytes, char *out, size_t size)
 {
     static const char *const units[] = {"bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"};
     double value = (double)bytes;
     int unit = 0;
-    while (value >= 1024.0 && unit < 6) {
+    while (value >= 1023.95 && unit < 6) {   /* what would print as 1024.0 is the next unit's 1.0 */
         value /= 1024.0;
         unit++;
     }
@@ -49,11 +51,17 @@ static void format_size(uint64_t bytes, char *out, size_t size)
 
 void ao_budget_explain(const struct ao_budget *budget, uint64_t bytes, char *out, size_t size)
 {
-    char need[32], left[32];
+    char need[64], left[64];
+    uint64_t rest = budget->limit - budget->used;
     format_size(bytes, need, sizeof need);
-    format_size(budget->limit - budget->used, left, sizeof left);
+    format_size(rest, left, sizeof left);
+    bool exact = strcmp(need, left) == 0 || bytes < 1024;
+    if (exact) {   /* too close to tell apart at one decimal: the counts */
+        snprintf(need, sizeof need, "%llu bytes", (unsigned long long)bytes);
+        snprintf(left, sizeof left, "%llu bytes", (unsigned long long)rest);
+    }
     if (bytes == UINT64_MAX)
         snprintf(need, sizeof need, "more than 8 EiB");
     snprintf(out, size, "need%s %s, more than the %s left of the scene budget (raise it with --scene-budget)",
-             bytes == UINT64_MAX ? "" : " about", need, left);
+             exact || bytes == UINT64_MAX ? "" : " about", need, left);
 }

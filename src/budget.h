@@ -34,8 +34,9 @@ void ao_budget_give(struct ao_budget *budget, uint64_t bytes);
 /* The charge for a mesh of so many triangles and vertices; UINT64_MAX where it overflows. */
 uint64_t ao_budget_mesh(uint64_t triangles, uint64_t vertices);
 
-/* Writes why bytes do not fit, for a one-line message: "need about 4.9 GiB, more than the 2.0 GiB
- * left of the scene budget (raise it with --scene-budget)". */
+/* Writes why bytes do not fit, for a one-line message: "need about 4.9 GiB, more than the 1.0 GiB
+ * left of the scene budget (raise it with --scene-budget)"; exact byte counts where the two would
+ * read alike. */
 void ao_budget_explain(const struct ao_budget *budget, uint64_t bytes, char *out, size_t size);
 
 #endif

@@ -136,6 +136,7 @@ for name, uri in [('up.gltf', '../secret/s.bin'), ('encoded.gltf', '%2e%2e/secre
                   ('empty.gltf', ''), ('inside.gltf', 'sub/../sub/./t.bin'), ('big.gltf', 'big.bin')]:
     gltf(name, uri)
 gltf('short.gltf', 'sub/t.bin', 37)
+gltf('huge.gltf', 'big.bin', 1 << 30)
 PY
 ln -s ../secret/s.bin model/link.bin
 ln -s ../secret model/dlink
@@ -152,8 +153,10 @@ refuse 1 "scheme.gltf: buffer 0 ('file:///etc/passwd'): the URI scheme 'file:' i
 refuse 1 "empty.gltf: buffer 0 (''): the URI is empty" model/empty.gltf
 refuse 1 "short.gltf: buffer 0 ('sub/t.bin'), byteLength 37: the file holds fewer bytes" model/short.gltf
 # What stays inside loads, and only byteLength bytes of a buffer file are read: 36 of a 1 GB file
-# (the triangle, then a sparse gigabyte), in the process's baseline of memory.
+# (the triangle, then a sparse gigabyte), in the process's baseline of memory; all of it would
+# not fit in the scene budget beside the glTF, and is refused unread.
 truncate -s 1G model/big.bin
+refuse 1 "huge.gltf: buffer 0 ('big.bin'), byteLength 1073741824, would need 1073741825 bytes, more than the" model/huge.gltf
 for name in inside big; do
   "$gnu_time" -f %M -o mem.txt "$bin" --headless -q --spp 1 --size 8x8 -o "$name.pfm" "model/$name.gltf" 2>err.txt
   got=$? kb=$(tail -n 1 mem.txt)

@@ -818,7 +818,7 @@ static void test_loaders_keep_to_the_budget(void **state)
     const char *path = temp_file("budget.obj", obj, sizeof obj - 1);
     uint64_t file = file_size(path) + 1;
     assert_false(load_within(&mesh, path, file + ao_budget_mesh(1, 3), err, sizeof err));
-    assert_non_null(strstr(err, "budget.obj:5: 1 triangles and 4 vertices need about 360 bytes, more than the "
+    assert_non_null(strstr(err, "budget.obj:5: 1 triangles and 4 vertices need 360 bytes, more than the "
                                 "300 bytes left of the scene budget (raise it with --scene-budget)"));
     path = temp_file("budget.obj", obj, sizeof obj - 9);   /* without the last line */
     file = file_size(path) + 1;
@@ -827,16 +827,16 @@ static void test_loaders_keep_to_the_budget(void **state)
     ao_mesh_finish(&mesh);
     /* A file larger than the budget is not read. */
     assert_false(load_within(&mesh, path, file - 1, err, sizeof err));
-    assert_non_null(strstr(err, "budget.obj: 32 bytes need about 33 bytes, more than the 32 bytes left"));
+    assert_non_null(strstr(err, "budget.obj: 32 bytes need 33 bytes, more than the 32 bytes left"));
     /* Binary PLY: 2 faces (at least 2 triangles) and 4 vertices, from the header; the quad then
      * fans into 2 triangles, so the mesh has 3. */
     struct bytes b = binary_square();
     path = temp_file("budget.ply", b.data, b.size);
     file = file_size(path) + 1;
     assert_false(load_within(&mesh, path, file + ao_budget_mesh(2, 4) - 1, err, sizeof err));
-    assert_non_null(strstr(err, "budget.ply: 2 triangles and 4 vertices need about 480 bytes"));
+    assert_non_null(strstr(err, "budget.ply: 2 triangles and 4 vertices need 480 bytes"));
     assert_false(load_within(&mesh, path, file + ao_budget_mesh(3, 4) - 1, err, sizeof err));
-    assert_non_null(strstr(err, "budget.ply: face 1: 3 triangles and 4 vertices need about 600 bytes"));
+    assert_non_null(strstr(err, "budget.ply: face 1: 3 triangles and 4 vertices need 600 bytes"));
     assert_true(load_within(&mesh, path, file + ao_budget_mesh(3, 4), err, sizeof err));
     ao_mesh_finish(&mesh);
     /* Binary STL: the header's 1000 triangles, before any is read. */

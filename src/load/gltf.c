@@ -11,8 +11,8 @@
  * against their vertex count. Integers are read only up to 2^53, so that sums of three of them and
  * products of one with a stride (at most 252) stay far below 2^64. Nodes must form trees: a node
  * with two parents, or a cycle, is refused before anything is traversed. Whatever the load holds
- * is charged to the scene budget before it is allocated: the JSON tree json-c will build
- * (estimated from the text, json_cost), each buffer, the per-node arrays, and the mesh its nodes
+ * is charged to the scene budget before it is allocated: the JSON tree json-c will build and the
+ * per-node arrays (both estimated from the text, json_cost), each buffer, and the mesh its nodes
  * instance, counted in a first pass, so that a small file cannot demand gigabytes. */
 #include <math.h>
 #include <stdarg.h>
@@ -291,7 +291,7 @@ static bool read_buffer_file(struct gltf *g, const char *where, const char *uri,
     snprintf(what, sizeof what, "%s ('%.40s'), byteLength %llu,", where, uri, (unsigned long long)length);
     if (length >= SIZE_MAX || !take(g, length + 1, what)) {
         close(fd);
-        return length < SIZE_MAX || gltf_error(g, "%s: too large", what);
+        return length >= SIZE_MAX && gltf_error(g, "%s too large", what);   /* else take reported */
     }
     const char *reason = NULL;
     bool ok = ao_file_read_prefix(fd, (size_t)length, &data, &reason);
