@@ -611,11 +611,11 @@ static bool check_range(const struct world *w, struct cursor *c, bool any, struc
     grow(&lo, &hi, w->target);
     if (!(largest_side(lo, hi) <= AO_SCENE_MAX_EXTENT))
         return fail(c, "camera: with it the scene is %.3g across; %s", largest_side(lo, hi), message);
-    struct dvec d = dvec_sub(w->target, w->eye);
-    double big = fmax(fabs(d.x), fmax(fabs(d.y), fabs(d.z)));
-    if (big > 0.0 && big * sqrt(dvec_dot(dvec_scale(d, 1.0 / big), dvec_scale(d, 1.0 / big))) < MIN_CAMERA_DISTANCE)
+    struct dvec d = dvec_sub(w->target, w->eye), along;
+    double distance = unit(d, &along) ? dvec_dot(d, along) : 0.0;   /* |d|, no square to vanish */
+    if (distance > 0.0 && distance < MIN_CAMERA_DISTANCE)
         return fail(c, "camera: eye and target are %.3g apart, closer than the %.3g aoview can aim by",
-                    big, MIN_CAMERA_DISTANCE);
+                    distance, MIN_CAMERA_DISTANCE);
     return true;
 }
 

@@ -222,7 +222,8 @@ static bool ascii_line(struct ascii_reader *r, struct ao_load_tokens *t, struct 
         }
         r->in_loop = false;
         r->facet_loops++;
-        if (!ao_load_fits(w->budget, indices->count / 3 + r->loop.count - 2, w->positions.count, r->path, r->line))
+        if (!ao_load_fits(w->budget, indices->count / 3 + r->loop.count - 2, w->positions.count, r->path,
+                          r->line))
             return false;
         return ao_load_fan(indices, &r->loop) || ao_load_out_of_memory(r->path);
     }
