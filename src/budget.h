@@ -8,7 +8,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* The default budget in bytes, 1 GiB: about 7 million triangles of an indexed mesh; every small
+/* The default budget in bytes, 1 GiB: about 6 million triangles of an indexed mesh; every small
  * file that asked for gigabytes is refused (docs/reliability.md). */
 #define AO_BUDGET_DEFAULT ((uint64_t)1 << 30)
 
