@@ -1,6 +1,7 @@
 /* Command line parsing: a table of options, one switch that applies them, strict value checks. */
 #include "cli.h"
 
+#include "budget.h"
 #include "image.h"
 #include "text.h"
 
@@ -22,7 +23,7 @@ enum option_id {
     OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
     OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
     OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR, OPT_SAVE_FORMAT, OPT_TIME,
-    OPT_VIEW, OPT_SHADING, OPT_COMPARE, OPT_PIXEL_SIZE,
+    OPT_VIEW, OPT_SHADING, OPT_COMPARE, OPT_PIXEL_SIZE, OPT_SCENE_BUDGET,
 };
 
 /* The longest --time: a year, far beyond any render, short of overflowing anything. */
@@ -80,6 +81,7 @@ static const struct option_spec specs[] = {
     {"--view", 0, true, OPT_VIEW},
     {"--shading", 0, true, OPT_SHADING},
     {"--compare", 0, true, OPT_COMPARE},
+    {"--scene-budget", 0, true, OPT_SCENE_BUDGET},
 };
 
 static const char usage[] =
@@ -127,6 +129,9 @@ static const char usage[] =
     "                        (default none)\n"
     "  --save-format F       pfm | exr: the linear file the window's S key saves\n"
     "                        beside the PNG (default pfm)\n"
+    "  --scene-budget SIZE   memory a scene may take: bytes, or with K, M, G or T\n"
+    "                        (powers of 1024); larger scenes are refused before\n"
+    "                        they are loaded (default 1G)\n"
     "  -q, --quiet           print nothing but errors\n"
     "  -h, --help            show this help\n"
     "  --version             show the version\n"
@@ -221,6 +226,24 @@ static bool parse_seconds(const char *name, const char *value, double *out, char
     }
     snprintf(msg, msg_size, "%s: expected seconds greater than 0 and at most %.0f, got '%s'", name, MAX_SECONDS,
              SHOWN(value));
+    return false;
+}
+
+/* --scene-budget: a whole number of bytes, or with a suffix K, M, G or T (powers of 1024), from
+ * 1M to 1024T. */
+static bool parse_budget(const char *name, const char *value, uint64_t *out, char *msg, size_t msg_size)
+{
+    static const char suffixes[] = "KMGT";
+    size_t n = strlen(value);
+    const char *unit = n ? strchr(suffixes, toupper((unsigned char)value[n - 1])) : NULL;
+    uint64_t number, shift = unit && *unit ? 10 * (uint64_t)(unit - suffixes + 1) : 0;
+    if (parse_u64(value, value + n - (shift ? 1 : 0), &number) && number <= (UINT64_C(1) << 50) >> shift &&
+        number << shift >= UINT64_C(1) << 20) {
+        *out = number << shift;
+        return true;
+    }
+    snprintf(msg, msg_size, "%s: expected a size from 1M to 1024T (bytes, or a number with K, M, G or T), got "
+             "'%s'", name, value);
     return false;
 }
 
@@ -404,6 +427,7 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
             return false;
         opts->pixel_size = choice ? 1 << (choice - 1) : 0;
         return true;
+    case OPT_SCENE_BUDGET: return parse_budget(name, value, &opts->scene_budget, msg, msg_size);
     }
     return false;
 }
@@ -455,7 +479,7 @@ bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, siz
     *opts = (struct ao_options){
         .spp = 0, .spppp = 0, .adaptive = true, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
         .sequence = AO_SEQUENCE_SOBOL, .below = AO_BELOW_REFLECT,
-        .ao_distance = NAN,
+        .ao_distance = NAN, .scene_budget = AO_BUDGET_DEFAULT,
     };
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];

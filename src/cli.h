@@ -52,6 +52,7 @@ struct ao_options {
     const char *stats_path;
     const char *reference_path;
     bool save_exr;            /* --save-format exr: S saves EXR beside the PNG, not PFM */
+    uint64_t scene_budget;    /* --scene-budget: bytes a scene may take to load (budget.h) */
     bool quiet, help, version;
 };
 

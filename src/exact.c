@@ -441,7 +441,7 @@ static int run(struct app *app, const struct ao_options *opts)
         fprintf(stderr, "aoview-exact: no SCENE given (try --help)\n");
         return EXIT_USAGE;
     }
-    if (!ao_scene_load(&app->scene, opts->scene_path))
+    if (!ao_scene_load_budget(&app->scene, opts->scene_path, opts->scene_budget))
         return EXIT_RUNTIME;
 
     /* The closed form, or a refusal. */

@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -28,36 +29,91 @@ static const char *unreadable(const struct stat *st)
     return NULL;
 }
 
-bool ao_file_read(const char *path, char **text, size_t *size)
+/* Reads exactly length bytes from fd into data; false on an error or an early end. */
+static bool read_all(int fd, char *data, size_t length)
+{
+    while (length > 0) {
+        ssize_t got = read(fd, data, length < ((size_t)1 << 30) ? length : (size_t)1 << 30);
+        if (got < 0 && errno == EINTR)
+            continue;
+        if (got <= 0)
+            return false;
+        data += got;
+        length -= (size_t)got;
+    }
+    return true;
+}
+
+bool ao_file_read_prefix(int fd, size_t length, char **data, const char **why)
+{
+    struct stat st;
+    *why = fstat(fd, &st) != 0 ? "cannot stat the file" : unreadable(&st);
+    if (!*why && (uintmax_t)st.st_size < length)
+        *why = "the file holds fewer bytes";
+    if (!*why && length == SIZE_MAX)
+        *why = "file too large";
+    if (!*why && !(*data = malloc(length + 1)))
+        *why = "out of memory";
+    if (!*why && !read_all(fd, *data, length)) {
+        free(*data);
+        *why = "read error";
+    }
+    if (*why)
+        return false;
+    (*data)[length] = '\0';
+    return true;
+}
+
+/* ao_file_read, charging budget first when there is one. */
+static bool read_file(const char *path, struct ao_budget *budget, char **text, size_t *size)
 {
     /* Non-blocking, so that opening a FIFO returns at once (to be refused below). */
-    int fd = open(path, O_RDONLY | O_NONBLOCK);
+    int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
-        fprintf(stderr, "%s: cannot open: %s\n", path, strerror(errno));
+        ao_file_report("%s: cannot open: %s", path, strerror(errno));
         return false;
     }
     struct stat st;
     const char *reason = fstat(fd, &st) != 0 ? "cannot stat the file" : unreadable(&st);
-    FILE *file = reason ? NULL : fdopen(fd, "rb");
-    if (!reason && !file)
-        reason = "cannot open";
-    if (!reason && !(*text = malloc((size_t)st.st_size + 1)))
-        reason = "out of memory";
-    if (!reason && fread(*text, 1, (size_t)st.st_size, file) != (size_t)st.st_size) {
-        free(*text);
-        reason = "read error";
+    uint64_t charge = reason ? 0 : (uint64_t)st.st_size + 1;
+    char why[200] = "";
+    bool taken = !reason && budget && ao_budget_take(budget, charge);
+    if (!reason && budget && !taken) {
+        ao_budget_explain(budget, charge, why, sizeof why);
+        reason = why;
     }
-    if (file)
-        fclose(file);
-    else
-        close(fd);
-    if (reason) {
-        fprintf(stderr, "%s: %s\n", path, reason);
-        return false;
-    }
-    *size = (size_t)st.st_size;
-    (*text)[*size] = '\0';
-    return true;
+    if (!reason && ao_file_read_prefix(fd, (size_t)st.st_size, text, &reason))
+        *size = (size_t)st.st_size;
+    else if (taken)
+        ao_budget_give(budget, charge);
+    close(fd);
+    if (reason == why)
+        ao_file_report("%s: %llu bytes %s", path, (unsigned long long)st.st_size, why);
+    else if (reason)
+        ao_file_report("%s: %s", path, reason);
+    return !reason;
+}
+
+bool ao_file_read(const char *path, char **text, size_t *size)
+{
+    return read_file(path, NULL, text, size);
+}
+
+bool ao_file_read_budget(const char *path, struct ao_budget *budget, char **text, size_t *size)
+{
+    return read_file(path, budget, text, size);
+}
+
+void ao_file_report(const char *format, ...)
+{
+    /* Formatted, then escaped, and written with one call so that lines of several threads do not
+     * interleave. */
+    char text[1024], line[4 * sizeof text + 2];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    fprintf(stderr, "%s\n", ao_text_escape(text, line, sizeof line));
 }
 
 /* One attempt at opening path for writing without blocking: created exclusively (*created), else

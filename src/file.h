@@ -1,10 +1,13 @@
-/* Whole-file reading shared by the scene and mesh loaders; opening a stream output (--stats). */
+/* Whole-file reading shared by the scene and mesh loaders, the one-line reports they print, and
+ * opening a stream output (--stats). */
 #ifndef AO_FILE_H
 #define AO_FILE_H
 
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdio.h>
+
+#include "budget.h"
 
 /* Reads the regular file at path into a malloc'd NUL-terminated buffer the caller frees, its
  * length (without the NUL) in *size. Refuses directories, FIFOs and devices without blocking; on
@@ -18,5 +21,20 @@ bool ao_file_read(const char *path, char **text, size_t *size);
  * *created: this call created the file. NULL after one line "what: cannot write path: reason".
  * Main thread (signals end the wait). */
 FILE *ao_file_open_output(const char *path, const char *what, bool *created);
+
+/* ao_file_read charging the file's size plus one (the NUL) to budget before anything is allocated:
+ * a file that does not fit is refused, unread, with "path: N bytes need about ...". The caller
+ * gives the bytes back (ao_budget_give(budget, *size + 1)) once it frees the text. Any thread. */
+bool ao_file_read_budget(const char *path, struct ao_budget *budget, char **text, size_t *size);
+
+/* Reads the first `length` bytes of the open file fd into a malloc'd buffer (a NUL after them)
+ * the caller frees. Refuses, before allocating, what is not a regular file or holds fewer bytes;
+ * then returns false with the reason in *why (static text) and prints nothing. Any thread. */
+bool ao_file_read_prefix(int fd, size_t length, char **data, const char **why);
+
+/* Prints the printf-formatted text and a newline to stderr as one line: control characters (a
+ * newline in a file name or a JSON string, an escape sequence in a scene token) are written as
+ * \n, \r, \t or \xNN, so that a report never spans lines or drives the terminal. Any thread. */
+void ao_file_report(const char *format, ...);
 
 #endif

@@ -110,7 +110,7 @@ bool ao_mesh_compute_normals(struct ao_mesh *mesh)
 {
     if (compute_all_normals(mesh))
         return true;
-    fprintf(stderr, "out of memory computing mesh normals\n");
+    ao_file_report("out of memory computing mesh normals");
     return false;
 }
 
@@ -177,6 +177,12 @@ bool ao_mesh_is_mesh_path(const char *path)
 
 bool ao_mesh_load(struct ao_mesh *mesh, const char *path)
 {
+    struct ao_budget budget = {AO_BUDGET_DEFAULT, 0};
+    return ao_mesh_load_budget(mesh, path, &budget);
+}
+
+bool ao_mesh_load_budget(struct ao_mesh *mesh, const char *path, struct ao_budget *budget)
+{
     memset(mesh, 0, sizeof *mesh);
     ao_load_format *load = loader_for(path);
     char *text;
@@ -185,10 +191,11 @@ bool ao_mesh_load(struct ao_mesh *mesh, const char *path)
         ao_load_report(path, 0, "unknown mesh format; expected .obj, .ply, .stl, .gltf or .glb");
         return false;
     }
-    if (!ao_file_read(path, &text, &size))
+    if (!ao_file_read_budget(path, budget, &text, &size))
         return false;
-    bool ok = load(mesh, path, text, size);
+    bool ok = load(mesh, path, text, size, budget);
     free(text);
+    ao_budget_give(budget, (uint64_t)size + 1);
     if (!ok)
         ao_mesh_finish(mesh);
     return ok;

@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "budget.h"
 #include "vec3.h"
 
 /* An indexed triangle mesh; the caller owns it (ao_mesh_load fills it, ao_mesh_finish frees it). */
@@ -26,6 +27,11 @@ bool ao_mesh_is_mesh_path(const char *path);
  * computes vertex normals where the file has none. On failure prints one "path:line: message"
  * (or "path: message") line to stderr, leaves mesh empty and returns false. Any thread. */
 bool ao_mesh_load(struct ao_mesh *mesh, const char *path);
+
+/* ao_mesh_load within budget (ao_mesh_load's is AO_BUDGET_DEFAULT): the file is charged while it is
+ * read and parsed, and a mesh whose ao_budget_mesh charge does not fit what is left is refused
+ * before its arrays are allocated. Nothing stays charged: the caller charges the mesh it keeps. */
+bool ao_mesh_load_budget(struct ao_mesh *mesh, const char *path, struct ao_budget *budget);
 
 /* Recomputes mesh->normals from the triangles (angle-weighted face normals). */
 bool ao_mesh_compute_normals(struct ao_mesh *mesh);

@@ -24,14 +24,18 @@ struct cursor {
     int next;
 };
 
+/* Reports "path:line: message" (or "path: message" at line 0) as one line; returns false. */
 static bool fail(const struct cursor *c, const char *fmt, ...)
 {
+    char message[512];
     va_list ap;
     va_start(ap, fmt);
-    fprintf(stderr, "%s:%d: ", c->path, c->line);
-    vfprintf(stderr, fmt, ap);
-    fputc('\n', stderr);
+    vsnprintf(message, sizeof message, fmt, ap);
     va_end(ap);
+    if (c->line)
+        ao_file_report("%s:%d: %s", c->path, c->line, message);
+    else
+        ao_file_report("%s: %s", c->path, message);
     return false;
 }
 
@@ -106,6 +110,18 @@ static double dvec_dot(struct dvec a, struct dvec b)
 static struct dvec dvec_of(struct ao_vec3 v)
 {
     return dvec_make(v.x, v.y, v.z);
+}
+
+/* The unit vector along v into *out; false when v is zero or not finite. Divided first by its
+ * largest component, so that no square overflows or vanishes. */
+static bool unit(struct dvec v, struct dvec *out)
+{
+    double big = fmax(fabs(v.x), fmax(fabs(v.y), fabs(v.z)));
+    if (!(big > 0.0) || !isfinite(v.x) || !isfinite(v.y) || !isfinite(v.z))
+        return false;
+    v = dvec_scale(v, 1.0 / big);
+    *out = dvec_scale(v, 1.0 / sqrt(dvec_dot(v, v)));
+    return true;
 }
 
 /* v narrowed to float. */
@@ -211,7 +227,22 @@ struct world {
     struct dvec eye, target;      /* the camera's, when has_camera */
     bool has_camera;
     int camera_line;
+    const char *extent_note;      /* what makes up the extent, for its message ("" in scene files) */
+    struct ao_budget *budget;     /* charged for every element as it is added */
 };
+
+/* Charges an element of so many triangles (a sphere counts as one) and vertices to the budget;
+ * false after reporting at the cursor's line. */
+static bool charge(struct cursor *c, struct world *w, uint64_t triangles, uint64_t vertices, const char *what)
+{
+    uint64_t bytes = ao_budget_mesh(triangles, vertices);
+    if (ao_budget_take(w->budget, bytes))
+        return true;
+    char why[200];
+    ao_budget_explain(w->budget, bytes, why, sizeof why);
+    return fail(c, "%s: %llu triangles and %llu vertices %s", what, (unsigned long long)triangles,
+                (unsigned long long)vertices, why);
+}
 
 static bool add_albedo(struct ao_scene *s, struct ao_vec3 rho, uint32_t *index)
 {
@@ -264,18 +295,24 @@ static struct dvec rotate(const struct transform *t, struct dvec v)
 }
 
 /* The mesh's world positions into *out (malloc'd; NULL when memory is short); its normals
- * transformed in place: the inverse transpose of the scale (1/s per axis), then the rotation. */
+ * transformed in place: the inverse transpose of the scale (1/s per axis), then the rotation. The
+ * inverse is taken as (sy sz, sx sz, sx sy) times the sign of sx sy sz, the same direction: no
+ * 1/s overflows for a tiny scale (which would make the normals NaN). */
 static bool transform_mesh(struct ao_mesh *m, const struct transform *t, struct dvec **out)
 {
     *out = m->vertex_count ? malloc(m->vertex_count * sizeof **out) : NULL;
     if (m->vertex_count && !*out)
         return false;
-    struct dvec inv = dvec_make(1.0 / t->scale.x, 1.0 / t->scale.y, 1.0 / t->scale.z);
+    struct dvec s = t->scale;
+    double sign = s.x * s.y * s.z < 0.0 ? -1.0 : 1.0;
+    struct dvec inv = dvec_make(sign * s.y * s.z, sign * s.x * s.z, sign * s.x * s.y);
     for (size_t i = 0; i < m->vertex_count; i++) {
         struct dvec p = dvec_of(m->positions[i]), n = dvec_of(m->normals[i]);
-        p = dvec_make(p.x * t->scale.x, p.y * t->scale.y, p.z * t->scale.z);
+        p = dvec_make(p.x * s.x, p.y * s.y, p.z * s.z);
         (*out)[i] = dvec_add(rotate(t, p), t->translate);
-        m->normals[i] = ao_vec3_normalize(narrow(rotate(t, dvec_make(n.x * inv.x, n.y * inv.y, n.z * inv.z))));
+        struct dvec u = {0};
+        unit(rotate(t, dvec_make(n.x * inv.x, n.y * inv.y, n.z * inv.z)), &u);   /* zero stays zero */
+        m->normals[i] = narrow(u);
     }
     return true;
 }
@@ -355,6 +392,8 @@ static bool parse_sphere(struct cursor *c, struct ao_scene *s, struct world *w)
     sp.radius = (float)radius;
     if (!(sp.radius > 0.0f))
         return fail(c, "'radius' must be positive");
+    if (!charge(c, w, 1, 0, "sphere"))
+        return false;
     if (!resize(&s->spheres, s->sphere_count + 1, sizeof *s->spheres) ||
         !resize(&w->sphere_centers, s->sphere_count + 1, sizeof *w->sphere_centers))
         return fail(c, "out of memory");
@@ -391,6 +430,8 @@ static bool parse_quad(struct cursor *c, struct ao_scene *s, struct world *w)
     struct ao_vec3 normals[4] = {n, n, n, n};
     static const uint32_t tris[6] = {0, 1, 2, 0, 2, 3};
     uint32_t a;
+    if (!charge(c, w, 2, 4, "quad"))
+        return false;
     if (!add_albedo(s, rho, &a) || !add_triangles(s, w, p, normals, 4, tris, 2, a))
         return fail(c, "out of memory");
     return true;
@@ -420,10 +461,8 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
         if (k == 2) {
             if (numbers(c, key, r, 4, 4) != 4)
                 return false;
-            double length = sqrt(r[0] * r[0] + r[1] * r[1] + r[2] * r[2]);
-            if (!(length > 0.0) || !isfinite(length))
+            if (!unit(dvec_make(r[0], r[1], r[2]), &t.axis))
                 return fail(c, "'rotate': the axis must not be zero");
-            t.axis = dvec_scale(dvec_make(r[0], r[1], r[2]), 1.0 / length);
             t.cos_angle = cos(r[3] * PI / 180.0);
             t.sin_angle = sin(r[3] * PI / 180.0);
         }
@@ -433,8 +472,12 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
     if (t.scale.x == 0.0 || t.scale.y == 0.0 || t.scale.z == 0.0)
         return fail(c, "'scale' must not be zero");
     struct ao_mesh m = {0};
-    if (!ao_mesh_load(&m, path))
+    if (!ao_mesh_load_budget(&m, path, w->budget))
         return false;
+    if (!charge(c, w, m.triangle_count, m.vertex_count, path)) {
+        ao_mesh_finish(&m);
+        return false;
+    }
     struct dvec *positions = NULL;
     uint32_t a;
     bool ok = transform_mesh(&m, &t, &positions) && add_albedo(s, rho, &a) &&
@@ -509,6 +552,73 @@ static bool bounds(const struct ao_scene *s, const struct world *w, struct dvec 
     return s->vertex_count + s->sphere_count > 0;
 }
 
+/* The sizes of scene that the renderer draws as it would the same scene at size 1 (scene.h's
+ * AO_SCENE_MIN_EXTENT and AO_SCENE_MAX_EXTENT; measured in docs/stability.md). It traces in single
+ * precision with flush-to-zero on, so each product it forms must stay between 2^-126 (below, it
+ * becomes 0) and 2^128 (above, infinite). With E the largest side of the box around the geometry,
+ * eye and target, every local coordinate is at most E (place()'s origin is in the box), and:
+ * - Above. A triangle in the box has edges of at most sqrt(3) E, so the unnormalized normal
+ *   Ng = e1 x e2 that either tracer returns is at most 3 E^2 long, and ao.c normalizes it through
+ *   |Ng|^2 <= 9 E^4 < 2^128: E < 2^32 / sqrt(3) = 2.48e9. The tracers' distance tests multiply Ng
+ *   by one more length (Embree's Pluecker depth 2 (v0 - o).Ng, the direct loops' w.N, at most
+ *   2 sqrt(3) E 3 E^2), which needs only E < 3.2e12; Embree's ray validity check (its assertion
+ *   `ray.valid()`: |org| and |dir| at most FLT_LARGE = 1.844e18, a tenth of sqrt(2^128)) only
+ *   E < 1.8e18. AO_SCENE_MAX_EXTENT = 2^31 = 2.15e9.
+ * - Below. Occlusion rays leave a surface lifted past the point's error bound, with a floor of
+ *   2^-100 where that bound is 0 (ao.h): on a facet in a coordinate plane through the local
+ *   origin, such as the ground y = 0 of most scenes. The same distance tests multiply that lift by
+ *   |Ng|; below 2^-126 the product flushes to 0, the ray meets its own facet at t = 0 and the
+ *   facet turns black. So |Ng| >= 2^-26, which a facet spanning the scene (|Ng| = E^2 for a
+ *   square) reaches at E = 2^-13 = 1.22e-4; AO_SCENE_MIN_EXTENT = 2^-12 = 2.44e-4 keeps a factor 2.
+ * The camera's eye and target are ray origins and directions: they belong to the box (Embree's
+ * check, and the depth test's o), and ao_camera_view squares their distance, which must therefore
+ * stay above 2^-63 (MIN_CAMERA_DISTANCE = 2^-60). Detail finer than the scene is not checked: a
+ * triangle whose |Ng| is below 2^-63 (edges of about 3e-10) is shaded with the eye-facing normal
+ * that stands in for degenerate ones, and a facet in a coordinate plane through the origin with
+ * |Ng| below 2^-26 occludes itself, whatever the scene's size. */
+static const double MIN_CAMERA_DISTANCE = 0x1p-60;
+
+/* The largest side of the box lo..hi. */
+static double largest_side(struct dvec lo, struct dvec hi)
+{
+    return fmax(hi.x - lo.x, fmax(hi.y - lo.y, hi.z - lo.z));
+}
+
+/* The box lo..hi grown to hold p. */
+static void grow(struct dvec *lo, struct dvec *hi, struct dvec p)
+{
+    *lo = dvec_make(fmin(lo->x, p.x), fmin(lo->y, p.y), fmin(lo->z, p.z));
+    *hi = dvec_make(fmax(hi->x, p.x), fmax(hi->y, p.y), fmax(hi->z, p.z));
+}
+
+/* Refuses a scene whose geometry (the box lo..hi, when any) or camera leaves the range derived
+ * above, with one line naming the size; false after reporting. */
+static bool check_range(const struct world *w, struct cursor *c, bool any, struct dvec lo, struct dvec hi)
+{
+    static const char range[] = "aoview renders scenes from %.3g to %.3g across (docs/stability.md)";
+    char message[256];
+    double size = any ? largest_side(lo, hi) : 0.0;
+    c->line = 0;
+    snprintf(message, sizeof message, range, AO_SCENE_MIN_EXTENT, AO_SCENE_MAX_EXTENT);
+    if (any && !(size >= AO_SCENE_MIN_EXTENT && size <= AO_SCENE_MAX_EXTENT))
+        return fail(c, "the scene is %.3g across%s; %s", size, w->extent_note, message);
+    if (!w->has_camera)
+        return true;
+    c->line = w->camera_line;
+    if (!any)
+        lo = hi = w->eye;
+    grow(&lo, &hi, w->eye);
+    grow(&lo, &hi, w->target);
+    if (!(largest_side(lo, hi) <= AO_SCENE_MAX_EXTENT))
+        return fail(c, "camera: with it the scene is %.3g across; %s", largest_side(lo, hi), message);
+    struct dvec d = dvec_sub(w->target, w->eye), along;
+    double distance = unit(d, &along) ? dvec_dot(d, along) : 0.0;   /* |d|, no square to vanish */
+    if (distance > 0.0 && distance < MIN_CAMERA_DISTANCE)
+        return fail(c, "camera: eye and target are %.3g apart, closer than the %.3g aoview can aim by",
+                    distance, MIN_CAMERA_DISTANCE);
+    return true;
+}
+
 /* Moves the scene from world space into its local frame and narrows it to float: every position,
  * sphere centre and the camera become world - origin, with the origin at the bounding box's centre,
  * so that float precision follows the scene's size rather than its distance from (0, 0, 0). Where
@@ -520,6 +630,8 @@ static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
 {
     struct dvec lo, hi, origin = {0};
     bool any = bounds(s, w, &lo, &hi);
+    if (!check_range(w, c, any, lo, hi))
+        return false;
     if (any && !(lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0 && lo.z <= 0.0 && hi.z >= 0.0))
         origin = dvec_scale(dvec_add(lo, hi), 0.5);
     s->origin[0] = origin.x, s->origin[1] = origin.y, s->origin[2] = origin.z;
@@ -555,11 +667,12 @@ static void begin(struct ao_scene *s, const char *path)
     s->ao_distance = INFINITY;
 }
 
-bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
+/* ao_scene_parse charging budget. */
+static bool parse_text(struct ao_scene *scene, const char *text, const char *path, struct ao_budget *budget)
 {
     begin(scene, path);
     struct cursor c = {.path = path};
-    struct world w = {0};
+    struct world w = {.extent_note = "", .budget = budget};
     bool ok = true;
     char line[MAX_LINE + 2];
     for (const char *p = text; ok && *p;) {
@@ -582,15 +695,26 @@ bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
     return ok;
 }
 
+bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
+{
+    struct ao_budget budget = {AO_BUDGET_DEFAULT, 0};
+    return parse_text(scene, text, path, &budget);
+}
+
 /* A bare mesh: the mesh itself, a large ground quad under it, a camera framed on the mesh. */
-static bool load_bare_mesh(struct ao_scene *s, const char *path)
+static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budget *budget)
 {
     begin(s, path);
     struct ao_mesh m = {0};
-    if (!ao_mesh_load(&m, path))
-        return false;
-    struct world w = {0};
+    struct world w = {.extent_note = " (the mesh with its ground quad, 50 times as wide as the mesh)",
+                      .budget = budget};
     struct cursor c = {.path = path};
+    if (!ao_mesh_load_budget(&m, path, budget))
+        return false;
+    if (!charge(&c, &w, m.triangle_count + 2, m.vertex_count + 4, "the mesh and its ground")) {
+        ao_mesh_finish(&m);
+        return false;
+    }
     struct transform identity = {.scale = dvec_make(1, 1, 1), .axis = dvec_make(0, 1, 0), .cos_angle = 1};
     struct dvec *positions = NULL, lo, hi;
     uint32_t a;
@@ -615,7 +739,7 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path)
         ok = add_albedo(s, ao_vec3_make(0.5f, 0.5f, 0.5f), &a) && add_triangles(s, &w, p, normals, 4, tris, 2, a);
     }
     if (!ok)
-        fprintf(stderr, "%s: out of memory\n", path);
+        ao_file_report("%s: out of memory", path);
     ok = ok && place(s, &w, &c);
     free(w.positions);
     if (!ok)
@@ -625,19 +749,23 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path)
 
 bool ao_scene_load(struct ao_scene *scene, const char *path)
 {
+    return ao_scene_load_budget(scene, path, AO_BUDGET_DEFAULT);
+}
+
+bool ao_scene_load_budget(struct ao_scene *scene, const char *path, uint64_t budget_bytes)
+{
+    struct ao_budget budget = {budget_bytes, 0};
     memset(scene, 0, sizeof *scene);
     if (ao_mesh_is_mesh_path(path))
-        return load_bare_mesh(scene, path);
+        return load_bare_mesh(scene, path, &budget);
     char *text;
     size_t got;
-    if (!ao_file_read(path, &text, &got))
+    if (!ao_file_read_budget(path, &budget, &text, &got))
         return false;
-    if (strlen(text) != got) {
-        fprintf(stderr, "%s: not a text file (it contains a NUL byte)\n", path);
-        free(text);
-        return false;
-    }
-    bool ok = ao_scene_parse(scene, text, path);
+    bool ok = strlen(text) == got;
+    if (!ok)
+        ao_file_report("%s: not a text file (it contains a NUL byte)", path);
+    ok = ok && parse_text(scene, text, path, &budget);
     free(text);
     return ok;
 }

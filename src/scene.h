@@ -13,6 +13,12 @@
 #include "camera.h"
 #include "vec3.h"
 
+/* The smallest and largest scene, as the largest side of the box around its geometry (and its
+ * camera, for the largest), that the renderer draws as the same scene at size 1; ao_scene_load
+ * and ao_scene_parse refuse others (derived in scene.c, measured in docs/stability.md). */
+#define AO_SCENE_MIN_EXTENT 0x1p-12
+#define AO_SCENE_MAX_EXTENT 0x1p31
+
 /* An analytic sphere with its diffuse albedo. */
 struct ao_sphere {
     struct ao_vec3 center;
@@ -45,8 +51,14 @@ struct ao_scene {
  * On failure prints one "file:line: message" line to stderr, leaves scene empty, returns false. */
 bool ao_scene_load(struct ao_scene *scene, const char *path);
 
+/* ao_scene_load within a scene budget of budget_bytes (ao_scene_load's is AO_BUDGET_DEFAULT): the
+ * files read, what the loaders hold and every element added are charged to it (budget.h), and a
+ * scene that does not fit is refused, before its memory is allocated, in one line naming what
+ * needs how much. */
+bool ao_scene_load_budget(struct ao_scene *scene, const char *path, uint64_t budget_bytes);
+
 /* Parses scene text as if read from path (relative mesh paths resolve against its directory);
- * same reporting as ao_scene_load. */
+ * same reporting and budget as ao_scene_load. */
 bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path);
 
 /* Frees everything the scene owns and zeroes it; accepts an empty scene. */

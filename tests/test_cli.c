@@ -8,6 +8,7 @@
 #include <math.h>
 #include <string.h>
 
+#include "budget.h"
 #include "cli.h"
 
 static char msg[256];
@@ -58,6 +59,7 @@ static void test_defaults(void **state)
     assert_null(o.stats_path);
     assert_null(o.reference_path);
     assert_false(o.quiet || o.help || o.version);
+    assert_true(o.scene_budget == AO_BUDGET_DEFAULT);
 }
 
 static void test_every_option(void **state)
@@ -309,6 +311,30 @@ static void test_compare_options(void **state)
     REJECT("--compare", "missing value", "--headless", "--compare");
 }
 
+/* --scene-budget: bytes, or K, M, G, T as powers of 1024, from 1M to 1024T. */
+static void test_scene_budget(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    static const struct {
+        const char *value;
+        uint64_t bytes;
+    } good[] = {{"4G", UINT64_C(4) << 30}, {"4g", UINT64_C(4) << 30}, {"512M", UINT64_C(512) << 20},
+                {"1048576", UINT64_C(1) << 20}, {"1024K", UINT64_C(1) << 20}, {"3T", UINT64_C(3) << 40},
+                {"1024T", UINT64_C(1) << 50}, {"1M", UINT64_C(1) << 20}};
+    for (size_t i = 0; i < sizeof good / sizeof good[0]; i++) {
+        assert_true(PARSE(&o, "--scene-budget", (char *)good[i].value));
+        assert_true(o.scene_budget == good[i].bytes);
+    }
+    assert_true(PARSE(&o, "--scene-budget=2G"));
+    assert_true(o.scene_budget == UINT64_C(2) << 30);
+    const char *bad[] = {"", "G", "0", "1023K", "1048575", "1025T", "4P", "4GB", "4 G", "-4G", "4.5G", "0x10M",
+                         "18446744073709551616", "17592186044416K"};
+    for (size_t i = 0; i < sizeof bad / sizeof bad[0]; i++)
+        REJECT("--scene-budget: expected a size from 1M to 1024T", bad[i], "--scene-budget", (char *)bad[i]);
+    REJECT("--scene-budget", "missing value", "--scene-budget");
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -316,7 +342,7 @@ static void test_usage_lists_every_option(void **state)
     const char *names[] = {"--headless", "-o, --output", "--spp", "--spppp", "--sampling",
                            "--aa", "--no-aa", "--size", "--threads", "--seed", "--ao-distance",
                            "--stats", "--reference", "-q, --quiet", "-h, --help", "--version",
-                           "--time", "--view", "--shading", "--compare A,B", "N normals", "F flat/Phong", "D difference",
+                           "--time", "--view", "--shading", "--compare A,B", "--scene-budget SIZE", "default 1G", "N normals", "F flat/Phong", "D difference",
                            "default 256", "default cosine", "640x480", "Esc"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         assert_non_null(strstr(u, names[i]));
@@ -338,6 +364,7 @@ int main(void)
         cmocka_unit_test(test_exr_and_save_format),
         cmocka_unit_test(test_view_options),
         cmocka_unit_test(test_compare_options),
+        cmocka_unit_test(test_scene_budget),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

@@ -120,7 +120,7 @@ doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0} for _ in range(65536)]
                     'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
 json.dump(doc, open('instances.gltf', 'w'))
 PY
-refuse 1 "instance its meshes into 39321600 triangles and 196608 vertices (more than 33554432, and more than 1836 bytes" instances.gltf
+refuse 1 "instances.gltf: 39321600 triangles and 196608 vertices need about 4.4 GiB, more than the" instances.gltf
 # One triangle as 10000 primitives of one mesh under 65536 nodes: counted once per mesh, so the
 # refusal takes a fraction of a second, not the hours of validating 655 million primitives.
 python3 - <<'PY'
@@ -129,11 +129,132 @@ doc = json.load(open('instances.gltf'))
 doc['meshes'] = [{'primitives': [{'attributes': {'POSITION': 0}}] * 10000}]
 json.dump(doc, open('primitives.gltf', 'w'))
 PY
-refuse 1 "instance its meshes into 655360000 triangles and 1966080000 vertices" primitives.gltf
-# Two million empty objects in 6 MB of JSON: json-c would take 1.6 GB for them.
+refuse 1 "primitives.gltf: 655360000 triangles and 1966080000 vertices need about 183.1 GiB" primitives.gltf
+# Two million empty objects in 6 MB of JSON: json-c would take 1.6 GB for them (each may be a node,
+# so each is charged a node's arrays too).
 python3 -c "open('objects.gltf', 'w').write('{\"asset\": {\"version\": \"2.0\"}, \"x\": [' + '{},' * 2000000 + '{}]}')"
-refuse 1 "objects.gltf: its JSON would take about 1740 MB to parse (more than 1024 MB)" objects.gltf
+refuse 1 "objects.gltf: parsing its JSON would need about 2.0 GiB, more than the 1018.3 MiB left of the scene budget (raise it with --scene-budget)" objects.gltf
 rm -f instances.gltf primitives.gltf objects.gltf
+
+# ---- glTF buffers outside the model's folder. Relative URIs resolve in the model's folder and may
+# not leave it, also percent-encoded, through a symbolic link or as an absolute path (read when the
+# glTF is named without a directory); other schemes than data: are refused, an empty URI is named.
+mkdir -p model/sub secret
+python3 - <<'PY'
+import json, struct
+data = struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0)
+open('secret/s.bin', 'wb').write(data)
+open('model/sub/t.bin', 'wb').write(data)
+open('model/big.bin', 'wb').write(data)
+def gltf(name, uri, length=36):
+    doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0}],
+           'meshes': [{'primitives': [{'attributes': {'POSITION': 0}}]}],
+           'accessors': [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3'}],
+           'bufferViews': [{'buffer': 0, 'byteLength': 36}], 'buffers': [{'byteLength': length, 'uri': uri}]}
+    json.dump(doc, open('model/' + name, 'w'))
+for name, uri in [('up.gltf', '../secret/s.bin'), ('encoded.gltf', '%2e%2e/secret/s.bin'),
+                  ('deep.gltf', 'sub/..%2F..%2Fsecret/s.bin'), ('link.gltf', 'link.bin'),
+                  ('dlink.gltf', 'dlink/s.bin'), ('passwd.gltf', '/etc/passwd'),
+                  ('passwd_encoded.gltf', '%2Fetc%2Fpasswd'), ('scheme.gltf', 'file:///etc/passwd'),
+                  ('empty.gltf', ''), ('inside.gltf', 'sub/../sub/./t.bin'), ('big.gltf', 'big.bin')]:
+    gltf(name, uri)
+gltf('short.gltf', 'sub/t.bin', 37)
+gltf('huge.gltf', 'big.bin', 1 << 30)
+PY
+ln -s ../secret/s.bin model/link.bin
+ln -s ../secret model/dlink
+refuse 1 "up.gltf: buffer 0 ('../secret/s.bin'): it leaves the model's folder" model/up.gltf
+refuse 1 "encoded.gltf: buffer 0 ('%2e%2e/secret/s.bin'): it leaves the model's folder" model/encoded.gltf
+refuse 1 "deep.gltf: buffer 0 ('sub/..%2F..%2Fsecret/s.bin'): it leaves the model's folder" model/deep.gltf
+refuse 1 "link.gltf: buffer 0 ('link.bin'): cannot open 'link.bin': a symbolic link" model/link.gltf
+refuse 1 "dlink.gltf: buffer 0 ('dlink/s.bin'): cannot open 'dlink': a symbolic link" model/dlink.gltf
+cd model
+refuse 1 "passwd.gltf: buffer 0 ('/etc/passwd'): an absolute path" passwd.gltf
+cd ..
+refuse 1 "passwd_encoded.gltf: buffer 0 ('%2Fetc%2Fpasswd'): an absolute path" model/passwd_encoded.gltf
+refuse 1 "scheme.gltf: buffer 0 ('file:///etc/passwd'): the URI scheme 'file:' is not supported" model/scheme.gltf
+refuse 1 "empty.gltf: buffer 0 (''): the URI is empty" model/empty.gltf
+refuse 1 "short.gltf: buffer 0 ('sub/t.bin'), byteLength 37: the file holds fewer bytes" model/short.gltf
+# What stays inside loads, and only byteLength bytes of a buffer file are read: 36 of a 1 GB file
+# (the triangle, then a sparse gigabyte), in the process's baseline of memory; all of it would
+# not fit in the scene budget beside the glTF, and is refused unread.
+truncate -s 1G model/big.bin
+refuse 1 "huge.gltf: buffer 0 ('big.bin'), byteLength 1073741824, would need 1073741825 bytes, more than the" model/huge.gltf
+for name in inside big; do
+  "$gnu_time" -f %M -o mem.txt "$bin" --headless -q --spp 1 --size 8x8 -o "$name.pfm" "model/$name.gltf" 2>err.txt
+  got=$? kb=$(tail -n 1 mem.txt)
+  if [ "$got" != 0 ] || [ -s err.txt ]; then fail "model/$name.gltf exited $got: $(head -c 300 err.txt)"
+  elif [ "$kb" -gt $((limit_mb * 1024 / 2)) ]; then fail "model/$name.gltf: peak memory $((kb / 1024)) MB"
+  else echo "loaded in $((kb / 1024)) MB: model/$name.gltf"; fi
+  rm -f "$name.pfm"
+done
+rm -rf model secret
+
+# ---- sizes the tracer cannot render: a mesh 1e18 across tripped Embree's assertion (status 134),
+# 1e14 rendered black, 1e20 blamed a camera the user never wrote, 1e-21 aborted too; a camera as
+# far out, or one aimed by a hair's breadth. The range is derived in src/scene.c.
+for size in 1e18 1e14 1e20 1e-21 1e9; do
+  printf 'v 0 0 0\nv %s 0 0\nv 0 %s 0\nv 0 0 %s\nf 1 2 3\nf 1 3 4\nf 1 4 2\n' $size $size $size > big.obj
+  across=$(python3 -c "print('%.3g' % (50 * $size))")
+  refuse 1 "big.obj: the scene is $across across (the mesh with its ground quad, 50 times as wide as the mesh); aoview renders scenes from 0.000244 to 2.15e+09 across" big.obj
+done
+printf 'camera eye 0 0 1e19 target 0 0 0\nquad corner -1 0 -1 edge1 0 0 2 edge2 2 0 0\n' > far.scene
+refuse 1 "far.scene:1: camera: with it the scene is 1e+19 across" far.scene
+printf 'camera eye 1e-20 0 0 target 0 0 0\nsphere center 0 0 0 radius 1\n' > aim.scene
+refuse 1 "aim.scene:1: camera: eye and target are 1e-20 apart" aim.scene
+printf 'camera eye 0 1 4 target 0 0 0\nsphere center 0 0 0 radius 1.5e9\n' > wide.scene
+refuse 1 "wide.scene: the scene is 3e+09 across; aoview renders" wide.scene
+rm -f big.obj far.scene aim.scene wide.scene
+
+# ---- the scene budget (--scene-budget, default 1G): small files that asked for gigabytes. A 3 MB
+# glTF instancing a 512-triangle grid under 65536 nodes (2^25 triangles, 4.7 GB and 27 s before),
+# a scene naming a mesh three times, a million one-triangle nodes in 13 MB (1.1 GB before), a JSON
+# string (3 bytes a byte to parse), a 3 GB sparse file (read whole before); each is refused
+# before its memory is allocated, the sparse file unread. A budget raised far enough loads.
+python3 - <<'PY'
+import base64, json, struct
+n = 16
+pos = [c for j in range(n + 1) for i in range(n + 1) for c in (i * 2.0, ((i * 7 + j * 3) % 5) * 0.3, j * 2.0)]
+idx = [k for j in range(n) for i in range(n)
+       for a in [j * (n + 1) + i] for k in (a, a + 1, a + n + 1, a + 1, a + n + 2, a + n + 1)]
+data = struct.pack('<%df' % len(pos), *pos) + struct.pack('<%dH' % len(idx), *idx)
+def grid(name, nodes):
+    doc = {'asset': {'version': '2.0'},
+           'nodes': [{'mesh': 0, 'translation': [i % 256 * 40.0, 0.0, i // 256 * 40.0]} for i in range(nodes)],
+           'meshes': [{'primitives': [{'attributes': {'POSITION': 0}, 'indices': 1}]}],
+           'accessors': [{'bufferView': 0, 'componentType': 5126, 'count': (n + 1) ** 2, 'type': 'VEC3'},
+                         {'bufferView': 1, 'componentType': 5123, 'count': len(idx), 'type': 'SCALAR'}],
+           'bufferViews': [{'buffer': 0, 'byteLength': 4 * len(pos)},
+                           {'buffer': 0, 'byteOffset': 4 * len(pos), 'byteLength': 2 * len(idx)}],
+           'buffers': [{'byteLength': len(data),
+                        'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
+    json.dump(doc, open(name, 'w'), separators=(',', ':'))
+grid('instanced.gltf', 65536)
+grid('grid.gltf', 256)
+open('three.scene', 'w').write('camera eye 5000 3000 14000 target 5000 0 5000\n' +
+                               ''.join('mesh grid.gltf translate 0 %d 0\n' % (10 * k) for k in range(3)))
+tri = base64.b64encode(struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0)).decode()
+with open('million.gltf', 'w') as f:
+    f.write('{"asset": {"version": "2.0"}, "nodes": [' + ', '.join(['{"mesh": 0}'] * 1000000) + '], '
+            '"meshes": [{"primitives": [{"attributes": {"POSITION": 0}}]}], "accessors": [{"bufferView": 0, '
+            '"componentType": 5126, "count": 3, "type": "VEC3"}], "bufferViews": [{"buffer": 0, "byteLength": 36}], '
+            '"buffers": [{"byteLength": 36, "uri": "data:application/octet-stream;base64,' + tri + '"}]}')
+with open('string.gltf', 'w') as f:
+    f.write('{"asset": {"version": "2.0"}, "x": "' + 'a' * (64 << 20) + '"}')
+PY
+truncate -s 3G sparse.gltf
+refuse 1 "instanced.gltf: 33554432 triangles and 18939904 vertices need about 4.8 GiB, more than the" instanced.gltf
+refuse 1 "grid.gltf: 131072 triangles and 73984 vertices need about 19.2 MiB, more than the" --scene-budget 48M three.scene
+refuse 1 "million.gltf: parsing its JSON would need about 1.1 GiB, more than the 1011.6 MiB left of the scene budget (raise it with --scene-budget)" million.gltf
+refuse 1 "string.gltf: parsing its JSON would need about 192.0 MiB, more than the 64.0 MiB left" --scene-budget 128M string.gltf
+refuse 1 "sparse.gltf: 3221225472 bytes need about 3.0 GiB, more than the 1.0 GiB left of the scene budget (raise it with --scene-budget)" sparse.gltf
+refuse 1 "grid.gltf: 131072 triangles and 73984 vertices need about 19.2 MiB, more than the" --scene-budget 16M grid.gltf
+refuse 2 "--scene-budget: expected a size from 1M to 1024T (bytes, or a number with K, M, G or T), got '4P'" --scene-budget 4P grid.gltf
+"$gnu_time" -f %M -o mem.txt "$bin" --headless -q --spp 1 --size 8x8 --scene-budget 32M -o grid.pfm grid.gltf 2>err.txt
+got=$? kb=$(tail -n 1 mem.txt)
+if [ "$got" != 0 ] || [ -s err.txt ]; then fail "grid.gltf under --scene-budget 32M exited $got: $(head -c 300 err.txt)"
+else echo "loaded in $((kb / 1024)) MB: grid.gltf under --scene-budget 32M"; fi
+rm -f instanced.gltf grid.gltf three.scene million.gltf string.gltf sparse.gltf grid.pfm
 
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000
@@ -179,6 +300,14 @@ refuse 1 "fifo.obj: not a regular file" fifo.obj
 refuse 1 "fifo.scene: not a regular file" fifo.scene
 printf 'camera eye 0 1 4 target 0 0 0\nmesh fifo.obj\n' > mesh_fifo.scene
 refuse 1 "fifo.obj: not a regular file" mesh_fifo.scene
+
+# ---- control characters in names and values are escaped, so that each report stays one line
+refuse 1 'no\nfile.obj: cannot open' "$(printf 'no\nfile.obj')"
+printf 'camera eye 0 1 4 target 0 0 0\nmesh a\033[2Jb.obj\n' > escape.scene
+refuse 1 'a\x1b[2Jb.obj: cannot open' escape.scene
+printf '{"asset": {"version": "1.0\\nfake.gltf:1: a second line"}}' > version.gltf
+refuse 1 "version.gltf: glTF version '1.0\nfake.gltf:1: a s'" version.gltf
+rm -f escape.scene version.gltf
 
 # ---- image sizes whose pixel count overflows 32 or 64 bits, in the scene and on the command line
 refuse 1 "image_huge.scene:2: 'image'" "$data/image_huge.scene"

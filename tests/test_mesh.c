@@ -17,6 +17,7 @@
 #include <unistd.h>
 
 #include "mesh.h"
+#include "scene.h"
 
 /* Where the committed fixtures are, and a scratch directory for generated files. */
 static char data_dir[4096];
@@ -90,6 +91,29 @@ static bool load_captured(struct ao_mesh *mesh, const char *path, char *err, siz
     size_t n = fread(err, 1, err_size - 1, capture);
     err[n] = '\0';
     fclose(capture);
+    return ok;
+}
+
+/* Runs ao_mesh_load_budget within a budget of `limit` bytes, stderr captured in err; the budget must
+ * come back empty, whatever happened. */
+static bool load_within(struct ao_mesh *mesh, const char *path, uint64_t limit, char *err, size_t err_size)
+{
+    struct ao_budget budget = {limit, 0};
+    FILE *capture = tmpfile();
+    assert_non_null(capture);
+    fflush(stderr);
+    int saved = dup(STDERR_FILENO);
+    assert_true(saved >= 0);
+    assert_true(dup2(fileno(capture), STDERR_FILENO) >= 0);
+    bool ok = ao_mesh_load_budget(mesh, path, &budget);
+    fflush(stderr);
+    assert_true(dup2(saved, STDERR_FILENO) >= 0);
+    close(saved);
+    rewind(capture);
+    size_t n = fread(err, 1, err_size - 1, capture);
+    err[n] = '\0';
+    fclose(capture);
+    assert_true(budget.used == 0);
     return ok;
 }
 
@@ -710,6 +734,143 @@ static void test_gltf_no_scene(void **state)
     ao_mesh_finish(&mesh);
 }
 
+/* A one-triangle glTF, (0,0,0) (1,0,0) (0,1,0), under one node with the given transform members. */
+static void load_transformed_triangle(struct ao_mesh *mesh, const char *transform)
+{
+    char text[1024];
+    int n = snprintf(text, sizeof text,
+                     "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0, %s}],\n"
+                     " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}],\n"
+                     " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3,"
+                     " \"type\": \"VEC3\"}], \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}],\n"
+                     " \"buffers\": [{\"byteLength\": 36, \"uri\": \"data:application/gltf-buffer;base64,"
+                     "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}]}\n", transform);
+    load_ok(mesh, temp_file("transformed.gltf", text, (size_t)n));
+    assert_mesh_valid(mesh);
+    assert_int_equal(mesh->triangle_count, 1);
+}
+
+/* Quaternions of any nonzero length are normalized, also where their squares would overflow or
+ * vanish (1e200 gave an infinite length and a silent identity, 1e-200 a "zero quaternion"). */
+static void test_gltf_rotation_of_any_length(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_transformed_triangle(&mesh, "\"rotation\": [1e200, 0, 0, 0]");   /* 180 degrees about x */
+    assert_vec3_near(mesh.positions[1], 1, 0, 0);
+    assert_vec3_near(mesh.positions[2], 0, -1, 0);
+    ao_mesh_finish(&mesh);
+    load_transformed_triangle(&mesh, "\"rotation\": [0, 0, 0, 1e-200]");  /* the identity */
+    assert_vec3_near(mesh.positions[2], 0, 1, 0);
+    ao_mesh_finish(&mesh);
+    load_transformed_triangle(&mesh, "\"rotation\": [0, 0, 3, 3]");       /* 90 degrees about z */
+    assert_vec3_near(mesh.positions[1], 0, 1, 0);
+    assert_vec3_near(mesh.positions[2], -1, 0, 0);
+    ao_mesh_finish(&mesh);
+}
+
+/* A finite but huge matrix whose entries cancel on the triangle's plane: the triangle (0,0,0)
+ * (1,1,0) (0,0,1) with NORMAL along (1,-1,0) under rows (1, 0, 0), (H, 1 - H, 0), (H, -H, 1),
+ * H = 1e160. The positions stay finite, but the products of two entries overflow, and the normal
+ * transform came out NaN (inf - inf); assert_mesh_valid wants every normal finite, unit or zero. */
+static void test_gltf_huge_matrix_gives_finite_normals(void **state)
+{
+    (void)state;
+    static const char text[] =
+        "{\"asset\": {\"version\": \"2.0\"},\n"
+        " \"nodes\": [{\"mesh\": 0, \"matrix\": [1, 1e160, 1e160, 0, 0, -1e160, -1e160, 0, 0, 0, 1, 0,"
+        " 0, 0, 0, 1]}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1}}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "                {\"bufferView\": 0, \"byteOffset\": 36, \"componentType\": 5126, \"count\": 3,"
+        " \"type\": \"VEC3\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 72}],\n"
+        " \"buffers\": [{\"byteLength\": 72, \"uri\": \"data:application/gltf-buffer;base64,"
+        "AAAAAAAAAAAAAAAAAACAPwAAgD8AAAAAAAAAAAAAAAAAAIA/8wQ1P/MENb8AAAAA8wQ1P/MENb8AAAAA8wQ1P/MENb8AAAAA\"}]}\n";
+    struct ao_mesh mesh;
+    load_ok(&mesh, temp_file("huge_matrix.gltf", text, sizeof text - 1));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.triangle_count, 1);
+    ao_mesh_finish(&mesh);
+}
+
+/* ------------------------------------------------------------------ the scene budget */
+
+/* The size of the file at path. */
+static uint64_t file_size(const char *path)
+{
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    return (uint64_t)st.st_size;
+}
+
+/* The loaders refuse, at the right place, a mesh whose charge (ao_budget_mesh) does not fit beside
+ * the file (charged while it is read): OBJ and ASCII formats as the counts grow, binary PLY and STL
+ * from their headers' counts, glTF before parsing its JSON. What fits loads, and the budget comes
+ * back empty. */
+static void test_loaders_keep_to_the_budget(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    char err[1024];
+    /* OBJ: one triangle fits exactly; the fourth vertex, one line later, does not. */
+    static const char obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 0 0 1\n";
+    const char *path = temp_file("budget.obj", obj, sizeof obj - 1);
+    uint64_t file = file_size(path) + 1;
+    assert_false(load_within(&mesh, path, file + ao_budget_mesh(1, 3), err, sizeof err));
+    assert_non_null(strstr(err, "budget.obj:5: 1 triangles and 4 vertices need 360 bytes, more than the "
+                                "300 bytes left of the scene budget (raise it with --scene-budget)"));
+    path = temp_file("budget.obj", obj, sizeof obj - 9);   /* without the last line */
+    file = file_size(path) + 1;
+    assert_true(load_within(&mesh, path, file + ao_budget_mesh(1, 3), err, sizeof err));
+    assert_int_equal(mesh.triangle_count, 1);
+    ao_mesh_finish(&mesh);
+    /* A file larger than the budget is not read. */
+    assert_false(load_within(&mesh, path, file - 1, err, sizeof err));
+    assert_non_null(strstr(err, "budget.obj: 32 bytes need 33 bytes, more than the 32 bytes left"));
+    /* Binary PLY: 2 faces (at least 2 triangles) and 4 vertices, from the header; the quad then
+     * fans into 2 triangles, so the mesh has 3. */
+    struct bytes b = binary_square();
+    path = temp_file("budget.ply", b.data, b.size);
+    file = file_size(path) + 1;
+    assert_false(load_within(&mesh, path, file + ao_budget_mesh(2, 4) - 1, err, sizeof err));
+    assert_non_null(strstr(err, "budget.ply: 2 triangles and 4 vertices need 480 bytes"));
+    assert_false(load_within(&mesh, path, file + ao_budget_mesh(3, 4) - 1, err, sizeof err));
+    assert_non_null(strstr(err, "budget.ply: face 1: 3 triangles and 4 vertices need 600 bytes"));
+    assert_true(load_within(&mesh, path, file + ao_budget_mesh(3, 4), err, sizeof err));
+    ao_mesh_finish(&mesh);
+    /* Binary STL: the header's 1000 triangles, before any is read. */
+    static unsigned char stl[84 + 50 * 1000];
+    stl[80] = 1000 & 0xff, stl[81] = 1000 >> 8;
+    path = temp_file("budget.stl", stl, sizeof stl);
+    assert_false(load_within(&mesh, path, sizeof stl + 1 + ao_budget_mesh(999, 0), err, sizeof err));
+    assert_non_null(strstr(err, "budget.stl: 1000 triangles and 0 vertices need about 117.2 KiB"));
+    /* glTF: its JSON tree, estimated before parsing. */
+    assert_false(load_within(&mesh, fixture("nodes.gltf"), file_size(fixture("nodes.gltf")) + 1000, err, sizeof err));
+    assert_non_null(strstr(err, "nodes.gltf: parsing its JSON would need about"));
+    assert_true(load_within(&mesh, fixture("nodes.gltf"), 1 << 20, err, sizeof err));
+    ao_mesh_finish(&mesh);
+}
+
+/* One budget covers the whole scene: each mesh line is charged, so the third of three that fit
+ * alone is refused, naming it. */
+static void test_scene_budget_covers_every_mesh_line(void **state)
+{
+    (void)state;
+    static const char obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    temp_file("tri.obj", obj, sizeof obj - 1);
+    static const char text[] = "camera eye 0 1 4 target 0 0 0\nmesh tri.obj\nmesh tri.obj translate 1 0 0\n"
+                               "mesh tri.obj translate 2 0 0\n";
+    const char *path = temp_file("three.scene", text, sizeof text - 1);
+    /* The scene's text, two triangles kept, and the third's file and check. */
+    uint64_t need = sizeof text + 2 * ao_budget_mesh(1, 3) + sizeof obj + ao_budget_mesh(1, 3);
+    struct ao_scene scene;
+    assert_true(ao_scene_load_budget(&scene, path, need));
+    assert_int_equal(scene.triangle_count, 3);
+    ao_scene_finish(&scene);
+    assert_false(ao_scene_load_budget(&scene, path, need - 1));
+}
+
 /* ------------------------------------------------------------------ bad input */
 
 /* Each bad fixture, where its one error line must point, and what it must say. */
@@ -779,7 +940,7 @@ static const struct {
     {"bad_gltf_position_type.gltf", ": ", "componentType 5123; only float (5126)"},
     {"bad_gltf_index_count.gltf", ": ", "2 indices, not a whole number of triangles"},
     {"bad_gltf_mesh_index.gltf", ": ", "node 1: 'mesh' 7 is out of range (2 defined)"},
-    {"bad_gltf_uri.gltf", ": ", "uri 'http://example.com/x.bin' is not a relative file name"},
+    {"bad_gltf_uri.gltf", ": ", "buffer 0 ('http://example.com/x.bin'): the URI scheme 'http:' is not supported"},
     {"bad_gltf_base64.gltf", ": ", "buffer 0: bad base64 data"},
 };
 
@@ -976,6 +1137,10 @@ int main(void)
         cmocka_unit_test(test_stl_binary),
         cmocka_unit_test(test_gltf_nodes),
         cmocka_unit_test(test_gltf_no_scene),
+        cmocka_unit_test(test_gltf_rotation_of_any_length),
+        cmocka_unit_test(test_gltf_huge_matrix_gives_finite_normals),
+        cmocka_unit_test(test_loaders_keep_to_the_budget),
+        cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_unreadable_file),

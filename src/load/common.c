@@ -7,6 +7,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "file.h"
+
 /* Appends n elements and returns the first, or NULL when memory or size_t runs out. */
 void *ao_load_append(struct ao_load_array *a, size_t n)
 {
@@ -52,9 +54,22 @@ void ao_load_report(const char *path, size_t line, const char *format, ...)
     vsnprintf(message, sizeof message, format, args);
     va_end(args);
     if (line)
-        fprintf(stderr, "%s:%zu: %s\n", path, line, message);
+        ao_file_report("%s:%zu: %s", path, line, message);
     else
-        fprintf(stderr, "%s: %s\n", path, message);
+        ao_file_report("%s: %s", path, message);
+}
+
+bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, const char *path,
+                  size_t line)
+{
+    uint64_t charge = ao_budget_mesh(triangles, vertices);
+    if (ao_budget_fits(budget, charge))
+        return true;
+    char why[200];
+    ao_budget_explain(budget, charge, why, sizeof why);
+    ao_load_report(path, line, "%llu triangles and %llu vertices %s", (unsigned long long)triangles,
+                   (unsigned long long)vertices, why);
+    return false;
 }
 
 /* Reports an allocation failure; returns false for the caller to pass on. */
@@ -130,11 +145,14 @@ bool ao_load_fan(struct ao_load_array *triangles, const struct ao_load_array *fa
     return true;
 }
 
-/* The unit vector along (x, y, z) in single precision, or zero when its length is zero. */
+/* The unit vector along (x, y, z) in single precision, or zero when it is zero or not finite.
+ * Divided first by its largest component, so that squares neither overflow nor vanish. */
 struct ao_vec3 ao_load_unit(double x, double y, double z)
 {
-    double length = sqrt(x * x + y * y + z * z);
-    if (length == 0.0)
+    double big = fmax(fabs(x), fmax(fabs(y), fabs(z)));
+    if (!(big > 0.0) || !isfinite(x) || !isfinite(y) || !isfinite(z))
         return ao_vec3_make(0.0f, 0.0f, 0.0f);
+    x /= big, y /= big, z /= big;
+    double length = sqrt(x * x + y * y + z * z);
     return ao_vec3_make((float)(x / length), (float)(y / length), (float)(z / length));
 }

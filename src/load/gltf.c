@@ -10,16 +10,16 @@
  * a bufferView against its buffer, an accessor's last element against its bufferView, indices
  * against their vertex count. Integers are read only up to 2^53, so that sums of three of them and
  * products of one with a stride (at most 252) stay far below 2^64. Nodes must form trees: a node
- * with two parents, or a cycle, is refused before anything is traversed. JSON that would make
- * json-c allocate more than MAX_JSON_COST is refused before it is parsed. Instancing a mesh under
- * many nodes (or one accessor under many primitives) may not make the loaded mesh larger than
- * MAX_INSTANCED triangles or vertices unless its buffers hold that many, so a small file cannot
- * demand gigabytes. */
+ * with two parents, or a cycle, is refused before anything is traversed. Whatever the load holds
+ * is charged to the scene budget before it is allocated: the JSON tree json-c will build and the
+ * per-node arrays (both estimated from the text, json_cost), each buffer, and the mesh its nodes
+ * instance, counted in a first pass, so that a small file cannot demand gigabytes. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include <json.h>
 
@@ -28,12 +28,8 @@
 
 /* Largest integer read from the JSON; see the header comment. */
 #define MAX_INTEGER 9007199254740992.0
-/* How many triangles or vertices instancing alone may produce (2^25; about 1 GB of mesh). */
-#define MAX_INSTANCED 33554432u
 /* JSON nesting depth accepted (glTF needs 6 or so; deep nesting is an attack on the parser). */
 #define MAX_DEPTH 64
-/* What json-c may allocate for a file's JSON, estimated before parsing (see json_cost). */
-#define MAX_JSON_COST (1024.0 * 1024 * 1024)
 
 /* GLB container constants: magic "glTF", chunk types "JSON" and "BIN\0". */
 enum { GLB_MAGIC = 0x46546C67, GLB_JSON = 0x4E4F534A, GLB_BIN = 0x004E4942, GLB_HEADER = 12 };
@@ -68,7 +64,8 @@ struct gltf {
     size_t *parent;               /* per node: its parent, or SIZE_MAX */
     double (*world)[16];          /* per node: its world matrix, column major */
     uint64_t triangles, vertices; /* totals of the instances found so far */
-    uint64_t buffer_bytes;        /* the sum of the buffers' lengths */
+    struct ao_budget *budget;     /* the scene budget */
+    uint64_t taken;               /* what this load took from it, given back at its end */
     struct mesh_size {
         uint64_t triangles, vertices;
         bool known;
@@ -87,6 +84,19 @@ static bool gltf_error(const struct gltf *g, const char *format, ...)
     va_end(args);
     ao_load_report(g->path, 0, "%s", message);
     return false;
+}
+
+/* Takes bytes from the scene budget for what the load holds until its end; else reports that
+ * `what` would need more than is left. */
+static bool take(struct gltf *g, uint64_t bytes, const char *what)
+{
+    if (ao_budget_take(g->budget, bytes)) {
+        g->taken += bytes;
+        return true;
+    }
+    char why[200];
+    ao_budget_explain(g->budget, bytes, why, sizeof why);
+    return gltf_error(g, "%s would %s", what, why);
 }
 
 /* ------------------------------------------------------------------ JSON access */
@@ -268,42 +278,32 @@ static bool decode_base64(const char *text, size_t n, unsigned char **out, size_
     return true;
 }
 
-/* The value of a hexadecimal digit, or -1. */
-static int hex_digit(char c)
+/* Reads byteLength bytes of the file a buffer's URI names inside the model's folder (uri.c). */
+static bool read_buffer_file(struct gltf *g, const char *where, const char *uri, uint64_t length,
+                             struct buffer *b)
 {
-    const char *digits = "0123456789abcdef";
-    const char *at = c ? strchr(digits, c | 0x20) : NULL;
-    return at ? (int)(at - digits) : -1;
-}
-
-/* The file a relative URI names, beside the glTF file, with %XX escapes decoded; NULL when the
- * URI has a scheme or memory runs out. */
-static char *uri_path(const char *gltf_path, const char *uri)
-{
-    const char *colon = strchr(uri, ':'), *slash = strchr(uri, '/');
-    if (colon && (!slash || colon < slash))
-        return NULL;
-    const char *base_end = strrchr(gltf_path, '/');
-    size_t base = base_end ? (size_t)(base_end - gltf_path) + 1 : 0;
-    char *path = malloc(base + strlen(uri) + 1);
-    if (!path)
-        return NULL;
-    memcpy(path, gltf_path, base);
-    char *out = path + base;
-    for (const char *p = uri; *p; p++) {
-        int hi = p[0] == '%' ? hex_digit(p[1]) : -1, lo = hi >= 0 ? hex_digit(p[2]) : -1;
-        if (lo >= 0) {
-            *out++ = (char)(hi << 4 | lo);
-            p += 2;
-        } else {
-            *out++ = *p;
-        }
+    char path[4096], why[160];
+    int fd;
+    if (!ao_load_uri_decode(uri, path, sizeof path, why, sizeof why) ||
+        !ao_load_uri_open(g->path, path, &fd, why, sizeof why))
+        return gltf_error(g, "%s ('%.60s'): %s", where, uri, why);
+    char *data = NULL, what[100];
+    snprintf(what, sizeof what, "%s ('%.40s'), byteLength %llu,", where, uri, (unsigned long long)length);
+    if (length >= SIZE_MAX || !take(g, length + 1, what)) {
+        close(fd);
+        return length >= SIZE_MAX && gltf_error(g, "%s too large", what);   /* else take reported */
     }
-    *out = '\0';
-    return path;
+    const char *reason = NULL;
+    bool ok = ao_file_read_prefix(fd, (size_t)length, &data, &reason);
+    close(fd);
+    if (!ok)
+        return gltf_error(g, "%s ('%.60s'), byteLength %llu: %s", where, uri,
+                          (unsigned long long)length, reason);
+    b->data = b->owned = (unsigned char *)data;
+    return true;
 }
 
-/* Loads buffer i: the GLB's BIN chunk (no uri), a data URI or a file beside the glTF. */
+/* Loads buffer i: the GLB's BIN chunk (no uri), a data URI or a file in the glTF's folder. */
 static bool load_buffer(struct gltf *g, json_object *json, size_t i)
 {
     char where[64];
@@ -327,25 +327,23 @@ static bool load_buffer(struct gltf *g, json_object *json, size_t i)
         const char *comma = strchr(uri, ',');
         if (!comma || comma - uri < 12 || memcmp(comma - 7, ";base64", 7) != 0)
             return gltf_error(g, "%s: only base64 data URIs are supported", where);
-        if (!decode_base64(comma + 1, strlen(comma + 1), &b->owned, &size))
+        size_t digits = strlen(comma + 1);
+        char what[96];
+        snprintf(what, sizeof what, "%.64s's data URI", where);
+        if (!take(g, digits / 4 * 3 + 3, what))
+            return false;
+        if (!decode_base64(comma + 1, digits, &b->owned, &size))
             return gltf_error(g, "%s: bad base64 data (or out of memory)", where);
         b->data = b->owned;
     } else {
-        char *path = uri_path(g->path, uri);
-        if (!path)
-            return gltf_error(g, "%s: uri '%.60s' is not a relative file name", where, uri);
-        char *text;
-        bool ok = ao_file_read(path, &text, &size);
-        free(path);
-        if (!ok)
+        if (!read_buffer_file(g, where, uri, length, b))
             return false;
-        b->data = b->owned = (unsigned char *)text;
+        size = (size_t)length;
     }
     if (size < length)
         return gltf_error(g, "%s: byteLength %llu but only %zu bytes of data", where,
                           (unsigned long long)length, size);
     b->size = (size_t)length;
-    g->buffer_bytes += length;
     return true;
 }
 
@@ -454,9 +452,15 @@ static bool local_matrix(const struct gltf *g, json_object *node, const char *wh
         (member(node, "rotation") && !numbers(g, node, "rotation", 4, where, q)) ||
         (member(node, "scale") && !numbers(g, node, "scale", 3, where, s)))
         return false;
-    double length = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(length > 0.0))
+    /* glTF asks for a unit quaternion; any other nonzero one is normalized, divided first by its
+     * largest component so that the squares can neither overflow (1e200 would give an infinite
+     * length and a silent identity) nor vanish (1e-200, a zero length). */
+    double big = fmax(fmax(fabs(q[0]), fabs(q[1])), fmax(fabs(q[2]), fabs(q[3])));
+    if (!(big > 0.0))
         return gltf_error(g, "%s: rotation is a zero quaternion", where);
+    for (int k = 0; k < 4; k++)
+        q[k] /= big;
+    double length = sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
     double x = q[0] / length, y = q[1] / length, z = q[2] / length, w = q[3] / length;
     double r[9] = {1 - 2 * (y * y + z * z), 2 * (x * y + z * w), 2 * (x * z - y * w),
                    2 * (x * y - z * w), 1 - 2 * (x * x + z * z), 2 * (y * z + x * w),
@@ -519,6 +523,28 @@ static bool check_tree(struct gltf *g, size_t count)
 
 /* ------------------------------------------------------------------ instances */
 
+/* The cofactor matrix C(r, c) of the 3x3 part of the column-major m (M(r, c) = m[4c + r]) into cof,
+ * which maps normals as M's inverse transpose does up to the factor det M, and a number with the
+ * sign of det M (negative where M mirrors). Computed from M divided by its largest entry: neither
+ * direction nor sign depends on that scale, and no product of two entries can then overflow
+ * (a finite but huge matrix would give inf - inf = NaN normals) or vanish together. */
+static double normal_matrix(const double m[16], double cof[3][3])
+{
+    double big = 0.0, a[9];
+    for (int c = 0; c < 3; c++)
+        for (int r = 0; r < 3; r++)
+            big = fmax(big, fabs(m[4 * c + r]));
+    for (int c = 0; c < 3; c++)
+        for (int r = 0; r < 3; r++)
+            a[3 * c + r] = big > 0.0 ? m[4 * c + r] / big : 0.0;
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+            cof[r][c] = a[3 * c1 + r1] * a[3 * c2 + r2] - a[3 * c2 + r1] * a[3 * c1 + r2];
+        }
+    return a[0] * cof[0][0] + a[3] * cof[0][1] + a[6] * cof[0][2];
+}
+
 /* Appends one primitive under the world matrix m: positions and normals transformed, triangles
  * offset (and turned round where m mirrors). With count_only, adds its size to the totals. */
 static bool add_primitive(struct gltf *g, json_object *primitive, const double m[16],
@@ -554,22 +580,14 @@ static bool add_primitive(struct gltf *g, json_object *primitive, const double m
         return gltf_error(g, "more than %u vertices in all", AO_LOAD_NO_INDEX - 1);
     uint32_t base = (uint32_t)g->positions.count;
 
-    /* Vertices: p' = M (p, 1); n' along M's inverse transpose times n, which is the cofactor
-     * matrix of M's 3x3 part divided by its determinant (only the sign of that matters). */
+    /* Vertices: p' = M (p, 1); n' along M's inverse transpose times n (normal_matrix). */
     struct ao_vec3 *p = ao_load_append(&g->positions, positions.count);
     struct ao_vec3 *n = ao_load_append(&g->normals, positions.count);
     bool *lacking = ao_load_append(&g->lacking, positions.count);
     if (!p || !n || !lacking)
         return ao_load_out_of_memory(g->path);
-    double cof[3][3], det = 0.0;   /* cofactors C(r, c) of the 3x3 part, M(r, c) = m[4c + r] */
-    for (int r = 0; r < 3; r++)
-        for (int c = 0; c < 3; c++) {
-            int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-            cof[r][c] = m[4 * c1 + r1] * m[4 * c2 + r2] - m[4 * c2 + r1] * m[4 * c1 + r2];
-        }
-    for (int c = 0; c < 3; c++)
-        det += m[4 * c] * cof[0][c];
-    double sign = det < 0.0 ? -1.0 : 1.0;
+    double cof[3][3];
+    double det = normal_matrix(m, cof), sign = det < 0.0 ? -1.0 : 1.0;
     for (size_t i = 0; i < positions.count; i++) {
         double x = float_at(&positions, i, 0), y = float_at(&positions, i, 1);
         double z = float_at(&positions, i, 2);
@@ -707,6 +725,10 @@ static bool place_nodes(struct gltf *g, size_t node_count, const bool *is_root, 
         ok = local_matrix(g, node, where, local);
         if (ok)
             multiply(is_root[n] ? identity : g->world[g->parent[n]], local, g->world[n]);
+        for (int k = 0; ok && k < 16; k++)
+            if (!isfinite(g->world[n][k]))
+                ok = gltf_error(g, "%s: its transform overflows (an entry of its world matrix is "
+                                "not finite)", where);
         placed[n] = true;
         json_object *children = member(node, "children");
         for (size_t k = 0; ok && k < length_of(children); k++) {
@@ -721,25 +743,37 @@ static bool place_nodes(struct gltf *g, size_t node_count, const bool *is_root, 
 
 /* ------------------------------------------------------------------ the file */
 
-/* An upper estimate of json-c's memory for text: each '{' makes an object with a 16-entry hash
- * table (measured: 780 bytes), each '[' an array (150 bytes), and every other value, which
- * follows a ',' or ':', 70 to 110 bytes. A few MB of "{}," would otherwise take gigabytes. */
-static double json_cost(const char *text, size_t size)
+/* An upper estimate of json-c's memory for text, and of the loader's per-node arrays: each '{'
+ * makes an object with a 16-entry hash table (measured: 780 bytes) and may be a node, for which
+ * read_scene keeps AO_BUDGET_NODE bytes more; each '[' an array (150 bytes), and every other
+ * value, which follows a ',' or ':', 70 to 110 bytes; a string's bytes are gathered in a buffer
+ * grown by doubling (less than twice their length) and then copied into the string (once more):
+ * 3 bytes per byte (measured: 1.9 for a 200 MB string). Charged before parsing, it keeps a few
+ * megabytes of "{}," from taking gigabytes, a 1 GB string 3 GB, and a million nodes from being
+ * parsed only to be refused. */
+static uint64_t json_cost(const char *text, size_t size)
 {
-    double cost = 0.0;
-    for (size_t i = 0; i < size; i++)
-        cost += text[i] == '{' ? 800.0 : text[i] == '[' ? 160.0
-              : text[i] == ',' || text[i] == ':' ? 112.0 : 0.0;
+    uint64_t cost = 0;
+    bool in_string = false;
+    for (size_t i = 0; i < size; i++) {
+        char c = text[i];
+        if (in_string) {
+            i += c == '\\';   /* an escaped character, '"' too, stays in the string */
+            in_string = c != '"';
+            cost += 3;
+        } else {
+            in_string = c == '"';
+            cost += c == '{' ? 800 + AO_BUDGET_NODE : c == '[' ? 160 : c == ',' || c == ':' ? 112 : 0;
+        }
+    }
     return cost;
 }
 
 /* Parses the JSON text into g->root; errors name the line. */
 static bool parse_json(struct gltf *g, const char *text, size_t size)
 {
-    double cost = json_cost(text, size);
-    if (cost > MAX_JSON_COST)
-        return gltf_error(g, "its JSON would take about %.0f MB to parse (more than %.0f MB)",
-                          cost / 1048576.0, MAX_JSON_COST / 1048576.0);
+    if (!take(g, json_cost(text, size), "parsing its JSON"))
+        return false;
     struct json_tokener *tokener = json_tokener_new_ex(MAX_DEPTH);
     if (!tokener)
         return ao_load_out_of_memory(g->path);
@@ -797,6 +831,8 @@ static bool read_scene(struct gltf *g)
         !array_member(g, g->root, "nodes", "file", &g->nodes, &node_count) ||
         !array_member(g, g->root, "buffers", "file", &buffers, &g->buffer_count))
         return false;
+    /* The per-node, per-buffer and per-mesh arrays: each of those is a JSON object, whose charge
+     * (json_cost) covers them. */
     g->buffers = calloc(g->buffer_count ? g->buffer_count : 1, sizeof *g->buffers);
     g->parent = malloc((node_count ? node_count : 1) * sizeof *g->parent);
     g->world = malloc((node_count ? node_count : 1) * sizeof *g->world);
@@ -810,17 +846,11 @@ static bool read_scene(struct gltf *g)
     ok = ok && check_tree(g, node_count) && find_roots(g, node_count, is_root) &&
          place_nodes(g, node_count, is_root, placed);
 
-    /* First count (validating every accessor), then refuse what instancing blows up: without
-     * it, a triangle takes at least 3 bytes of buffer (uint8 indices) and a vertex 12, so more
-     * than that (and more than MAX_INSTANCED) comes from reusing data. Then fill. */
+    /* First count (validating every accessor), then refuse a mesh, as its nodes instance it,
+     * that does not fit in the budget beside what the load holds already. Then fill. */
     for (size_t i = 0; ok && i < node_count; i++)
         ok = !placed[i] || add_node_mesh(g, i, true);
-    if (ok && ((g->triangles > MAX_INSTANCED && g->triangles > g->buffer_bytes / 3) ||
-               (g->vertices > MAX_INSTANCED && g->vertices > g->buffer_bytes / 12)))
-        ok = gltf_error(g, "the scene's nodes instance its meshes into %llu triangles and %llu "
-                        "vertices (more than %u, and more than %llu bytes of buffers hold)",
-                        (unsigned long long)g->triangles, (unsigned long long)g->vertices,
-                        MAX_INSTANCED, (unsigned long long)g->buffer_bytes);
+    ok = ok && ao_load_fits(g->budget, g->triangles, g->vertices, g->path, 0);
     g->triangles = g->vertices = 0;
     for (size_t i = 0; ok && i < node_count; i++)
         ok = !placed[i] || add_node_mesh(g, i, false);
@@ -828,10 +858,12 @@ static bool read_scene(struct gltf *g)
     return ok;
 }
 
-bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size_t size)
+bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size_t size,
+                  struct ao_budget *budget)
 {
     struct gltf g = {
         .path = path,
+        .budget = budget,
         .positions = {.size = sizeof(struct ao_vec3)},
         .normals = {.size = sizeof(struct ao_vec3)},
         .lacking = {.size = sizeof(bool)},
@@ -867,5 +899,6 @@ bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size
     ao_load_free(&g.normals);
     ao_load_free(&g.lacking);
     ao_load_free(&g.indices);
+    ao_budget_give(budget, g.taken);
     return ok;
 }

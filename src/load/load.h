@@ -8,6 +8,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "budget.h"
 #include "mesh.h"
 
 /* An absent OBJ normal in a face corner; also one past the largest usable vertex index. */
@@ -34,8 +35,11 @@ struct ao_load_tokens {
 
 /* A format's loader: parses a whole file (size bytes, followed by a NUL) into the empty mesh,
  * ending with ao_load_finish; on failure prints one line and returns false (the caller empties
- * the mesh). */
-typedef bool ao_load_format(struct ao_mesh *mesh, const char *path, const char *text, size_t size);
+ * the mesh). Before it allocates for triangles and vertices it checks that their charge fits in
+ * budget (ao_load_fits), from the file's counts where it has them, else as the counts grow; what
+ * else it holds for a while (a parser's tree, buffers) it takes from budget and gives back. */
+typedef bool ao_load_format(struct ao_mesh *mesh, const char *path, const char *text, size_t size,
+                            struct ao_budget *budget);
 
 /* The loaders, one file each under src/load/. */
 ao_load_format ao_load_obj, ao_load_ply, ao_load_stl, ao_load_gltf;
@@ -51,6 +55,11 @@ void ao_load_free(struct ao_load_array *a);
 
 /* Prints the load's one error line: "path:line: message", or "path: message" when line is 0. */
 void ao_load_report(const char *path, size_t line, const char *format, ...);
+
+/* True when a mesh of so many triangles and vertices fits in what budget has left (ao_budget_mesh);
+ * else reports "path:line: T triangles and V vertices need about ..." and returns false. */
+bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, const char *path,
+                  size_t line);
 
 /* Reports an allocation failure; returns false for the caller to pass on. */
 bool ao_load_out_of_memory(const char *path);
@@ -77,8 +86,19 @@ bool ao_load_parse_float(struct ao_load_span s, float *out);
  * least 3) to triangles. */
 bool ao_load_fan(struct ao_load_array *triangles, const struct ao_load_array *face);
 
-/* The unit vector along (x, y, z) in single precision, or zero when its length is zero. */
+/* The unit vector along (x, y, z) in single precision, or zero when it is zero or not finite;
+ * exact-enough for any finite double components (no square overflows or vanishes). */
 struct ao_vec3 ao_load_unit(double x, double y, double z);
+
+/* Percent-decodes the URI of a glTF buffer (not a data: URI) into out, a file name of at most
+ * size - 1 bytes; false with the reason in why when it is empty, has a scheme, is absolute, holds
+ * a bad escape or %00, or does not fit. */
+bool ao_load_uri_decode(const char *uri, char *out, size_t size, char *why, size_t why_size);
+
+/* Opens the file at the decoded relative path inside the folder of the model at model_path into
+ * *fd (the caller closes it), following no symbolic link; false with the reason in why when the
+ * path leaves that folder or cannot be opened there. */
+bool ao_load_uri_open(const char *model_path, const char *relative, int *fd, char *why, size_t why_size);
 
 /* Common end of every loader: drops degenerate triangles, refuses a mesh without triangles and
  * computes the normals the file did not give (all when mesh->normals is NULL, else those

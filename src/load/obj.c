@@ -24,6 +24,7 @@ struct obj_reader {
     struct ao_load_array face;        /* struct corner: the face being read */
     struct ao_load_array corners;     /* struct corner: 3 per triangle */
     bool has_normals;         /* some corner references a normal */
+    const struct ao_budget *budget;
 };
 
 /* Reads the rest of the line as at most 6 finite numbers into out, counting them. */
@@ -195,6 +196,14 @@ static bool parse_obj_face(struct obj_reader *o, struct ao_load_tokens *t)
     return ao_load_fan(&o->corners, &o->face) || ao_load_out_of_memory(o->path);
 }
 
+/* The file has no counts ahead of its data: the budget is checked as they grow, after each line
+ * that adds positions, normals (both held like vertices) or triangles. */
+static bool within_budget(const struct obj_reader *o)
+{
+    return ao_load_fits(o->budget, o->corners.count / 3, o->positions.count + o->normals.count, o->path,
+                        o->line);
+}
+
 /* One line; '#' starts a comment, statements other than v, vn, vt and f are ignored. */
 static bool parse_obj_line(struct obj_reader *o, const char *begin, const char *end)
 {
@@ -204,11 +213,11 @@ static bool parse_obj_line(struct obj_reader *o, const char *begin, const char *
     if (!ao_load_next_token(&t, &keyword))
         return true;
     if (ao_load_span_is(keyword, "v"))
-        return parse_obj_vertex(o, &t);
+        return parse_obj_vertex(o, &t) && within_budget(o);
     if (ao_load_span_is(keyword, "vn"))
-        return parse_obj_normal(o, &t);
+        return parse_obj_normal(o, &t) && within_budget(o);
     if (ao_load_span_is(keyword, "f"))
-        return parse_obj_face(o, &t);
+        return parse_obj_face(o, &t) && within_budget(o);
     if (ao_load_span_is(keyword, "vt"))
         o->texcoord_count++;
     return true;
@@ -286,6 +295,8 @@ static bool split_vertex(struct obj_reader *o, struct vertex_map *map, struct sp
         ao_load_report(o->path, 0, "too many distinct vertices for 32-bit indices");
         return false;
     }
+    if (!ao_load_fits(o->budget, o->corners.count / 3, map->count + 1, o->path, 0))
+        return false;
     struct ao_vec3 *p = ao_load_append(&out->positions, 1), *n = ao_load_append(&out->normals, 1);
     bool *lacking = ao_load_append(&out->lacking, 1);
     if (!p || !n || !lacking)
@@ -331,10 +342,12 @@ static bool build_split_vertices(struct obj_reader *o, struct ao_mesh *mesh)
 }
 
 /* Parses OBJ text line by line, then builds the indexed mesh. */
-bool ao_load_obj(struct ao_mesh *mesh, const char *path, const char *text, size_t size)
+bool ao_load_obj(struct ao_mesh *mesh, const char *path, const char *text, size_t size,
+                 struct ao_budget *budget)
 {
     struct obj_reader o = {
         .path = path,
+        .budget = budget,
         .positions = {.size = sizeof(struct ao_vec3)},
         .normals = {.size = sizeof(struct ao_vec3)},
         .face = {.size = sizeof(struct corner)},

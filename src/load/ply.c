@@ -70,6 +70,7 @@ struct ply_reader {
     uint64_t row_index;
     struct ao_load_array positions, normals;    /* struct ao_vec3 */
     struct ao_load_array face, indices;         /* uint32_t */
+    const struct ao_budget *budget;
 };
 
 /* The reader's one error line, located by line (header, ascii) or element row (binary). */
@@ -86,6 +87,18 @@ static bool ply_error(const struct ply_reader *r, const char *format, ...)
     else
         ao_load_report(r->path, r->line, "%s", message);
     return false;
+}
+
+/* True when so many triangles and vertices fit in the budget; else reports where the reader is. */
+static bool within_budget(const struct ply_reader *r, uint64_t triangles, uint64_t vertices)
+{
+    uint64_t charge = ao_budget_mesh(triangles, vertices);
+    if (ao_budget_fits(r->budget, charge))
+        return true;
+    char why[200];
+    ao_budget_explain(r->budget, charge, why, sizeof why);
+    return ply_error(r, "%llu triangles and %llu vertices %s", (unsigned long long)triangles,
+                     (unsigned long long)vertices, why);
 }
 
 /* The element at index i. */
@@ -335,7 +348,9 @@ static bool check_binary_size(struct ply_reader *r)
         }
         left -= e->count * row;
     }
-    return true;
+    /* The counts are real: they fit in the file. A face is at least one triangle. */
+    r->line = 0;
+    return within_budget(r, element_at(r, r->face_element)->count, element_at(r, r->vertex_element)->count);
 }
 
 /* Decodes the little-endian bytes of one value of a PLY type. */
@@ -460,6 +475,8 @@ static bool read_row(struct ply_reader *r, const struct ply_element *e, double v
 /* Stores a vertex row: a finite position and, when present, a finite normal (normalized). */
 static bool add_vertex(struct ply_reader *r, const double v[ROLE_COUNT])
 {
+    if (!within_budget(r, r->indices.count / 3, r->positions.count + 1))
+        return false;
     struct ao_vec3 p = ao_vec3_make((float)v[ROLE_X], (float)v[ROLE_Y], (float)v[ROLE_Z]);
     if (!ao_vec3_is_finite(p))
         return ply_error(r, "vertex position is not a finite float");
@@ -482,6 +499,8 @@ static bool add_face(struct ply_reader *r)
 {
     if (r->face.count < 3)
         return ply_error(r, "face with %zu vertices; at least 3 needed", r->face.count);
+    if (!within_budget(r, r->indices.count / 3 + r->face.count - 2, r->positions.count))
+        return false;
     return ao_load_fan(&r->indices, &r->face) || ao_load_out_of_memory(r->path);
 }
 
@@ -528,10 +547,12 @@ static bool check_trailing_data(struct ply_reader *r)
 }
 
 /* Parses a PLY header and its ascii or binary little-endian data into mesh. */
-bool ao_load_ply(struct ao_mesh *mesh, const char *path, const char *text, size_t size)
+bool ao_load_ply(struct ao_mesh *mesh, const char *path, const char *text, size_t size,
+                 struct ao_budget *budget)
 {
     struct ply_reader r = {
         .path = path,
+        .budget = budget,
         .elements = {.size = sizeof(struct ply_element)},
         .properties = {.size = sizeof(struct ply_property)},
         .positions = {.size = sizeof(struct ao_vec3)},

@@ -19,6 +19,8 @@ struct weld {
     struct ao_load_array positions;  /* struct ao_vec3 */
     uint32_t *slots;                 /* vertex index, or AO_LOAD_NO_INDEX when empty */
     size_t capacity;                 /* a power of two, at most half full */
+    const struct ao_load_array *corners;  /* the mesh's triangle corners so far */
+    const struct ao_budget *budget;  /* checked as vertices are made */
 };
 
 /* The hash of a position's bits (after -0 became +0). */
@@ -49,7 +51,7 @@ static bool weld_reserve(struct weld *w)
 {
     if (2 * (w->positions.count + 1) <= w->capacity)
         return true;
-    struct weld grown = {w->positions, NULL, w->capacity ? 2 * w->capacity : 1024};
+    struct weld grown = {w->positions, NULL, w->capacity ? 2 * w->capacity : 1024, w->corners, w->budget};
     if (grown.capacity > SIZE_MAX / sizeof *grown.slots ||
         !(grown.slots = malloc(grown.capacity * sizeof *grown.slots)))
         return false;
@@ -77,6 +79,8 @@ static bool weld_vertex(struct weld *w, struct ao_vec3 p, struct ao_load_array *
             ao_load_report(path, line, "too many distinct vertices for 32-bit indices");
             return false;
         }
+        if (!ao_load_fits(w->budget, w->corners->count / 3 + 1, w->positions.count + 1, path, line))
+            return false;
         struct ao_vec3 *stored = ao_load_append(&w->positions, 1);
         if (!stored)
             return ao_load_out_of_memory(path);
@@ -218,6 +222,9 @@ static bool ascii_line(struct ascii_reader *r, struct ao_load_tokens *t, struct 
         }
         r->in_loop = false;
         r->facet_loops++;
+        if (!ao_load_fits(w->budget, indices->count / 3 + r->loop.count - 2, w->positions.count, r->path,
+                          r->line))
+            return false;
         return ao_load_fan(indices, &r->loop) || ao_load_out_of_memory(r->path);
     }
     if (ao_load_span_is(keyword, "endfacet")) {
@@ -260,16 +267,18 @@ static bool starts_with_solid(const char *text, size_t size)
     return size - i >= 5 && memcmp(text + i, "solid", 5) == 0;
 }
 
-bool ao_load_stl(struct ao_mesh *mesh, const char *path, const char *text, size_t size)
+bool ao_load_stl(struct ao_mesh *mesh, const char *path, const char *text, size_t size,
+                 struct ao_budget *budget)
 {
-    struct weld w = {.positions = {.size = sizeof(struct ao_vec3)}};
     struct ao_load_array indices = {.size = sizeof(uint32_t)};
+    struct weld w = {.positions = {.size = sizeof(struct ao_vec3)}, .corners = &indices, .budget = budget};
     uint32_t n = size >= BINARY_PREFIX ? le32(text + BINARY_HEADER) : 0;
     bool binary = size >= BINARY_PREFIX &&
                   (uint64_t)size == BINARY_PREFIX + (uint64_t)n * BINARY_RECORD;
     bool ok;
     if (binary) {
-        ok = read_binary(&w, &indices, path, text, n);
+        /* The header's count is real (the file's size matches it): check it before reading. */
+        ok = ao_load_fits(budget, n, 0, path, 0) && read_binary(&w, &indices, path, text, n);
     } else if (starts_with_solid(text, size) && strlen(text) == size) {
         ok = read_ascii(&w, &indices, path, text, size);
     } else if (size < BINARY_PREFIX) {

@@ -1,7 +1,8 @@
 /* libFuzzer target for the scene parser. The input is the scene text, parsed as if read from a
  * file in a scratch directory that holds three small meshes (tri.obj, quad.ply, bin.ply), so
  * `mesh` lines exercise loading, transforms and merging without reaching outside it (absolute
- * paths aside). A scene that parses must be consistent. */
+ * paths aside). A scene that parses must be consistent: indices in range, finite positions and eye
+ * within the range scene.c accepts, unit or zero normals. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -48,6 +49,19 @@ static void check(const struct ao_scene *s)
     for (size_t i = 0; !broken && i < s->sphere_count; i++)
         if (!(s->spheres[i].radius > 0.0f))
             broken = "sphere without a positive radius";
+    for (size_t i = 0; !broken && i < s->vertex_count; i++) {
+        struct ao_vec3 p = s->positions[i], n = s->normals[i];
+        double length = sqrt((double)n.x * n.x + (double)n.y * n.y + (double)n.z * n.z);
+        if (!ao_vec3_is_finite(p))
+            broken = "non-finite position";
+        else if (fmaxf(fabsf(p.x), fmaxf(fabsf(p.y), fabsf(p.z))) > AO_SCENE_MAX_EXTENT)
+            broken = "position beyond the range scene.c accepts";
+        else if (!(length == 0.0 || fabs(length - 1.0) < 1e-5))
+            broken = "normal neither unit nor zero";
+    }
+    struct ao_vec3 eye = s->camera.eye;
+    if (!broken && !(fmaxf(fabsf(eye.x), fmaxf(fabsf(eye.y), fabsf(eye.z))) <= AO_SCENE_MAX_EXTENT))
+        broken = "eye beyond the range scene.c accepts";
     if (!broken && !(s->ao_distance > 0.0f))
         broken = "ao-distance not positive";
     if (!broken && (s->width < 0 || s->height < 0))
