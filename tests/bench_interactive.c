@@ -4,8 +4,9 @@
  * A and B: medians over 21 camera changes of the time from the change to the first frame published
  * for it (a preview) and to its first full-resolution frame; F: during a scripted 2-second orbit
  * (the camera moved every 16 ms), the cameras per second that reached a published frame before the
- * next one was set. Then the previews' cost per restart against the first full pass, and the time
- * to 1 % estimated error at 640x480 with previews on and off. Asserts nothing.
+ * next one was set, and the median cell size of the frame a window would show as each change came
+ * (the newest published). Then the previews' cost per restart against the first full pass, and the
+ * time to 1 % estimated error at 640x480 with previews on and off. Asserts nothing.
  * Run: ./build/tests/bench_interactive [SCENE] (default: the bunny) */
 #include <math.h>
 #include <pthread.h>
@@ -122,11 +123,16 @@ static void interactive(const struct ao_scene *scene, const struct ao_tracer *tr
 
     /* The orbit: a change every ORBIT_STEP seconds; a camera counts when a frame of it was
      * published before the next change. */
-    int shown = 0, steps = 0;
-    double begin = bench_now();
+    int shown = 0, steps = 0, taken = 0;
+    double begin = bench_now(), blocks[(int)(ORBIT_SECONDS / ORBIT_STEP) + 1];
+    const struct ao_frame *newest = NULL;
     for (double next = begin; next - begin < ORBIT_SECONDS; next += ORBIT_STEP, steps++) {
         sleep_seconds(fmax(0.0, next - bench_now()));
         shown += steps > 0 && atomic_load(&w.frames) > 0;
+        const struct ao_frame *f = ao_render_take_frame(r);
+        newest = f ? f : newest;
+        if (steps > 0 && newest)
+            blocks[taken++] = newest->block;
         watch(&w, ++run);
         nudge(r);
     }
@@ -136,9 +142,11 @@ static void interactive(const struct ao_scene *scene, const struct ao_tracer *tr
     ao_render_destroy(r);
 
     double preview_ms = bench_median(previews, CHANGES), pass_ms = bench_median(pass, CHANGES);
-    printf("%dx%d: first frame %.1f ms, first full frame %.1f ms, orbit %.0f frames/s; previews %.1f ms a "
-           "restart, %.0f %% of the first full pass (%.1f ms)\n",
-           width, height, bench_median(first, CHANGES), bench_median(full, CHANGES), orbit, preview_ms,
+    int block = taken ? (int)bench_median(blocks, taken) : 0;
+    printf("%dx%d: first frame %.1f ms, first full frame %.1f ms, orbit %.0f frames/s (shown: %dx%d cells); "
+           "previews %.1f ms a restart, %.0f %% of the first full pass (%.1f ms)\n",
+           width, height, bench_median(first, CHANGES), bench_median(full, CHANGES), orbit,
+           block ? (width + block - 1) / block : 0, block ? (height + block - 1) / block : 0, preview_ms,
            100.0 * preview_ms / pass_ms, pass_ms);
     fflush(stdout);
 }
