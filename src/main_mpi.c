@@ -56,8 +56,11 @@ static bool take_own_options(int *argc, char **argv, double *seconds, char *mess
         }
         char *end = NULL;
         double value = k + 1 < *argc ? strtod(argv[k + 1], &end) : NAN;
-        if (ok && (!end || end == argv[k + 1] || *end || !(value >= 0.0) || isinf(value))) {
-            snprintf(message, size, "--safety-copy: expected seconds >= 0, got '%s'", k + 1 < *argc ? argv[k + 1] : "");
+        if (ok && k + 1 >= *argc) {
+            snprintf(message, size, "--safety-copy: needs a number of seconds");
+            ok = false;
+        } else if (ok && (end == argv[k + 1] || *end || !(value >= 0.0) || isinf(value))) {
+            snprintf(message, size, "--safety-copy: expected seconds >= 0, got '%s'", argv[k + 1]);
             ok = false;
         }
         *seconds = ok ? value : *seconds;
