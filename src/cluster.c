@@ -28,10 +28,14 @@ static const long SPIN_NS = 200000, POLL_FIRST_NS = 50000, POLL_MOST_NS = 100000
  * LOOK_NS, before a tile: a look takes the lock and tests three requests. */
 static const long LOOK_NS = 100000;
 
-/* A lend carries at most LEND_MOST entries (one message of 2.3 kB); a rank that was told "none" by
- * MISSES ranks in a row (or by every other rank) borrows no more in that pass. The victims are
- * taken in a row from a random start, so that thieves spread over the ranks. */
-enum { LEND_MOST = 64, MISSES = 4 };
+/* A lend carries at most LEND_MOST entries (one message of 9 kB): of what the lender has not begun,
+ * the borrower's share of the two ranks' speed (entries a second, measured in the pass, or in the
+ * last one early on), so that both finish together and one or two loans balance a pass whatever
+ * the ratio (half each time took log2 of the ratio round trips, each waiting for the slow rank's
+ * next tile). A rank that was told "none" by MISSES ranks in a row (or by every other rank)
+ * borrows no more in that pass. The lenders are taken in a row from a random start, so that
+ * borrowers spread over the ranks. */
+enum { LEND_MOST = 256, MISSES = 4 };
 
 /* What a lend carries: a header, then its entries. */
 struct lend_header {
@@ -87,12 +91,16 @@ struct ao_cluster {
     /* Asks for a later pass, from ranks already in it: answered when this rank gets there. */
     struct {
         int rank;
-        uint64_t pass, most;
+        uint64_t pass, speed;
     } *deferred;
     int deferred_count;
-    uint64_t ask[2];         /* the ask being received (pass, most) and the give-up (pass) */
+    uint64_t ask[2];         /* the ask being received (pass, the asker's speed as double bits) and
+                                the give-up (pass) */
     uint64_t give_up;
     MPI_Request asked, gave_up;
+    /* Speeds: when the pass opened here and when this rank's list ran out (0: not yet), and the
+     * entries a second its threads traced in the last pass (0: unknown). */
+    double opened_at, emptied_at, speed;
     /* As a borrower: the victim asked (-1: none), the answer, the rank's misses, the grant held
      * (entries handed out to threads, and traced) and its sums, sent when all are traced. */
     int victim, misses, start;
@@ -174,13 +182,15 @@ static bool await(struct ao_cluster *c, int n, MPI_Request *requests, long most,
 
 /* Lock held: pass's tiles are traced from now on; forgets the last pass's loans and answers the
  * asks that waited for this pass. */
-static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t most);
+static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t speed);
 
 static void open_pass(struct ao_cluster *c, const struct ao_share_pass *pass)
 {
     if (pass->serial == c->pass)
         return;
     c->pass = pass->serial;
+    c->opened_at = now_seconds();
+    c->emptied_at = 0.0;
     atomic_store_explicit(&c->opened, pass->serial, memory_order_relaxed);
     c->current = pass;
     c->open = true;
@@ -201,7 +211,7 @@ static void open_pass(struct ao_cluster *c, const struct ao_share_pass *pass)
     int waiting = c->deferred_count;
     c->deferred_count = 0;
     for (int k = 0; k < waiting; k++)
-        answer(c, c->deferred[k].rank, c->deferred[k].pass, c->deferred[k].most);
+        answer(c, c->deferred[k].rank, c->deferred[k].pass, c->deferred[k].speed);
 }
 
 /* Lock held: whether the pass this rank traces is given up (by it or another rank), or the run
@@ -211,14 +221,23 @@ static bool given_up(const struct ao_cluster *c)
     return c->given_up == c->pass || atomic_load_explicit(&c->stopping, memory_order_relaxed);
 }
 
-/* Lock held: answers rank's ask for up to `most` entries of pass: a lend of what this rank can
- * spare, none once its list is done or the pass given up; an ask for a later pass waits. */
-static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t most)
+/* Lock held: this rank's speed in the pass so far (its own entries begun a second), once it has
+ * begun two, else the last pass's; 0: unknown. `until`: when its list ran out, or now. */
+static double own_speed(const struct ao_cluster *c, double until)
+{
+    double begun = (double)(c->current->count - c->current->left(c->current->renderer) - c->lent_entries);
+    return begun >= 2.0 && until > c->opened_at ? begun / (until - c->opened_at) : c->speed;
+}
+
+/* Lock held: answers rank's ask for entries of pass, `speed` its speed (double bits): a lend of the
+ * asker's share of what this rank has not begun, none once its list is done or the pass given up;
+ * an ask for a later pass waits. */
+static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t speed)
 {
     if (pass > c->pass) {
         c->deferred[c->deferred_count].rank = rank;
         c->deferred[c->deferred_count].pass = pass;
-        c->deferred[c->deferred_count++].most = most;
+        c->deferred[c->deferred_count++].speed = speed;
         return;
     }
     unsigned char message[LEND_BYTES];
@@ -227,8 +246,13 @@ static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t most)
     if (pass == c->pass && c->open && !given_up(c) && c->lent_count < c->lent_capacity) {
         int tiles[LEND_MOST];
         struct ao_tile_work works[LEND_MOST];
-        int first = 0, want = most < LEND_MOST ? (int)most : LEND_MOST;
-        header.count = c->current->lend(c->current->renderer, want, &first, tiles, works);
+        double theirs, ours = own_speed(c, now_seconds());
+        memcpy(&theirs, &speed, sizeof theirs);
+        double share = theirs > 0.0 && ours > 0.0 ? theirs / (theirs + ours) : 0.5;
+        int left = c->current->left(c->current->renderer), first = 0;
+        int want = (int)((double)left * share + 0.999);
+        want = want < LEND_MOST ? want : LEND_MOST;
+        header.count = want > 0 ? c->current->lend(c->current->renderer, want, &first, tiles, works) : 0;
         header.first = first;
         for (int k = 0; k < header.count; k++)
             entries[k] = (struct lend_entry){.tile = tiles[k], .work = works[k]};
@@ -383,7 +407,11 @@ static void ask(struct ao_cluster *c)
     int k = (c->start + c->misses) % (c->size - 1);
     c->victim = (c->rank + 1 + k) % c->size;
     c->owner = c->victim;
-    uint64_t message[2] = {c->pass, LEND_MOST};
+    if (c->emptied_at == 0.0)
+        c->emptied_at = now_seconds();
+    double speed = own_speed(c, c->emptied_at);
+    uint64_t message[2] = {c->pass, 0};
+    memcpy(&message[1], &speed, sizeof speed);
     MPI_Irecv(c->answer, LEND_BYTES, MPI_BYTE, c->victim, TAG_LEND, c->loans, &c->answering);
     MPI_Send(message, 2, MPI_UINT64_T, c->victim, TAG_ASK, c->loans);
     if (c->rank == 0)
@@ -475,8 +503,11 @@ static bool settle(void *user, const struct ao_share_pass *pass, bool finished, 
     double spin_until = now_seconds() + 1e-9 * (double)SPIN_NS;
     pthread_mutex_lock(&c->lock);
     open_pass(c, pass);
-    if (c->open && finished)
+    if (c->open && finished) {
         c->tiles += (uint64_t)(pass->count - c->lent_entries);
+        if (pass->count - c->lent_entries >= 2)
+            c->speed = own_speed(c, c->emptied_at > 0.0 ? c->emptied_at : now_seconds());
+    }
     c->open = false; /* its threads are done: nothing more to lend */
     if (!finished)
         tell_given_up(c);
@@ -960,11 +991,12 @@ void ao_cluster_summary(struct ao_cluster *cluster, char *out, size_t size)
     double passes = cluster->passes_combined ? (double)cluster->passes_combined : 1.0;
     if (used >= 0 && (size_t)used < size)
         snprintf(out + used, size - (size_t)used,
-                 "; %llu passes, %.0f bytes into rank 0 and %.0f bytes out of it per pass, %.0f bytes in %llu image "
-                 "gathers, %.3f s in collectives and gathers",
+                 "; %llu passes, %.0f bytes into rank 0 and %.0f bytes out of it per pass (loans %.0f and %.0f), "
+                 "%.0f bytes in %llu image gathers, %.3f s in collectives and gathers",
                  (unsigned long long)cluster->passes_combined, (cluster->bytes_in + cluster->loan_in) / passes,
-                 (cluster->bytes_out + cluster->loan_out) / passes,
-                 cluster->gather_bytes, (unsigned long long)cluster->gathers, cluster->seconds);
+                 (cluster->bytes_out + cluster->loan_out) / passes, cluster->loan_in / passes,
+                 cluster->loan_out / passes, cluster->gather_bytes, (unsigned long long)cluster->gathers,
+                 cluster->seconds);
 }
 
 void ao_cluster_destroy(struct ao_cluster *cluster)

@@ -83,8 +83,8 @@ void ao_cluster_release(struct ao_cluster *cluster, int status);
 bool ao_cluster_await_release(struct ao_cluster *cluster, double seconds, int *status);
 
 /* At the end of a finished run (a collective): on rank 0, writes the tiles each rank traced, the
- * bytes through rank 0 per pass, the image gathers and the seconds rank 0 spent in collectives
- * and gathers into out (one line, no newline). */
+ * bytes through rank 0 per pass (and of them the loans'), the image gathers and the seconds rank 0
+ * spent in collectives and gathers into out (one line, no newline). */
 void ao_cluster_summary(struct ao_cluster *cluster, char *out, size_t size);
 
 /* Frees the cluster (not a collective); accepts NULL. */

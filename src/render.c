@@ -272,8 +272,16 @@ static int take_entry(struct ao_render *r)
     }
 }
 
-/* struct ao_share_pass's lend: half the entries not begun (rounded up), at most `most`, from the
- * end of the list, for another process. */
+/* struct ao_share_pass's left: the entries not begun. */
+static int entries_left(void *renderer)
+{
+    uint_fast64_t span = atomic_load_explicit(&((struct ao_render *)renderer)->span, memory_order_relaxed);
+    uint32_t front = (uint32_t)span, back = (uint32_t)(span >> 32);
+    return back > front ? (int)(back - front) : 0;
+}
+
+/* struct ao_share_pass's lend: up to `most` entries not begun, from the end of the list, for
+ * another process. */
 static int lend_entries(void *renderer, int most, int *first, int *tiles, struct ao_tile_work *works)
 {
     struct ao_render *r = renderer;
@@ -282,7 +290,7 @@ static int lend_entries(void *renderer, int most, int *first, int *tiles, struct
     do {
         uint32_t front = (uint32_t)span;
         back = (uint32_t)(span >> 32);
-        count = back > front ? (back - front + 1) / 2 : 0;
+        count = back > front ? back - front : 0;
         count = count < (uint32_t)most ? count : (uint32_t)most;
         if (count == 0)
             return 0;
@@ -366,7 +374,8 @@ static bool run_pass(struct ao_render *r)
     atomic_store(&r->given_up, false);
     r->pass_serial++;
     r->share_pass = (struct ao_share_pass){.serial = r->pass_serial, .count = count, .pixels = TILE * TILE,
-                                           .sums = r->pass_sums, .lend = lend_entries, .renderer = r};
+                                           .sums = r->pass_sums, .left = entries_left, .lend = lend_entries,
+                                           .renderer = r};
     ao_pool_run(r->pool, pass_job, r);
     bool finished = !aborted(r) && !atomic_load(&r->given_up);
     const struct ao_render_share *share = r->config.share;

@@ -85,9 +85,11 @@ struct ao_share_pass {
     int count;               /* entries in this process's list */
     int pixels;              /* pixel sums an entry */
     struct ao_vec3 *sums;
-    /* Hands half the entries this process has not begun (rounded up), at most `most`, from the end
-     * of its list to another process: returns how many (0: none left), the first's number in *first,
-     * their tiles and work in tiles and works. Any thread. */
+    /* How many entries of this process's list are not begun yet. Any thread. */
+    int (*left)(void *renderer);
+    /* Hands up to `most` entries this process has not begun, from the end of its list, to another
+     * process: returns how many (0: none left), the first's number in *first, their tiles and work
+     * in tiles and works. Any thread. */
     int (*lend)(void *renderer, int most, int *first, int *tiles, struct ao_tile_work *works);
     void *renderer;
 };

@@ -209,10 +209,10 @@ differ)
   ;;
 slow)
   # Rank 1 sleeps 3 ms a tile (AO_MPI_TEST_DELAY_US, read by src/cluster.c for this test only),
-  # some 30 times a 16x16 tile's cost at these settings here. Rank 0 then traces most tiles: a rank
-  # holds at most two chunks, 1/32 of what is left of the pass each with two ranks, so rank 1 gets
-  # about 1/16 of a pass plus the little it finishes meanwhile; with equal static shares it would
-  # get 1/2. The bound, rank 1 below 1/4 of the tiles, leaves a wide margin for a busy machine.
+  # some 30 times a 16x16 tile's cost at these settings here. Rank 0 then traces most tiles: once
+  # its own are done it borrows rank 1's untraced ones in proportion to their speeds (about 30 to
+  # 1), so rank 1 traces the few it begins before a loan comes; without loans it would trace its
+  # half. The bound, rank 1 below 1/4 of the tiles, leaves a wide margin for a busy machine.
   same slow "--size 160x120 --spp 128" 1 "--threads 1" : -np 1 env AO_MPI_TEST_DELAY_US=3000 "$mpi_bin" -q --size 160x120 --spp 128 --threads 1
   "${mpirun[@]}" -np 1 "$mpi_bin" --headless --size 160x120 --spp 128 --threads 1 -o slow.pfm : \
     -np 1 env AO_MPI_TEST_DELAY_US=3000 "$mpi_bin" --size 160x120 --spp 128 --threads 1 -o slow.pfm 2>slow.err
