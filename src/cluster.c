@@ -180,10 +180,10 @@ static bool await(struct ao_cluster *c, int n, MPI_Request *requests, long most,
 
 /* ---- loans ---- */
 
-/* Lock held: pass's tiles are traced from now on; forgets the last pass's loans and answers the
- * asks that waited for this pass. */
 static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t speed);
 
+/* Lock held: pass's tiles are traced from now on; forgets the last pass's loans and answers the
+ * asks that waited for this pass. */
 static void open_pass(struct ao_cluster *c, const struct ao_share_pass *pass)
 {
     if (pass->serial == c->pass)
