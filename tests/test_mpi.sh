@@ -83,7 +83,7 @@ rank_pid() {
 # busy machine.
 start_long() {
   local passes=${1:-3}
-  shift
+  shift $(($# > 0))
   rm -f long.pfm long.csv
   "${mpirun[@]}" -np 3 "$mpi_bin" --headless --spp 1000000 --size 96x64 --threads 1 -o long.pfm --stats long.csv "$@" \
     2>long.err &
