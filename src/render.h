@@ -120,7 +120,8 @@ struct ao_render_share {
     enum ao_share_step (*begin)(void *user, enum ao_share_step step, struct ao_settings *settings,
                                 uint64_t *restarts);
     /* Whether tile t of `tiles` is this process's: the same answer on every process for every
-     * run, each tile owned once. Render thread. */
+     * run, each tile owned once. Whichever thread allocates a run (ao_render_create's, the render
+     * thread's on a resize). */
     bool (*owns)(void *user, int tile, int tiles);
     /* Before each tile of a pass (any render thread): lends entries to processes that ask, and
      * sets [arrived[0], arrived[1]) to entries whose sums came back, for this thread to add; false
