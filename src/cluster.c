@@ -1,10 +1,9 @@
-/* The ranks of an aoview-mpi run; see cluster.h. Three communicators keep the kinds of traffic
- * apart, since they come from different threads: claims (render threads and rank 0's server: the
- * requests, grants and sums of chunks), passes (the render thread's starts and ends of passes) and
- * control (main: answers after an interruption, the tile counts at the end). */
+/* The ranks of an aoview-mpi run; see cluster.h. Four communicators keep the kinds of traffic
+ * apart, since they come from different threads: passes (the render thread's begins and
+ * collectives), loans (any render thread: asks, lends, repaid sums, given-up passes), images (the
+ * gathers) and control (the listener and main: interruptions, the summary at the end). */
 #include "cluster.h"
 
-#include <assert.h>
 #include <limits.h>
 #include <mpi.h>
 #include <pthread.h>
@@ -14,86 +13,128 @@
 #include <string.h>
 #include <time.h>
 
-enum { TAG_REQUEST = 1, TAG_GRANT, TAG_SUMS, TAG_ANSWER };
+enum { TAG_ASK = 1, TAG_LEND, TAG_REPAY, TAG_GIVE_UP, TAG_GATHER, TAG_SALVAGE, TAG_ANSWER, TAG_STOP, TAG_RELEASE };
 
-/* A rank waiting for a message or for the slowest rank at a merge tests its request without
- * sleeping for SPIN_NS, which most waits at the ends of passes and for chunks take (a sleep's
- * wake-up alone costs more), then sleeps 50 us, doubling up to 1 ms while nothing comes: it leaves
- * the cores to the render threads, at a cost of at most 1 ms a wait; sleeps of 10 to 200 us took
- * 0.55 s of system time in a 5 s run against 0.3 s, for no shorter waits (docs/mpi.md). A rank
- * waiting for rank 0 to begin a pass sleeps up to POLL_IDLE_NS once it has waited IDLE_AFTER_NS:
- * rank 0 may be paused or done, for as long as its window stays open. */
+/* A rank waiting for a message or a collective tests its request without sleeping for SPIN_NS,
+ * which most waits at the ends of passes take (a sleep's wake-up alone costs more), then sleeps
+ * 50 us, doubling up to 1 ms while nothing comes: it leaves the cores to the render threads, at a
+ * cost of at most 1 ms a wait. A rank waiting for rank 0 to begin a pass sleeps up to POLL_IDLE_NS
+ * once it has waited IDLE_AFTER_NS: rank 0 may be paused or done, for as long as its window stays
+ * open. The listener looks for interruptions every LISTEN_NS. */
 static const long SPIN_NS = 200000, POLL_FIRST_NS = 50000, POLL_MOST_NS = 1000000, POLL_IDLE_NS = 20000000,
-                  IDLE_AFTER_NS = 50000000;
-/* How often rank 0's claim server looks for an interrupted rank's answer between passes. */
-static const long ANSWER_POLL_NS = 100000000;
+                  IDLE_AFTER_NS = 50000000, LISTEN_NS = 10000000;
 
-/* Rank 0 grants a rank 1 / (CHUNKS x ranks) of the entries still to hand out, so that chunks
- * shrink as the pass runs out: a rank holds at most two chunks (the one it traces and the next,
- * asked for ahead), 1/16 of a pass between two ranks however slow one of them is. But at least
- * what the rank traces in CHUNK_SECONDS, by its own measure, so that the next chunk's round trip
- * (0.1 ms here, a few ms when the machine is busy) hides behind the one it traces; and, near the
- * end of a pass, at most 1 / (LAST x ranks) of what is left, so that the last chunks shrink to
- * single entries and rank 0's threads, which take one at a time, do not wait at the merge for
- * another rank's two last chunks of 2 ms each (docs/mpi.md). */
-enum { CHUNKS = 16, LAST = 4 };
-static const double CHUNK_SECONDS = 2e-3;
+/* Render threads look at the loans (asks to answer, sums come back, a pass given up) at most every
+ * LOOK_NS, before a tile: a look takes the lock and tests three requests. */
+static const long LOOK_NS = 100000;
+
+/* A lend carries at most LEND_MOST entries (one message of 9 kB): of what the lender has not begun,
+ * the borrower's share of the two ranks' speed (entries a second, measured in the pass, or in the
+ * last one early on), so that both finish together and one or two loans balance a pass whatever
+ * the ratio (half each time took log2 of the ratio round trips, each waiting for the slow rank's
+ * next tile). A rank that was told "none" by MISSES ranks in a row (or by every other rank)
+ * borrows no more in that pass. The lenders are taken in a row from a random start, so that
+ * borrowers spread over the ranks. */
+enum { LEND_MOST = 256, MISSES = 4 };
+
+/* What a lend carries: a header, then its entries. */
+struct lend_header {
+    uint64_t pass;
+    int32_t first, count;
+};
+struct lend_entry {
+    int32_t tile;
+    struct ao_tile_work work;
+};
+enum { LEND_BYTES = sizeof(struct lend_header) + LEND_MOST * sizeof(struct lend_entry) };
+
+/* A range of this rank's list lent to another rank, whose sums come back into the pass's sums. */
+struct lent {
+    int first, count;
+    bool reported;           /* handed to the renderer to add */
+};
+
+/* What rank 0 sends before every pass: the step, and for a pass the settings and restarts that
+ * every rank renders it with; as bytes, since the ranks run one binary. */
+struct start {
+    struct ao_settings settings;
+    uint64_t restarts;
+    int32_t step;
+};
 
 struct ao_cluster {
     struct ao_render_share share;
     int rank, size;
-    MPI_Comm claims, passes, control;
+    MPI_Comm passes, loans, images, control;
+    MPI_Datatype tally_type;
+    MPI_Op tally_op;
     atomic_bool stopping;
-    atomic_int interrupted;  /* rank 0: another rank that said it was interrupted, or -1 */
-    bool closed;             /* rank 0: it gave up the pass (a restart or stop); nothing is handed
-                                out until the next pass begins */
-    bool open;               /* rank 0: from a pass's begin (or its giving up) to its merge, when
-                                requests may come: the server thread polls */
-    bool claiming;           /* rank 0: its threads claimed since the server thread last looked */
-    pthread_cond_t opened;   /* rank 0: signalled when a pass opens, and on stop */
-    long delay_ns;           /* tests only: AO_MPI_TEST_DELAY_US per tile claimed, a slow rank */
+    bool ended;              /* rank 0's END arrived */
+    long delay_ns;           /* tests only: AO_MPI_TEST_DELAY_US before each tile, a slow rank */
 
-    pthread_mutex_t lock;    /* the claim state below */
-    uint64_t pass;           /* rank 0: the pass being handed out; others: the pass of the chunk */
-    int next, count;         /* rank 0: the next entry to hand out, of count */
-    int begin, end;          /* other ranks: what is left of the chunk granted */
-    bool exhausted;          /* other ranks: rank 0 has nothing left of this pass */
-    bool asked;              /* other ranks: a request for the next chunk is out */
-    double last_claim;       /* other ranks: when an entry was last claimed without waiting */
-    double entry_seconds;    /* other ranks: the time between claims, smoothed; 0: unknown */
-    int grant[2];            /* other ranks: its answer, [begin, end) */
-    MPI_Request granted;
-    struct range *ranges;    /* the chunks of the pass: rank 0, those it granted; others, those they
-                                were granted */
-    int range_count, range_capacity;
-    MPI_Request *moves;      /* range_capacity: each chunk's sums, rank 0 receiving, others sending */
-    int moving;              /* the first chunks whose sums are on their way: rank 0 posted their
-                                receives, the others sent them */
-    int arrived;             /* rank 0: the first chunks whose sums arrived and went to be added */
-    float *pass_sums;        /* the passes' sums (NULL until known), entry_floats an entry of the
-                                work list */
-    int entry_floats;
-    bool starved;            /* reserve failed once (and said so) */
-    uint64_t tiles;          /* entries this rank claimed */
-    uint64_t request[3];     /* rank 0: the request being received (pass, count, least) */
-    MPI_Request incoming;
+    /* Rank 0's gathers by the clock (set from main), and the last one's end. */
+    _Atomic double interval;
+    double last_gather;
 
-    double merge_seconds;    /* the last merge's duration (render thread) */
-    uint64_t merges;         /* merges so far, the bytes this rank sent and received, the seconds */
-    double merge_bytes, waited, moved;  /* waiting for the slowest rank, and moving sums and states */
-    pthread_t server;
-    bool serving;
+    /* Loans, under `lock`: the pass this rank traces and whether it is open to lend, given up
+     * (the newest pass any rank gave up), and told (this rank told the others it gives it up). */
+    pthread_mutex_t lock;
+    atomic_llong looked;     /* when a render thread last looked at the loans, ns */
+    uint64_t pass, given_up;
+    atomic_uint_fast64_t opened;  /* a copy of pass, for a look without the lock */
+    const struct ao_share_pass *current;
+    bool open, told;
+    /* As a lender: the ranges lent in this pass and their sums' receives. */
+    struct lent *lent;
+    MPI_Request *lent_requests;
+    int lent_count, lent_capacity, lent_entries;
+    /* Asks for a later pass, from ranks already in it: answered when this rank gets there. */
+    struct {
+        int rank;
+        uint64_t pass, speed;
+    } *deferred;
+    int deferred_count;
+    uint64_t ask[2];         /* the ask being received (pass, the asker's speed as double bits) and
+                                the give-up (pass) */
+    uint64_t give_up;
+    MPI_Request asked, gave_up;
+    /* Speeds: when the pass opened here and when this rank's list ran out (0: not yet), and the
+     * entries a second its threads traced in the last pass (0: unknown). */
+    double opened_at, emptied_at, speed;
+    /* As a borrower: the victim asked (-1: none), the answer, the rank's misses, the grant held
+     * (entries handed out to threads, and traced) and its sums, sent when all are traced. */
+    int victim, misses, start;
+    bool exhausted, holding;
+    unsigned char *answer;
+    MPI_Request answering;
+    int owner, first, count, handed, repaid;
+    struct ao_vec3 *loan_sums;
+    MPI_Request repaying;
+    uint64_t tiles;          /* tiles this rank traced: its own and borrowed */
 
-    /* Rank 0's buffers for ao_cluster_missing and ao_cluster_tiles, one entry per rank. */
-    MPI_Request *pending;
-    int *answers;
+    /* Rank 0's accounting: passes combined, bytes in and out besides gathers, gathers and their
+     * bytes, seconds in collectives and gathers. */
+    uint64_t passes_combined, gathers;
+    double bytes_in, bytes_out, gather_bytes, seconds;  /* render thread (or main after it) */
+    double loan_in, loan_out;                           /* under `lock` */
+    _Atomic double copied;   /* when the last gather ended; 0: none yet */
+    int fan;                 /* ceil(log2 size): the rounds of a tree or recursive-doubling collective */
+
+    /* Interruptions: the listener thread, rank 0's answers (the signal of each, -1 until it came),
+     * the others' stop request and rank 0's release; the salvage gather's deadline. */
+    pthread_t listener;
+    bool listening;
+    atomic_bool listen;
+    void (*stopped)(void *user);
+    void *stopped_user;
+    MPI_Request *answers, halt, released;
+    int *signals, halt_word, release_word;
+    bool halted;
+    int first_stop;          /* rank 0: the rank whose answer the listener heard first (0: none) */
+    double salvage_until;
     unsigned long long *tiles_by_rank;
-};
-
-/* A chunk of a pass's work list that rank 0 granted: entries [begin, end) to rank `rank`, of which
- * `left` are not traced yet (other ranks). */
-struct range {
-    int rank, begin, end, left;
+    MPI_Request *gather_requests;  /* rank 0: a gather's receives and their datatypes, a rank each */
+    MPI_Datatype *gather_types;
 };
 
 static double now_seconds(void)
@@ -109,24 +150,24 @@ static void sleep_ns(long ns)
     nanosleep(&ts, NULL);
 }
 
-static void serve_claims(struct ao_cluster *c);
+static void serve(struct ao_cluster *c);
 
-/* Tests the n requests until all complete (true) or *stopping is set (false; they are left
- * pending: the process ends without MPI_Finalize), sleeping between tests up to POLL_MOST_NS, or
- * `most` ns once IDLE_AFTER_NS have passed; `most` 0: without sleeping (data in flight). Rank 0
- * answers the others' requests between tests when `serving` is set. */
-static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, long most, struct ao_cluster *serving)
+/* Tests the n requests until all complete (true), *stopping is set or the deadline (if > 0) passes
+ * (false; they are left pending: the process ends without MPI_Finalize), sleeping between tests
+ * up to POLL_MOST_NS, or `most` ns once IDLE_AFTER_NS have passed; `most` 0: without sleeping
+ * (data in flight). With `serving`, answers the loans between tests (lock not held). */
+static bool await(struct ao_cluster *c, int n, MPI_Request *requests, long most, bool serving, double deadline)
 {
     long pause = POLL_FIRST_NS, slept = 0;
     double spin_until = now_seconds() + 1e-9 * (double)SPIN_NS;
     for (;;) {
         int done = 0;
         if (serving)
-            serve_claims(serving);
+            serve(c);
         MPI_Testall(n, requests, &done, MPI_STATUSES_IGNORE);
         if (done)
             return true;
-        if (stopping && atomic_load_explicit(stopping, memory_order_relaxed))
+        if (deadline > 0.0 ? now_seconds() > deadline : c && atomic_load_explicit(&c->stopping, memory_order_relaxed))
             return false;
         if (!most || now_seconds() < spin_until)
             continue;
@@ -137,363 +178,530 @@ static bool await(const atomic_bool *stopping, int n, MPI_Request *requests, lon
     }
 }
 
-/* Lock held: makes room for the chunks of a pass of count entries (each has one at least) and
- * forgets the last pass's; false, with one message the first time, when memory is short (the
- * rank then takes no chunks: rank 0's threads trace the pass). */
-static bool reserve(struct ao_cluster *c, int count)
+/* ---- loans ---- */
+
+static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t speed);
+
+/* Lock held: pass's tiles are traced from now on; forgets the last pass's loans and answers the
+ * asks that waited for this pass. */
+static void open_pass(struct ao_cluster *c, const struct ao_share_pass *pass)
 {
-    c->range_count = c->moving = c->arrived = 0;
-    if (count <= c->range_capacity)
-        return true;
-    struct range *ranges = realloc(c->ranges, (size_t)count * sizeof *ranges);
-    c->ranges = ranges ? ranges : c->ranges;
-    MPI_Request *moves = realloc(c->moves, (size_t)count * sizeof *moves);
-    c->moves = moves ? moves : c->moves;
-    if (!ranges || !moves) {
-        if (!c->starved)
-            fprintf(stderr, "aoview-mpi: rank %d: out of memory for a pass of %d tiles\n", c->rank, count);
-        c->starved = true;
-        return false;
+    if (pass->serial == c->pass)
+        return;
+    c->pass = pass->serial;
+    c->opened_at = now_seconds();
+    c->emptied_at = 0.0;
+    atomic_store_explicit(&c->opened, pass->serial, memory_order_relaxed);
+    c->current = pass;
+    c->open = true;
+    c->told = false;
+    c->lent_count = c->lent_entries = 0;
+    if (pass->count > c->lent_capacity) { /* a lend takes one entry at least; short of memory, none */
+        struct lent *lent = realloc(c->lent, (size_t)pass->count * sizeof *lent);
+        c->lent = lent ? lent : c->lent;
+        MPI_Request *requests = realloc(c->lent_requests, (size_t)pass->count * sizeof *requests);
+        c->lent_requests = requests ? requests : c->lent_requests;
+        if (lent && requests)
+            c->lent_capacity = pass->count;
     }
-    c->range_capacity = count;
-    return true;
+    c->misses = 0;
+    c->exhausted = c->size < 2;
+    uint64_t others = c->size > 1 ? (uint64_t)c->size - 1 : 1;
+    c->start = (int)((pass->serial * 2654435761u + (uint64_t)c->rank * 40503u) % others);
+    int waiting = c->deferred_count;
+    c->deferred_count = 0;
+    for (int k = 0; k < waiting; k++)
+        answer(c, c->deferred[k].rank, c->deferred[k].pass, c->deferred[k].speed);
 }
 
-/* Rank 0, lock held: opens pass `pass` of `count` entries when it is new, and hands out a chunk of
- * what is left, at least `least` and at most `most` entries: [*begin, *end), empty when nothing is. */
-static void hand_out(struct ao_cluster *c, uint64_t pass, int count, int least, int most, int *begin, int *end)
+/* Lock held: whether the pass this rank traces is given up (by it or another rank), or the run
+ * stops. */
+static bool given_up(const struct ao_cluster *c)
+{
+    return c->given_up == c->pass || atomic_load_explicit(&c->stopping, memory_order_relaxed);
+}
+
+/* Lock held: this rank's speed in the pass so far (its own entries begun a second), once it has
+ * begun two, else the last pass's; 0: unknown. `until`: when its list ran out, or now. */
+static double own_speed(const struct ao_cluster *c, double until)
+{
+    double begun = (double)(c->current->count - c->current->left(c->current->renderer) - c->lent_entries);
+    return begun >= 2.0 && until > c->opened_at ? begun / (until - c->opened_at) : c->speed;
+}
+
+/* Lock held: answers rank's ask for entries of pass, `speed` its speed (double bits): a lend of the
+ * asker's share of what this rank has not begun, none once its list is done or the pass given up;
+ * an ask for a later pass waits. */
+static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t speed)
 {
     if (pass > c->pass) {
-        c->pass = pass;
-        c->next = 0;
-        c->count = count;
-        c->open = true;
-        pthread_cond_signal(&c->opened);
-        reserve(c, count);
+        c->deferred[c->deferred_count].rank = rank;
+        c->deferred[c->deferred_count].pass = pass;
+        c->deferred[c->deferred_count++].speed = speed;
+        return;
     }
-    int left = pass == c->pass && !c->closed ? c->count - c->next : 0;
-    int chunk = left / (CHUNKS * c->size), last = left / (LAST * c->size);
-    chunk = chunk < least ? least : chunk > most ? most : chunk;
-    if (last < 1)
-        last = 1;
-    if (chunk > last)
-        chunk = last;
-    if (chunk > left)
-        chunk = left;
-    *begin = c->next;
-    *end = c->next += chunk;
-}
-
-/* The sums of chunk k of the pass, as a buffer and a count of floats. */
-static float *chunk_sums(const struct ao_cluster *c, int k, int *floats)
-{
-    *floats = (c->ranges[k].end - c->ranges[k].begin) * c->entry_floats;
-    return c->pass_sums + (size_t)c->ranges[k].begin * (size_t)c->entry_floats;
-}
-
-/* Rank 0, lock held: posts the receives of the sums of the chunks granted so far, once it knows
- * where the sums go (a request may come before rank 0's first claim). */
-static void post_receives(struct ao_cluster *c)
-{
-    for (int floats; c->pass_sums && c->moving < c->range_count; c->moving++) {
-        float *sums = chunk_sums(c, c->moving, &floats);
-        MPI_Irecv(sums, floats, MPI_FLOAT, c->ranges[c->moving].rank, TAG_SUMS, c->claims, &c->moves[c->moving]);
-        c->merge_bytes += (double)floats * sizeof(float);
+    unsigned char message[LEND_BYTES];
+    struct lend_header header = {.pass = pass};
+    struct lend_entry entries[LEND_MOST];
+    if (pass == c->pass && c->open && !given_up(c) && c->lent_count < c->lent_capacity) {
+        int tiles[LEND_MOST];
+        struct ao_tile_work works[LEND_MOST];
+        double theirs, ours = own_speed(c, now_seconds());
+        memcpy(&theirs, &speed, sizeof theirs);
+        double share = theirs > 0.0 && ours > 0.0 ? theirs / (theirs + ours) : 0.5;
+        int left = c->current->left(c->current->renderer), first = 0;
+        int want = (int)((double)left * share + 0.999);
+        want = want < LEND_MOST ? want : LEND_MOST;
+        header.count = want > 0 ? c->current->lend(c->current->renderer, want, &first, tiles, works) : 0;
+        header.first = first;
+        for (int k = 0; k < header.count; k++)
+            entries[k] = (struct lend_entry){.tile = tiles[k], .work = works[k]};
     }
+    memcpy(message, &header, sizeof header);
+    memcpy(message + sizeof header, entries, (size_t)header.count * sizeof *entries);
+    int bytes = (int)(sizeof header + (size_t)header.count * sizeof *entries);
+    if (header.count > 0) { /* the sums come back into the pass's sums, in one message */
+        int floats = 3 * header.count * c->current->pixels;
+        struct ao_vec3 *sums = c->current->sums + (size_t)header.first * (size_t)c->current->pixels;
+        MPI_Irecv(sums, floats, MPI_FLOAT, rank, TAG_REPAY, c->loans, &c->lent_requests[c->lent_count]);
+        c->lent[c->lent_count++] = (struct lent){header.first, header.count, false};
+        c->lent_entries += header.count;
+        if (c->rank == 0)
+            c->loan_in += (double)floats * sizeof(float);
+    }
+    MPI_Send(message, bytes, MPI_BYTE, rank, TAG_LEND, c->loans);
+    if (c->rank == 0)
+        c->loan_out += bytes;
 }
 
-/* Rank 0, lock held: answers every request that has come with a chunk, after posting the receive
- * of the chunk's sums; true if there was one. */
-static bool serve_pending(struct ao_cluster *c)
+/* Lock held: answers the asks that came and notes the passes given up. */
+static void serve_locked(struct ao_cluster *c)
 {
-    bool served = false;
     for (;;) {
         int done = 0;
         MPI_Status status;
-        MPI_Test(&c->incoming, &done, &status);
+        MPI_Test(&c->asked, &done, &status);
         if (!done)
-            return served;
-        int grant[2];
-        hand_out(c, c->request[0], (int)c->request[1], (int)c->request[2], INT_MAX, &grant[0], &grant[1]);
-        if (grant[0] < grant[1] && c->range_count < c->range_capacity) {
-            c->ranges[c->range_count++] = (struct range){status.MPI_SOURCE, grant[0], grant[1], 0};
-            post_receives(c);
-        } else { /* not recorded (memory was short): kept for rank 0's threads */
-            c->next = grant[1] = grant[0];
-        }
-        MPI_Send(grant, 2, MPI_INT, status.MPI_SOURCE, TAG_GRANT, c->claims);
-        MPI_Irecv(c->request, 3, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_REQUEST, c->claims, &c->incoming);
-        served = true;
+            break;
+        if (c->rank == 0)
+            c->loan_in += sizeof c->ask;
+        answer(c, status.MPI_SOURCE, c->ask[0], c->ask[1]);
+        MPI_Irecv(c->ask, 2, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_ASK, c->loans, &c->asked);
+    }
+    for (;;) {
+        int done = 0;
+        MPI_Test(&c->gave_up, &done, MPI_STATUS_IGNORE);
+        if (!done)
+            break;
+        if (c->rank == 0)
+            c->loan_in += sizeof c->give_up;
+        c->given_up = c->give_up > c->given_up ? c->give_up : c->given_up;
+        MPI_Irecv(&c->give_up, 1, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_GIVE_UP, c->loans, &c->gave_up);
     }
 }
 
-/* Rank 0, lock not held: answers the requests that have come and posts their sums' receives. */
-static void serve_claims(struct ao_cluster *c)
+/* Lock not held: as serve_locked. */
+static void serve(struct ao_cluster *c)
 {
     pthread_mutex_lock(&c->lock);
-    serve_pending(c);
+    serve_locked(c);
     pthread_mutex_unlock(&c->lock);
 }
 
-/* Rank 0's server thread: answers requests while rank 0's own threads are not claiming (inside
- * long tiles, or not yet started on the pass), when a woken thread may take milliseconds to run on
- * a busy machine. Each claim of rank 0's answers them first, and so does its wait at the pass's
- * end; while its threads claim, the server looks only every CHUNK_SECONDS, as long as a chunk
- * lasts at least, since each of its wake-ups interrupts a render thread (on a virtual machine, at
- * a cost of 3 % of rank 0's time when it looked every 1 ms). Between passes, when no request can
- * come, it sleeps until the next pass opens, waking every ANSWER_POLL_NS: a rank interrupted by
- * itself (ao_cluster_answer) would leave rank 0 waiting for it for ever, at the pass's end or for
- * the sums of a chunk it did not finish, and the server stops the cluster when one answers. */
-static void *serve(void *arg)
+/* Lock held: the next range lent whose sums have come back, into arrived; left as it is when none
+ * has. */
+static void take_repaid(struct ao_cluster *c, int arrived[2])
 {
-    struct ao_cluster *c = arg;
-    long pause = POLL_FIRST_NS;
-    while (!atomic_load_explicit(&c->stopping, memory_order_relaxed)) {
-        pthread_mutex_lock(&c->lock);
-        bool open = c->open, served = false, claiming = false;
-        if (!open && !atomic_load(&c->stopping)) { /* the next pass's first requests come as soon as it opens */
-            struct timespec until;
-            clock_gettime(CLOCK_REALTIME, &until);
-            until.tv_nsec += ANSWER_POLL_NS;
-            until.tv_sec += until.tv_nsec / 1000000000L;
-            until.tv_nsec %= 1000000000L;
-            pthread_cond_timedwait(&c->opened, &c->lock, &until);
-            pause = POLL_FIRST_NS;
-        } else if (open) {
-            served = serve_pending(c);
-            claiming = c->claiming;
-            c->claiming = false;
-        }
-        pthread_mutex_unlock(&c->lock);
-        int answered = 0;
-        MPI_Status status;
-        MPI_Iprobe(MPI_ANY_SOURCE, TAG_ANSWER, c->control, &answered, &status);
-        if (answered) { /* left for ao_cluster_missing to receive */
-            atomic_store(&c->interrupted, status.MPI_SOURCE);
-            ao_cluster_stop(c);
-        }
-        if (!open)
+    for (int k = 0; k < c->lent_count; k++) {
+        int done = 0;
+        if (c->lent[k].reported)
             continue;
-        pause = claiming ? (long)(CHUNK_SECONDS * 1e9) : served ? POLL_FIRST_NS
-                                                    : pause * 2 < POLL_MOST_NS ? pause * 2 : POLL_MOST_NS;
-        sleep_ns(pause);
-    }
-    return NULL;
-}
-
-/* Other ranks, lock held: asks rank 0 for the next chunk of the pass. */
-static void ask(struct ao_cluster *c, uint64_t pass, int count)
-{
-    double least = c->entry_seconds > 0.0 ? CHUNK_SECONDS / c->entry_seconds : 1.0;
-    uint64_t request[3] = {pass, (uint64_t)count, least < 1.0 ? 1 : least > count ? (uint64_t)count : (uint64_t)least};
-    MPI_Send(request, 3, MPI_UINT64_T, 0, TAG_REQUEST, c->claims);
-    MPI_Irecv(c->grant, 2, MPI_INT, 0, TAG_GRANT, c->claims, &c->granted);
-    c->asked = true;
-}
-
-/* Other ranks, lock held: entry n is traced; sends rank 0 the sums of the chunks traced in full, in
- * the order they were granted, which is the order rank 0 posted their receives in. */
-static void traced(struct ao_cluster *c, int n)
-{
-    for (int k = c->range_count - 1; k >= 0; k--)
-        if (c->ranges[k].begin <= n && n < c->ranges[k].end) {
-            c->ranges[k].left--;
-            break;
-        }
-    for (int floats; c->moving < c->range_count && c->ranges[c->moving].left == 0; c->moving++) {
-        float *sums = chunk_sums(c, c->moving, &floats);
-        MPI_Isend(sums, floats, MPI_FLOAT, 0, TAG_SUMS, c->claims, &c->moves[c->moving]);
-        c->merge_bytes += (double)floats * sizeof(float);
-    }
-}
-
-/* Other ranks, lock held: the next entry of the pass, or -1 when none is left or the cluster
- * stops. A chunk is asked for as soon as the one before it arrives, so that the answer's round
- * trip overlaps tracing. */
-static int claim_remote(struct ao_cluster *c, uint64_t pass, int count)
-{
-    if (c->pass != pass) { /* tiles cost more in some passes than in others: measure anew */
-        c->pass = pass;
-        c->begin = c->end = 0;
-        c->exhausted = !reserve(c, count);
-        c->last_claim = c->entry_seconds = 0.0;
-    }
-    bool waited = false;
-    while (!c->exhausted && c->begin == c->end) {
-        if (!c->asked)
-            ask(c, pass, count);
-        if (!await(&c->stopping, 1, &c->granted, POLL_MOST_NS, NULL))
-            return -1;
-        waited = true;
-        c->asked = false;
-        c->begin = c->grant[0];
-        c->end = c->grant[1];
-        c->exhausted = c->begin == c->end;
-        if (!c->exhausted) {
-            c->ranges[c->range_count++] = (struct range){c->rank, c->begin, c->end, c->end - c->begin};
-            ask(c, pass, count);
+        MPI_Test(&c->lent_requests[k], &done, MPI_STATUS_IGNORE);
+        if (done) {
+            c->lent[k].reported = true;
+            arrived[0] = c->lent[k].first;
+            arrived[1] = c->lent[k].first + c->lent[k].count;
+            return;
         }
     }
-    if (c->exhausted)
-        return -1;
-    double now = now_seconds();
-    if (!waited && c->last_claim > 0.0)
-        c->entry_seconds = c->entry_seconds > 0.0 ? 0.8 * c->entry_seconds + 0.2 * (now - c->last_claim)
-                                                  : now - c->last_claim;
-    c->last_claim = now;
-    return c->begin++;
 }
 
-/* Lock held: where the sums of pass's entries go. */
-static void locate_sums(struct ao_cluster *c, const struct ao_share_pass *pass)
-{
-    _Static_assert(sizeof(struct ao_vec3) == 3 * sizeof(float), "pixel sums are 3 packed floats");
-    c->pass_sums = &pass->sums->x;
-    c->entry_floats = 3 * pass->pixels;
-}
-
-/* Rank 0, lock held: the next chunk, in the order they were granted, whose sums have arrived, as
- * entries [arrived[0], arrived[1]); left as they are when it has not. */
-static void take_arrived(struct ao_cluster *c, int arrived[2])
-{
-    int done = 0;
-    if (c->arrived < c->moving)
-        MPI_Test(&c->moves[c->arrived], &done, MPI_STATUS_IGNORE);
-    if (done) {
-        arrived[0] = c->ranges[c->arrived].begin;
-        arrived[1] = c->ranges[c->arrived++].end;
-    }
-}
-
-static int claim(void *user, const struct ao_share_pass *pass, int done, int arrived[2])
+static bool poll(void *user, const struct ao_share_pass *pass, int arrived[2])
 {
     struct ao_cluster *c = user;
-    int n = -1, end;
-    pthread_mutex_lock(&c->lock);
-    locate_sums(c, pass);
-    if (c->rank == 0) {
-        serve_pending(c);
-        post_receives(c);
-        hand_out(c, pass->serial, pass->count, 1, 1, &n, &end);
-        n = n < end ? n : -1;
-        c->claiming = n >= 0;
-        take_arrived(c, arrived);
-    } else {
-        if (done >= 0)
-            traced(c, done);
-        n = claim_remote(c, pass->serial, pass->count);
-    }
-    c->tiles += n >= 0;
-    pthread_mutex_unlock(&c->lock);
-    if (n >= 0 && c->delay_ns)
+    if (c->delay_ns)
         sleep_ns(c->delay_ns);
-    return n;
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    long long now = (long long)ts.tv_sec * 1000000000LL + ts.tv_nsec;
+    if (pass->serial == atomic_load_explicit(&c->opened, memory_order_relaxed) &&
+        now - atomic_load_explicit(&c->looked, memory_order_relaxed) < LOOK_NS)
+        return !atomic_load_explicit(&c->stopping, memory_order_relaxed);
+    atomic_store_explicit(&c->looked, now, memory_order_relaxed);
+    pthread_mutex_lock(&c->lock);
+    open_pass(c, pass);
+    serve_locked(c);
+    take_repaid(c, arrived);
+    bool going = !given_up(c);
+    pthread_mutex_unlock(&c->lock);
+    return going;
 }
 
-/* What rank 0 sends at the beginning of every pass: the settings and restarts that every rank
- * renders it with, or (go 0) the end of the run; as bytes, since the ranks run one binary. */
-struct start {
-    struct ao_settings settings;
-    uint64_t restarts;
-    uint64_t go;
-};
+/* Lock held: the grant's sums go to its owner once all its entries are traced. */
+static void repay_if_traced(struct ao_cluster *c)
+{
+    if (!c->holding || c->repaid < c->count || c->repaying != MPI_REQUEST_NULL)
+        return;
+    int floats = 3 * c->count * c->current->pixels;
+    MPI_Isend(c->loan_sums, floats, MPI_FLOAT, c->owner, TAG_REPAY, c->loans, &c->repaying);
+    if (c->rank == 0)
+        c->loan_out += (double)floats * sizeof(float);
+}
+
+/* Lock held: whether the grant held is all traced and its sums have left (then it is let go). */
+static bool grant_settled(struct ao_cluster *c)
+{
+    if (!c->holding)
+        return true;
+    int done = 0;
+    if (c->repaying != MPI_REQUEST_NULL)
+        MPI_Test(&c->repaying, &done, MPI_STATUS_IGNORE);
+    if (c->repaying == MPI_REQUEST_NULL && c->repaid == c->count)
+        c->holding = false;
+    return !c->holding;
+}
+
+/* Lock held: takes the answer to this rank's ask if it came (true): a grant to hold, or a miss. In
+ * a pass given up, a grant's entries are repaid at once (their sums do not count). */
+static bool take_answer(struct ao_cluster *c)
+{
+    int done = 0;
+    MPI_Test(&c->answering, &done, MPI_STATUS_IGNORE);
+    if (!done)
+        return false;
+    struct lend_header header;
+    memcpy(&header, c->answer, sizeof header);
+    if (c->rank == 0)
+        c->loan_in += (double)(sizeof header + (size_t)header.count * sizeof(struct lend_entry));
+    c->victim = -1;
+    if (header.count == 0) {
+        c->misses++;
+        c->exhausted = c->misses >= MISSES || c->misses >= c->size - 1;
+        return true;
+    }
+    c->holding = true;
+    c->first = header.first;
+    c->count = header.count;
+    c->handed = c->repaid = 0;
+    if (given_up(c)) {
+        memset(c->loan_sums, 0, (size_t)c->count * (size_t)c->current->pixels * sizeof *c->loan_sums);
+        c->handed = c->repaid = c->count;
+        repay_if_traced(c);
+    }
+    return true;
+}
+
+/* Lock held: asks the next rank in this rank's row for entries of the pass. */
+static void ask(struct ao_cluster *c)
+{
+    int k = (c->start + c->misses) % (c->size - 1);
+    c->victim = (c->rank + 1 + k) % c->size;
+    c->owner = c->victim;
+    if (c->emptied_at == 0.0)
+        c->emptied_at = now_seconds();
+    double speed = own_speed(c, c->emptied_at);
+    uint64_t message[2] = {c->pass, 0};
+    memcpy(&message[1], &speed, sizeof speed);
+    MPI_Irecv(c->answer, LEND_BYTES, MPI_BYTE, c->victim, TAG_LEND, c->loans, &c->answering);
+    MPI_Send(message, 2, MPI_UINT64_T, c->victim, TAG_ASK, c->loans);
+    if (c->rank == 0)
+        c->loan_out += sizeof message;
+}
+
+/* Lock held, then released and taken again: a short wait inside a loop over the loans. */
+static void pause_locked(struct ao_cluster *c, long *pause)
+{
+    pthread_mutex_unlock(&c->lock);
+    sleep_ns(*pause);
+    *pause = *pause * 2 < POLL_MOST_NS ? *pause * 2 : POLL_MOST_NS;
+    pthread_mutex_lock(&c->lock);
+}
+
+static bool borrow(void *user, const struct ao_share_pass *pass, struct ao_share_loan *loan)
+{
+    struct ao_cluster *c = user;
+    long pause = POLL_FIRST_NS / 4;
+    pthread_mutex_lock(&c->lock);
+    open_pass(c, pass);
+    for (;;) {
+        serve_locked(c);
+        if (atomic_load_explicit(&c->stopping, memory_order_relaxed)) {
+            pthread_mutex_unlock(&c->lock);
+            return false;
+        }
+        if (c->victim >= 0 && !take_answer(c)) {
+            pause_locked(c, &pause);
+            continue;
+        }
+        if (c->holding && c->handed < c->count && !given_up(c)) {
+            int n = c->handed++;
+            *loan = (struct ao_share_loan){.tile = 0, .ticket = n,
+                                           .sums = c->loan_sums + (size_t)n * (size_t)pass->pixels};
+            struct lend_entry entry;
+            memcpy(&entry, c->answer + sizeof(struct lend_header) + (size_t)n * sizeof entry, sizeof entry);
+            loan->tile = entry.tile;
+            loan->work = entry.work;
+            c->tiles++;
+            pthread_mutex_unlock(&c->lock);
+            return true;
+        }
+        if (given_up(c) || (c->exhausted && !c->holding)) {
+            pthread_mutex_unlock(&c->lock);
+            return false;
+        }
+        if (!grant_settled(c)) { /* another thread traces the grant's last entries */
+            pause_locked(c, &pause);
+            continue;
+        }
+        if (c->exhausted) {
+            pthread_mutex_unlock(&c->lock);
+            return false;
+        }
+        ask(c);
+    }
+}
+
+static void repay(void *user, const struct ao_share_pass *pass, const struct ao_share_loan *loan)
+{
+    (void)pass;
+    (void)loan;
+    struct ao_cluster *c = user;
+    pthread_mutex_lock(&c->lock);
+    c->repaid++;
+    repay_if_traced(c);
+    pthread_mutex_unlock(&c->lock);
+}
+
+/* Lock held: tells every other rank that this one gives the pass up. */
+static void tell_given_up(struct ao_cluster *c)
+{
+    if (c->told)
+        return;
+    c->told = true;
+    c->given_up = c->pass > c->given_up ? c->pass : c->given_up;
+    for (int r = 0; r < c->size; r++)
+        if (r != c->rank)
+            MPI_Send(&c->pass, 1, MPI_UINT64_T, r, TAG_GIVE_UP, c->loans);
+    if (c->rank == 0)
+        c->loan_out += (double)(c->size - 1) * sizeof c->pass;
+}
+
+static bool settle(void *user, const struct ao_share_pass *pass, bool finished, int arrived[2])
+{
+    struct ao_cluster *c = user;
+    long pause = POLL_FIRST_NS / 4;
+    double spin_until = now_seconds() + 1e-9 * (double)SPIN_NS;
+    pthread_mutex_lock(&c->lock);
+    open_pass(c, pass);
+    if (c->open && finished) {
+        c->tiles += (uint64_t)(pass->count - c->lent_entries);
+        if (pass->count - c->lent_entries >= 2)
+            c->speed = own_speed(c, c->emptied_at > 0.0 ? c->emptied_at : now_seconds());
+    }
+    c->open = false; /* its threads are done: nothing more to lend */
+    if (!finished)
+        tell_given_up(c);
+    for (;;) {
+        serve_locked(c);
+        if (c->victim >= 0)
+            take_answer(c);
+        if (c->holding && c->handed < c->count) { /* not traced (the pass is given up): zeros */
+            memset(c->loan_sums + (size_t)c->handed * (size_t)pass->pixels, 0,
+                   (size_t)(c->count - c->handed) * (size_t)pass->pixels * sizeof *c->loan_sums);
+            c->repaid += c->count - c->handed;
+            c->handed = c->count;
+            repay_if_traced(c);
+        }
+        take_repaid(c, arrived);
+        if (arrived[0] < arrived[1]) {
+            pthread_mutex_unlock(&c->lock);
+            return true;
+        }
+        bool repaid = true;
+        for (int k = 0; k < c->lent_count; k++)
+            repaid = repaid && c->lent[k].reported;
+        if (repaid && c->victim < 0 && grant_settled(c)) {
+            pthread_mutex_unlock(&c->lock);
+            return true;
+        }
+        if (atomic_load(&c->stopping)) {
+            pthread_mutex_unlock(&c->lock);
+            return false;
+        }
+        if (now_seconds() > spin_until)
+            pause_locked(c, &pause);
+    }
+}
+
+/* ---- passes ---- */
 
 /* Broadcasts rank 0's start to every rank; false when the cluster stops first. */
 static bool broadcast_start(struct ao_cluster *c, struct start *start)
 {
     MPI_Request pending;
     MPI_Ibcast(start, sizeof *start, MPI_BYTE, 0, c->passes, &pending);
-    return await(&c->stopping, 1, &pending, POLL_IDLE_NS, NULL);
+    if (c->rank == 0)
+        c->bytes_out += (double)c->fan * sizeof *start;
+    return await(c, 1, &pending, POLL_IDLE_NS, true, 0.0);
 }
 
-/* Rank 0 sends its settings and restarts; the others wait for them. */
-static bool begin_pass(void *user, struct ao_settings *settings, uint64_t *restarts)
+static enum ao_share_step begin_step(void *user, enum ao_share_step step, struct ao_settings *settings,
+                                     uint64_t *restarts)
 {
     struct ao_cluster *c = user;
     struct start start;
     memset(&start, 0, sizeof start);
-    if (c->rank == 0) { /* the others' requests come before rank 0's first claim: serve them */
-        pthread_mutex_lock(&c->lock);
-        c->closed = false;
-        c->open = true;
-        pthread_cond_signal(&c->opened);
-        pthread_mutex_unlock(&c->lock);
+    if (c->rank == 0) {
         start.settings = *settings;
         start.restarts = *restarts;
-        start.go = 1;
+        start.step = step;
     }
-    if (!broadcast_start(c, &start) || !start.go)
+    double began = now_seconds();
+    if (!broadcast_start(c, &start))
+        return AO_SHARE_END;
+    if (c->rank == 0)
+        c->seconds += now_seconds() - began;
+    if (start.step == AO_SHARE_END)
+        c->ended = true;
+    if (start.step == AO_SHARE_PASS) {
+        *settings = start.settings;
+        *restarts = start.restarts;
+    }
+    return (enum ao_share_step)start.step;
+}
+
+static bool owns(void *user, int tile, int tiles)
+{
+    (void)tiles;
+    struct ao_cluster *c = user;
+    return tile % c->size == c->rank;
+}
+
+/* The tally's combination: exact sums merged, totals added, maxima taken. */
+static void combine_tallies(void *in, void *inout, int *len, MPI_Datatype *type)
+{
+    (void)type;
+    for (int k = 0; k < *len; k++) {
+        struct ao_share_tally a, b;
+        memcpy(&a, (unsigned char *)in + (size_t)k * sizeof a, sizeof a);
+        memcpy(&b, (unsigned char *)inout + (size_t)k * sizeof b, sizeof b);
+        for (int j = 0; j < AO_TALLY_EXACT; j++)
+            ao_sum_merge(&b.exact[j], &a.exact[j]);
+        for (int j = 0; j < AO_TALLY_TOTAL; j++)
+            b.total[j] += a.total[j];
+        for (int j = 0; j < AO_TALLY_MOST; j++)
+            b.most[j] = a.most[j] > b.most[j] ? a.most[j] : b.most[j];
+        memcpy((unsigned char *)inout + (size_t)k * sizeof b, &b, sizeof b);
+    }
+}
+
+static bool combine(void *user, struct ao_share_tally *tally)
+{
+    struct ao_cluster *c = user;
+    double began = now_seconds();
+    MPI_Request pending;
+    MPI_Iallreduce(MPI_IN_PLACE, tally, 1, c->tally_type, c->tally_op, c->passes, &pending);
+    if (!await(c, 1, &pending, POLL_MOST_NS, true, 0.0))
         return false;
-    *settings = start.settings;
-    *restarts = start.restarts;
+    if (c->rank == 0) {
+        c->passes_combined++;
+        c->bytes_in += (double)c->fan * sizeof *tally;
+        c->bytes_out += (double)c->fan * sizeof *tally;
+        c->seconds += now_seconds() - began;
+    }
     return true;
 }
 
-/* Rank 0 sends its tile states; the others wait for them. */
-static bool pass_states(void *user, void *tiles, size_t size)
+static bool add_up(void *user, uint64_t *values, int count)
 {
     struct ao_cluster *c = user;
-    assert(size <= INT_MAX);
     double began = now_seconds();
     MPI_Request pending;
-    MPI_Ibcast(tiles, (int)size, MPI_BYTE, 0, c->passes, &pending);
-    if (!await(&c->stopping, 1, &pending, 0, NULL)) /* in flight: rank 0 sent the start and its states */
+    MPI_Iallreduce(MPI_IN_PLACE, values, count, MPI_UINT64_T, MPI_SUM, c->passes, &pending);
+    if (!await(c, 1, &pending, POLL_MOST_NS, true, 0.0))
         return false;
-    pthread_mutex_lock(&c->lock);
-    c->merge_bytes += (double)size * (c->rank == 0 ? c->size - 1 : 1);
-    c->moved += now_seconds() - began;
-    pthread_mutex_unlock(&c->lock);
+    if (c->rank == 0) {
+        c->bytes_in += (double)c->fan * (double)count * sizeof *values;
+        c->bytes_out += (double)c->fan * (double)count * sizeof *values;
+        c->seconds += now_seconds() - began;
+    }
     return true;
+}
+
+static bool due(void *user)
+{
+    struct ao_cluster *c = user;
+    double interval = atomic_load(&c->interval);
+    return interval > 0.0 && now_seconds() - c->last_gather >= interval;
+}
+
+/* The gather: rank k's records are tiles k, k + N, k + 2N, ...: rank 0 receives each rank's
+ * straight into place, as a strided datatype. After an interruption (salvage) the same with their
+ * own tag, until the deadline. */
+static bool gather(void *user, const void *mine, int count, size_t size, void *all, int tiles)
+{
+    struct ao_cluster *c = user;
+    bool salvage = c->salvage_until > 0.0;
+    int tag = salvage ? TAG_SALVAGE : TAG_GATHER;
+    double began = now_seconds();
+    if (c->rank != 0) {
+        MPI_Request pending;
+        MPI_Isend(mine, (int)((size_t)count * size), MPI_BYTE, 0, tag, c->images, &pending);
+        return await(c, 1, &pending, POLL_MOST_NS, !salvage, c->salvage_until);
+    }
+    MPI_Request *pending = c->gather_requests;
+    MPI_Datatype *types = c->gather_types;
+    int receives = 0;
+    double bytes = 0.0;
+    for (int r = 1; r < c->size; r++) {
+        int records = tiles > r ? (tiles - r + c->size - 1) / c->size : 0;
+        if (!records)
+            continue;
+        MPI_Type_vector(records, (int)size, (int)((size_t)c->size * size), MPI_BYTE, &types[receives]);
+        MPI_Type_commit(&types[receives]);
+        MPI_Irecv((unsigned char *)all + (size_t)r * size, 1, types[receives], r, tag, c->images, &pending[receives]);
+        receives++;
+        bytes += (double)records * (double)size;
+    }
+    for (int k = 0; k < count; k++)
+        memcpy((unsigned char *)all + (size_t)k * (size_t)c->size * size,
+               (const unsigned char *)mine + (size_t)k * size, size);
+    bool ok = await(c, receives, pending, POLL_MOST_NS, !salvage, c->salvage_until);
+    for (int k = 0; k < receives; k++)
+        MPI_Type_free(&types[k]);
+    if (ok) {
+        c->gathers++;
+        c->gather_bytes += bytes;
+        c->seconds += now_seconds() - began;
+        c->last_gather = now_seconds();
+        atomic_store(&c->copied, c->last_gather);
+    }
+    return ok;
 }
 
 /* Rank 0's render thread ends (the window closed, or the run is over): the others' end too. */
 static void end_run(void *user)
 {
     struct ao_cluster *c = user;
-    struct start start;
-    memset(&start, 0, sizeof start);
-    if (c->rank == 0 && !atomic_load(&c->stopping))
-        broadcast_start(c, &start);
+    if (c->rank != 0 || atomic_load(&c->stopping))
+        return;
+    struct ao_settings settings;
+    memset(&settings, 0, sizeof settings);
+    uint64_t restarts = 0;
+    begin_step(c, AO_SHARE_END, &settings, &restarts);
 }
 
-/* The pass's seconds are the slowest rank's, the previous merge included; waiting for it doubles
- * as the barrier, with sleeps (rank 0 answering the others' last requests meanwhile), and tells
- * whether a rank gave the pass up (rank 0 then hands out no more of it, so that the others come
- * soon). Then the sums of the chunks, sent as they were traced, have arrived or are the last in
- * flight: every rank waits for its receives or sends without sleeping, even for a pass given up
- * (rank 0's receives write into the pass's sums), and rank 0 adds up the rays. */
-static bool merge(void *user, const struct ao_share_pass *pass, bool finished, uint64_t rays[2], double *seconds)
-{
-    struct ao_cluster *c = user;
-    double start = now_seconds(), slowest[2] = {*seconds + c->merge_seconds, finished ? 0.0 : 1.0};
-    if (!finished && c->rank == 0) { /* nothing more is handed out: the others come soon */
-        pthread_mutex_lock(&c->lock);
-        c->closed = true;
-        pthread_mutex_unlock(&c->lock);
-    }
-    MPI_Request pending;
-    MPI_Iallreduce(MPI_IN_PLACE, slowest, 2, MPI_DOUBLE, MPI_MAX, c->passes, &pending);
-    if (!await(&c->stopping, 1, &pending, POLL_MOST_NS, c->rank == 0 ? c : NULL))
-        return false;
-    /* every rank is here: no request is left for rank 0's server thread, no chunk to trace */
-    pthread_mutex_lock(&c->lock);
-    c->open = false;
-    locate_sums(c, pass);
-    if (c->rank == 0)
-        post_receives(c);
-    int moves = c->moving;
-    pthread_mutex_unlock(&c->lock);
-    double arrived = now_seconds();
-    if (!await(&c->stopping, moves, c->moves, 0, NULL) || slowest[1] > 0.0)
-        return false;
-    MPI_Reduce(c->rank == 0 ? MPI_IN_PLACE : rays, rays, 2, MPI_UINT64_T, MPI_SUM, 0, c->passes);
-    *seconds = slowest[0];
-    c->merge_seconds = now_seconds() - start;
-    c->merges++;
-    c->waited += arrived - start;
-    c->moved += now_seconds() - arrived;
-    return true;
-}
+/* ---- life cycle ---- */
 
 bool ao_cluster_init(int *argc, char ***argv, int *rank, int *size)
 {
@@ -516,22 +724,66 @@ bool ao_cluster_agree(bool ok)
     int all = ok;
     MPI_Request pending;
     MPI_Iallreduce(MPI_IN_PLACE, &all, 1, MPI_INT, MPI_LAND, MPI_COMM_WORLD, &pending);
-    await(NULL, 1, &pending, POLL_MOST_NS, NULL);
+    await(NULL, 1, &pending, POLL_MOST_NS, false, 0.0);
     return all;
 }
 
-bool ao_cluster_same(uint64_t value)
+int ao_cluster_differs(uint64_t value)
 {
-    uint64_t range[2] = {value, ~value}; /* the smallest value, and the largest as its complement */
+    int rank, size;
+    MPI_Comm_rank(MPI_COMM_WORLD, &rank);
+    MPI_Comm_size(MPI_COMM_WORLD, &size);
+    uint64_t *all = rank == 0 ? calloc((size_t)size, sizeof *all) : NULL;
     MPI_Request pending;
-    MPI_Iallreduce(MPI_IN_PLACE, range, 2, MPI_UINT64_T, MPI_MIN, MPI_COMM_WORLD, &pending);
-    await(NULL, 1, &pending, POLL_MOST_NS, NULL);
-    return range[0] == ~range[1];
+    MPI_Igather(&value, 1, MPI_UINT64_T, all, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD, &pending);
+    await(NULL, 1, &pending, POLL_MOST_NS, false, 0.0);
+    int first = -1;
+    for (int r = 1; all && r < size && first < 0; r++)
+        if (all[r] != all[0])
+            first = r;
+    if (rank == 0 && !all) /* out of memory: which rank is not known */
+        first = 0;
+    free(all);
+    int verdict[2] = {first, first};
+    MPI_Ibcast(verdict, 2, MPI_INT, 0, MPI_COMM_WORLD, &pending);
+    await(NULL, 1, &pending, POLL_MOST_NS, false, 0.0);
+    return verdict[0];
 }
 
 void ao_cluster_finalize(void)
 {
     MPI_Finalize();
+}
+
+/* The listener: on rank 0, a rank's answer during the run (it was interrupted); elsewhere, rank 0's
+ * request to stop. Either makes this rank stop, once. */
+static void *listen_thread(void *arg)
+{
+    struct ao_cluster *c = arg;
+    while (atomic_load(&c->listen)) {
+        bool heard = false;
+        for (int r = 1; r < c->size && c->rank == 0; r++) {
+            int done = 0;
+            if (c->answers[r] != MPI_REQUEST_NULL) {
+                MPI_Test(&c->answers[r], &done, MPI_STATUS_IGNORE);
+                if (done && !c->first_stop)
+                    c->first_stop = r;
+                heard = heard || done;
+            }
+        }
+        if (c->rank != 0) {
+            int done = 0;
+            MPI_Test(&c->halt, &done, MPI_STATUS_IGNORE);
+            heard = done;
+        }
+        if (heard) {
+            if (c->stopped)
+                c->stopped(c->stopped_user);
+            return NULL;
+        }
+        sleep_ns(LISTEN_NS);
+    }
+    return NULL;
 }
 
 struct ao_cluster *ao_cluster_create(void)
@@ -545,32 +797,57 @@ struct ao_cluster *ao_cluster_create(void)
     }
     MPI_Comm_rank(MPI_COMM_WORLD, &c->rank);
     MPI_Comm_size(MPI_COMM_WORLD, &c->size);
-    MPI_Comm_dup(MPI_COMM_WORLD, &c->claims);
     MPI_Comm_dup(MPI_COMM_WORLD, &c->passes);
+    MPI_Comm_dup(MPI_COMM_WORLD, &c->loans);
+    MPI_Comm_dup(MPI_COMM_WORLD, &c->images);
     MPI_Comm_dup(MPI_COMM_WORLD, &c->control);
+    MPI_Type_contiguous((int)sizeof(struct ao_share_tally), MPI_BYTE, &c->tally_type);
+    MPI_Type_commit(&c->tally_type);
+    MPI_Op_create(combine_tallies, 1, &c->tally_op);
     pthread_mutex_init(&c->lock, NULL);
-    pthread_cond_init(&c->opened, NULL);
     atomic_init(&c->stopping, false);
-    atomic_init(&c->interrupted, -1);
-    c->share = (struct ao_render_share){.begin = begin_pass, .states = pass_states, .claim = claim, .merge = merge,
-                                        .end = end_run,
-                                        .follows = c->rank != 0, .user = c};
+    atomic_init(&c->looked, 0);
+    atomic_init(&c->opened, 0);
+    atomic_init(&c->listen, false);
+    c->share = (struct ao_render_share){.begin = begin_step, .owns = owns, .poll = poll, .borrow = borrow,
+                                        .repay = repay, .settle = settle, .combine = combine, .add_up = add_up,
+                                        .due = due, .gather = gather, .end = end_run, .follows = c->rank != 0,
+                                        .user = c};
     const char *delay = getenv("AO_MPI_TEST_DELAY_US");
     c->delay_ns = delay ? 1000L * strtol(delay, NULL, 10) : 0;
+    for (int n = 1; n < c->size; n *= 2)
+        c->fan++;
+    c->victim = -1;
+    c->repaying = c->answering = MPI_REQUEST_NULL;
+    c->last_gather = now_seconds();
     size_t ranks = (size_t)c->size;
-    bool ok = true;
-    if (c->rank == 0) {
-        c->pending = calloc(ranks, sizeof *c->pending);
-        c->answers = calloc(ranks, sizeof *c->answers);
-        c->tiles_by_rank = calloc(ranks, sizeof *c->tiles_by_rank);
-        ok = c->pending && c->answers && c->tiles_by_rank;
-        if (ok) {
-            MPI_Irecv(c->request, 3, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_REQUEST, c->claims, &c->incoming);
-            ok = c->serving = pthread_create(&c->server, NULL, serve, c) == 0;
+    c->deferred = calloc(ranks, sizeof *c->deferred);
+    c->answer = malloc(LEND_BYTES);
+    c->loan_sums = malloc((size_t)LEND_MOST * AO_TILE_PIXELS * sizeof *c->loan_sums);
+    c->answers = calloc(ranks, sizeof *c->answers);
+    c->signals = calloc(ranks, sizeof *c->signals);
+    c->tiles_by_rank = calloc(ranks, sizeof *c->tiles_by_rank);
+    c->gather_requests = calloc(ranks, sizeof *c->gather_requests);
+    c->gather_types = calloc(ranks, sizeof *c->gather_types);
+    bool ok = c->deferred && c->answer && c->loan_sums && c->answers && c->signals && c->tiles_by_rank &&
+              c->gather_requests && c->gather_types;
+    if (ok) {
+        MPI_Irecv(c->ask, 2, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_ASK, c->loans, &c->asked);
+        MPI_Irecv(&c->give_up, 1, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_GIVE_UP, c->loans, &c->gave_up);
+        for (int r = 0; r < c->size; r++)
+            c->answers[r] = MPI_REQUEST_NULL;
+        for (int r = 1; r < c->size && c->rank == 0; r++) {
+            c->signals[r] = -1;
+            MPI_Irecv(&c->signals[r], 1, MPI_INT, r, TAG_ANSWER, c->control, &c->answers[r]);
         }
+        c->halt = c->released = MPI_REQUEST_NULL;
+        if (c->rank != 0) {
+            MPI_Irecv(&c->halt_word, 1, MPI_INT, 0, TAG_STOP, c->control, &c->halt);
+            MPI_Irecv(&c->release_word, 1, MPI_INT, 0, TAG_RELEASE, c->control, &c->released);
+        }
+    } else {
+        fprintf(stderr, "aoview-mpi: out of memory for the cluster\n");
     }
-    if (!ok)
-        fprintf(stderr, "aoview-mpi: out of memory or threads for the cluster\n");
     if (!ao_cluster_agree(ok)) {
         ao_cluster_destroy(c);
         return NULL;
@@ -583,12 +860,37 @@ const struct ao_render_share *ao_cluster_share(struct ao_cluster *cluster)
     return &cluster->share;
 }
 
+void ao_cluster_set_interval(struct ao_cluster *cluster, double seconds)
+{
+    atomic_store(&cluster->interval, seconds);
+}
+
+void ao_cluster_listen(struct ao_cluster *cluster, void (*stopped)(void *user), void *user)
+{
+    cluster->stopped = stopped;
+    cluster->stopped_user = user;
+    atomic_store(&cluster->listen, true);
+    cluster->listening = pthread_create(&cluster->listener, NULL, listen_thread, cluster) == 0;
+}
+
+/* Ends the listener thread (from main). */
+static void stop_listening(struct ao_cluster *cluster)
+{
+    atomic_store(&cluster->listen, false);
+    if (cluster->listening)
+        pthread_join(cluster->listener, NULL);
+    cluster->listening = false;
+}
+
 void ao_cluster_stop(struct ao_cluster *cluster)
 {
     atomic_store(&cluster->stopping, true);
-    pthread_mutex_lock(&cluster->lock);
-    pthread_cond_broadcast(&cluster->opened);
-    pthread_mutex_unlock(&cluster->lock);
+    stop_listening(cluster);
+}
+
+bool ao_cluster_ended(struct ao_cluster *cluster)
+{
+    return cluster->ended;
 }
 
 void ao_cluster_answer(struct ao_cluster *cluster, int sig)
@@ -596,26 +898,34 @@ void ao_cluster_answer(struct ao_cluster *cluster, int sig)
     MPI_Send(&sig, 1, MPI_INT, 0, TAG_ANSWER, cluster->control);
 }
 
-int ao_cluster_interrupted(struct ao_cluster *cluster, int *sig)
+void ao_cluster_halt(struct ao_cluster *cluster)
 {
-    int rank = atomic_load(&cluster->interrupted);
-    if (sig)
-        *sig = rank > 0 && cluster->pending[rank] == MPI_REQUEST_NULL ? cluster->answers[rank] : 0;
-    return rank;
+    if (cluster->halted)
+        return;
+    cluster->halted = true;
+    static const int word = 1;
+    for (int r = 1; r < cluster->size; r++) {
+        MPI_Request sent;
+        MPI_Isend(&word, 1, MPI_INT, r, TAG_STOP, cluster->control, &sent);
+        MPI_Request_free(&sent);
+    }
 }
 
 void ao_cluster_missing(struct ao_cluster *cluster, double seconds, char *out, size_t size)
 {
-    MPI_Request *pending = cluster->pending;
-    int ranks = cluster->size, left = ranks - 1;
-    for (int r = 1; r < ranks; r++)
-        MPI_Irecv(&cluster->answers[r], 1, MPI_INT, r, TAG_ANSWER, cluster->control, &pending[r]);
-    for (double deadline = now_seconds() + seconds; left > 0 && now_seconds() < deadline; sleep_ns(POLL_MOST_NS))
+    MPI_Request *pending = cluster->answers;
+    int ranks = cluster->size;
+    for (double deadline = now_seconds() + seconds; now_seconds() < deadline; sleep_ns(POLL_MOST_NS)) {
+        int left = 0;
         for (int r = 1; r < ranks; r++) {
             int done = 0;
-            if (pending[r] != MPI_REQUEST_NULL && MPI_Test(&pending[r], &done, MPI_STATUS_IGNORE) == MPI_SUCCESS && done)
-                left--;
+            if (pending[r] != MPI_REQUEST_NULL)
+                MPI_Test(&pending[r], &done, MPI_STATUS_IGNORE);
+            left += pending[r] != MPI_REQUEST_NULL;
         }
+        if (!left)
+            break;
+    }
     size_t used = 0;
     out[0] = '\0';
     for (int r = 1; r < ranks; r++)
@@ -623,18 +933,70 @@ void ao_cluster_missing(struct ao_cluster *cluster, double seconds, char *out, s
             used += (size_t)snprintf(out + used, size - used, "%s%d", used ? ", " : "", r);
 }
 
+int ao_cluster_signalled(struct ao_cluster *cluster, char *out, size_t size)
+{
+    size_t used = 0;
+    int first = 0;
+    out[0] = '\0';
+    for (int r = 1; r < cluster->size; r++)
+        if (cluster->answers[r] == MPI_REQUEST_NULL && cluster->signals[r] > 0 && used < size) {
+            used += (size_t)snprintf(out + used, size - used, "%s%d", used ? ", " : "", r);
+            first = first ? first : cluster->signals[r];
+        }
+    if (!out[0] && cluster->first_stop) /* stopped by itself without a signal: it failed */
+        snprintf(out, size, "%d", cluster->first_stop);
+    return first;
+}
+
+void ao_cluster_salvage(struct ao_cluster *cluster, double seconds)
+{
+    cluster->salvage_until = now_seconds() + seconds;
+}
+
+double ao_cluster_copy_age(struct ao_cluster *cluster)
+{
+    double copied = atomic_load(&cluster->copied);
+    return copied > 0.0 ? now_seconds() - copied : -1.0;
+}
+
+void ao_cluster_release(struct ao_cluster *cluster, int status)
+{
+    cluster->release_word = status;
+    for (int r = 1; r < cluster->size; r++)
+        if (cluster->answers[r] == MPI_REQUEST_NULL) {
+            MPI_Request sent;
+            MPI_Isend(&cluster->release_word, 1, MPI_INT, r, TAG_RELEASE, cluster->control, &sent);
+            MPI_Request_free(&sent);
+        }
+}
+
+bool ao_cluster_await_release(struct ao_cluster *cluster, double seconds, int *status)
+{
+    if (!await(NULL, 1, &cluster->released, POLL_MOST_NS, false, now_seconds() + seconds))
+        return false;
+    *status = cluster->release_word;
+    return true;
+}
+
 void ao_cluster_summary(struct ao_cluster *cluster, char *out, size_t size)
 {
+    stop_listening(cluster);
     unsigned long long mine = cluster->tiles, *all = cluster->tiles_by_rank;
     MPI_Request pending;
     MPI_Igather(&mine, 1, MPI_UNSIGNED_LONG_LONG, all, 1, MPI_UNSIGNED_LONG_LONG, 0, cluster->control, &pending);
-    await(NULL, 1, &pending, POLL_IDLE_NS, NULL);
+    await(NULL, 1, &pending, POLL_IDLE_NS, false, 0.0);
     int used = snprintf(out, size, "%d rank%s, tiles traced by rank", cluster->size, cluster->size > 1 ? "s" : "");
-    for (int r = 0; all && r < cluster->size && used >= 0 && (size_t)used < size; r++)
+    for (int r = 0; r < cluster->size && used >= 0 && (size_t)used < size; r++)
         used += snprintf(out + used, size - (size_t)used, "%s %d: %llu", r ? "," : "", r, all[r]);
+    double passes = cluster->passes_combined ? (double)cluster->passes_combined : 1.0;
     if (used >= 0 && (size_t)used < size)
-        snprintf(out + used, size - (size_t)used, "; %llu merges moved %.1f MB (tiles in, tile states out) in %.3f s, after %.3f s waiting for the slowest rank",
-                 (unsigned long long)cluster->merges, cluster->merge_bytes / 1e6, cluster->moved, cluster->waited);
+        snprintf(out + used, size - (size_t)used,
+                 "; %llu passes, %.0f bytes into rank 0 and %.0f bytes out of it per pass (loans %.0f and %.0f), "
+                 "%.0f bytes in %llu image gathers, %.3f s in collectives and gathers",
+                 (unsigned long long)cluster->passes_combined, (cluster->bytes_in + cluster->loan_in) / passes,
+                 (cluster->bytes_out + cluster->loan_out) / passes, cluster->loan_in / passes,
+                 cluster->loan_out / passes, cluster->gather_bytes, (unsigned long long)cluster->gathers,
+                 cluster->seconds);
 }
 
 void ao_cluster_destroy(struct ao_cluster *cluster)
@@ -642,20 +1004,33 @@ void ao_cluster_destroy(struct ao_cluster *cluster)
     if (!cluster)
         return;
     ao_cluster_stop(cluster);
-    if (cluster->serving) {
-        pthread_join(cluster->server, NULL);
-        MPI_Cancel(&cluster->incoming);
-        MPI_Wait(&cluster->incoming, MPI_STATUS_IGNORE);
-    }
-    MPI_Comm_free(&cluster->claims);
+    MPI_Request *persistent[] = {&cluster->asked, &cluster->gave_up, &cluster->halt, &cluster->released};
+    for (size_t k = 0; k < sizeof persistent / sizeof persistent[0]; k++)
+        if (*persistent[k] != MPI_REQUEST_NULL) {
+            MPI_Cancel(persistent[k]);
+            MPI_Wait(persistent[k], MPI_STATUS_IGNORE);
+        }
+    for (int r = 1; cluster->answers && r < cluster->size; r++)
+        if (cluster->answers[r] != MPI_REQUEST_NULL) {
+            MPI_Cancel(&cluster->answers[r]);
+            MPI_Wait(&cluster->answers[r], MPI_STATUS_IGNORE);
+        }
+    MPI_Op_free(&cluster->tally_op);
+    MPI_Type_free(&cluster->tally_type);
     MPI_Comm_free(&cluster->passes);
+    MPI_Comm_free(&cluster->loans);
+    MPI_Comm_free(&cluster->images);
     MPI_Comm_free(&cluster->control);
-    pthread_cond_destroy(&cluster->opened);
     pthread_mutex_destroy(&cluster->lock);
-    free(cluster->ranges);
-    free(cluster->moves);
-    free(cluster->pending);
+    free(cluster->lent);
+    free(cluster->lent_requests);
+    free(cluster->deferred);
+    free(cluster->answer);
+    free(cluster->loan_sums);
     free(cluster->answers);
+    free(cluster->signals);
     free(cluster->tiles_by_rank);
+    free(cluster->gather_requests);
+    free(cluster->gather_types);
     free(cluster);
 }

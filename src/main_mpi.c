@@ -1,12 +1,14 @@
 /* aoview-mpi: `mpirun -np N aoview-mpi [aoview's options] SCENE` renders aoview's image on N
- * ranks: each loads the scene and traces the tiles it claims from rank 0, which gathers every
- * pass's sums, and shows the window (its keys and mouse set every rank's passes) or, headless,
- * writes -o; and --stats and the progress bar. */
+ * ranks: each loads the scene and traces and keeps the tiles it owns; rank 0 leads (its window's
+ * keys and mouse set every rank's passes), gathers the image when it shows or writes it, and
+ * writes --stats and the progress bar from the few numbers the ranks combine after each pass. */
 #include <fcntl.h>
+#include <math.h>
 #include <signal.h>
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <unistd.h>
 
@@ -17,12 +19,14 @@
 #include "image.h"
 #include "window.h"
 
-/* How long rank 0 waits for the other ranks to answer after an interruption: mpirun sends SIGTERM
- * to every rank at once and SIGKILL a second later, and a PNG takes about 0.5 s to write. The
- * other ranks then wait up to LINGER_SECONDS for that SIGKILL: mpirun kills at once what is left
- * of a job whose other ranks have all ended. */
-static const double ANSWER_SECONDS = 0.2;
-enum { LINGER_SECONDS = 5 };
+/* After an interruption rank 0 waits ANSWER_SECONDS for the other ranks to answer (mpirun sends
+ * SIGTERM to every rank at once and SIGKILL a second later), then SALVAGE_SECONDS for their tiles
+ * (each joins its render thread first), leaving half a second for a PNG (OSMesa and LLVM load at
+ * the first); the others wait up to LINGER_SECONDS for rank 0's release with the run's status
+ * (mpirun kills at once what is left of a job whose other ranks have all ended). A window is
+ * gathered at most FRAME_SECONDS apart; headless, a safety copy every --safety-copy seconds. */
+static const double ANSWER_SECONDS = 0.2, SALVAGE_SECONDS = 0.3, LINGER_SECONDS = 5.0, FRAME_SECONDS = 1.0 / 60.0,
+                    SAFETY_COPY_SECONDS = 5.0;
 
 /* Whether the user watches stderr on a terminal: mpirun hands its ranks a pipe for stderr (and a
  * terminal for stdout, always), so rank 0 also asks about its parent's, which is mpirun's when
@@ -40,12 +44,41 @@ static bool watched_on_terminal(void)
     return terminal;
 }
 
-/* Parses argv on every rank; 0, or the exit status after one message (from rank 0, or from a rank
- * whose options alone fail). */
-static int parse(int argc, char **argv, int rank, struct ao_options *opts)
+/* Takes aoview-mpi's own option, --safety-copy SECONDS, out of argv into *seconds; false with the
+ * message when its value is not a number of seconds >= 0. */
+static bool take_own_options(int *argc, char **argv, double *seconds, char *message, size_t size)
+{
+    int kept = 1;
+    bool ok = true;
+    for (int k = 1; k < *argc; k++) {
+        if (strcmp(argv[k], "--safety-copy") != 0) {
+            argv[kept++] = argv[k];
+            continue;
+        }
+        char *end = NULL;
+        double value = k + 1 < *argc ? strtod(argv[k + 1], &end) : NAN;
+        if (ok && k + 1 >= *argc) {
+            snprintf(message, size, "--safety-copy: needs a number of seconds");
+            ok = false;
+        } else if (ok && (end == argv[k + 1] || *end || !(value >= 0.0) || isinf(value))) {
+            snprintf(message, size, "--safety-copy: expected seconds >= 0, got '%s'", argv[k + 1]);
+            ok = false;
+        }
+        *seconds = ok ? value : *seconds;
+        k++;
+    }
+    argv[kept] = NULL;
+    *argc = kept;
+    return ok;
+}
+
+/* Parses argv on every rank (aoview's options and --safety-copy into *copy); 0, or the exit status
+ * after one message (from rank 0, or from a rank whose options alone fail). */
+static int parse(int argc, char **argv, int rank, struct ao_options *opts, double *copy)
 {
     char message[512];
-    bool parsed = ao_cli_parse(argc, argv, opts, message, sizeof message);
+    bool parsed = take_own_options(&argc, argv, copy, message, sizeof message) &&
+                  ao_cli_parse(argc, argv, opts, message, sizeof message);
     for (int k = 1; k < argc; k++) /* before the parser's own complaints about it */
         if (strcmp(argv[k], "--compare") == 0) {
             snprintf(message, sizeof message, "--compare: not available in aoview-mpi");
@@ -68,34 +101,54 @@ static uint64_t fnv(uint64_t hash, const void *data, size_t size)
     return hash;
 }
 
-/* A fingerprint of what the image depends on: the render config and settings but the threads, and
- * the scene's geometry, so that ranks given other options or other files are caught. */
-static uint64_t fingerprint(const struct ao_render_config *c, const struct ao_settings *s, const struct ao_scene *scene)
+/* A digest of the loaded scene: everything in it that the image depends on (the camera, the ao
+ * distance and the image size are the options' digest's, as the options may replace them). */
+static uint64_t scene_digest(const struct ao_scene *scene)
+{
+    size_t counts[] = {scene->sphere_count, scene->vertex_count, scene->triangle_count, scene->albedo_count};
+    uint64_t hash = fnv(0xcbf29ce484222325u, counts, sizeof counts);
+    hash = fnv(hash, &scene->background, sizeof scene->background);
+    hash = fnv(hash, scene->spheres, scene->sphere_count * sizeof *scene->spheres);
+    hash = fnv(hash, scene->positions, scene->vertex_count * sizeof *scene->positions);
+    hash = fnv(hash, scene->normals, scene->vertex_count * sizeof *scene->normals);
+    hash = fnv(hash, scene->indices, 3 * scene->triangle_count * sizeof *scene->indices);
+    hash = fnv(hash, scene->triangle_albedo, scene->triangle_count * sizeof *scene->triangle_albedo);
+    return fnv(hash, scene->albedos, scene->albedo_count * sizeof *scene->albedos);
+}
+
+/* A digest of what the image and the --stats rows depend on besides the scene: the render config
+ * and settings but the threads (the camera, ao distance and size included), and the reference's
+ * pixels, from which every rank takes its tiles' share of the RMSE. */
+static uint64_t options_digest(const struct ao_render_config *c, const struct ao_settings *s)
 {
     double numbers[] = {s->width, s->height, (double)c->seed, c->target_spp, c->target_error, c->time_limit,
                         c->ao_distance, c->sequence, c->below, s->sampling, s->aa, s->spppp, s->adaptive,
-                        s->output, s->shading, scene->background.x, scene->background.y, scene->background.z,
-                        (double)scene->sphere_count, (double)scene->triangle_count};
+                        s->output, s->shading, c->reference != NULL, c->reference_width, c->reference_height};
     uint64_t hash = fnv(0xcbf29ce484222325u, numbers, sizeof numbers);
     hash = fnv(hash, &s->camera, sizeof s->camera);
-    hash = fnv(hash, scene->positions, scene->vertex_count * sizeof *scene->positions);
-    return fnv(hash, scene->indices, 3 * scene->triangle_count * sizeof *scene->indices);
+    size_t floats = c->reference ? 3 * (size_t)c->reference_width * (size_t)c->reference_height : 0;
+    return fnv(hash, c->reference, floats * sizeof *c->reference);
 }
 
-/* Writes what was held in `held` (see load) to stderr and closes it. */
-static void release(FILE *held, bool say)
+/* Writes what was held in `held` (see load) to stderr, each line naming the rank, and closes it. */
+static void release(FILE *held, bool say, int rank)
 {
-    char buffer[4096];
-    size_t n;
+    char line[4096];
     rewind(held);
-    while (say && (n = fread(buffer, 1, sizeof buffer, held)) > 0)
-        fwrite(buffer, 1, n, stderr);
+    bool start = true;
+    while (say && fgets(line, sizeof line, held)) {
+        if (start)
+            fprintf(stderr, "aoview-mpi: rank %d: ", rank);
+        fputs(line, stderr);
+        start = strchr(line, '\n') != NULL;
+    }
     fclose(held);
 }
 
 /* Loads the scene and the rest on every rank at once; a rank other than 0 holds back what it says
- * (its stderr goes to a temporary file) and says it only if rank 0 loaded, so that a file missing
- * everywhere is reported once; 0 when every rank has it. */
+ * (its stderr goes to a temporary file) and says it, naming itself, only if rank 0 loaded, so that
+ * a file missing everywhere is reported once; 0 when every rank has it and the same scene and
+ * options as rank 0 (else rank 0 names the first rank that differs). */
 static int load(struct ao_app *app, const struct ao_options *opts, int rank, struct ao_render_config *config,
                 struct ao_settings *settings)
 {
@@ -110,49 +163,75 @@ static int load(struct ao_app *app, const struct ao_options *opts, int rank, str
     }
     bool first_loaded = ao_cluster_agree(rank != 0 || status == 0);
     if (held)
-        release(held, first_loaded);
+        release(held, first_loaded, rank);
     if (!ao_cluster_agree(status == 0))
         return AO_EXIT_RUNTIME;
-    if (ao_cluster_same(fingerprint(config, settings, &app->scene)))
+    int scene = ao_cluster_differs(scene_digest(&app->scene));
+    int options = scene >= 0 ? -1 : ao_cluster_differs(options_digest(config, settings));
+    if (scene < 0 && options < 0)
         return 0;
-    if (rank == 0)
-        fprintf(stderr, "aoview-mpi: the ranks were given different options or scene files (only --threads, -o, "
-                        "--stats, --reference and -q may differ)\n");
+    if (rank == 0 && scene >= 0)
+        fprintf(stderr, "aoview-mpi: rank %d loaded another scene than rank 0 (every rank needs the same file)\n",
+                scene);
+    else if (rank == 0)
+        fprintf(stderr, "aoview-mpi: rank %d was given other options than rank 0 (only --threads, -o, --stats and -q "
+                        "may differ, and --reference's path but not its image)\n",
+                options);
     return AO_EXIT_USAGE;
 }
 
-/* After an interruption: the other ranks tell rank 0 they are alive and by which signal; rank 0
- * names those that did not answer (lost: killed or crashed, which made mpirun stop the job), or
- * the rank interrupted while rank 0 was not (a signal to that rank alone, which stopped rank 0's
- * cluster), and writes the image of the last merged pass, the newest frame published (the render
- * thread may be in a tile for long: mpirun's SIGKILL does not wait for it; its --stats row is
- * written). sig: rank 0's own signal, 0 when it has none (yet). */
+/* After an interruption (a signal here or at another rank, a lost rank, rank 0's request to stop).
+ * A rank other than 0 tells rank 0 it is alive and which signal stopped it, sends its tiles and
+ * waits for rank 0's release with the run's status. Rank 0 asks the others to stop and waits for
+ * their answers. When a rank did not answer (lost: killed or crashed, which made mpirun stop the
+ * job) its tiles are gone: rank 0 names it and writes the last copy it gathered, saying how old it
+ * is. Otherwise it gathers the tiles as the ranks hold them and writes that image (or the last copy,
+ * when they do not come in time), naming the rank whose signal ended the run if not its own. */
 static int interrupted(struct ao_app *app, struct ao_cluster *cluster, const struct ao_options *opts, int rank,
                        int sig)
 {
     if (rank != 0) {
         ao_cluster_answer(cluster, sig);
-        sleep(LINGER_SECONDS);
-        return 128 + sig;
+        ao_cluster_salvage(cluster, SALVAGE_SECONDS);
+        ao_render_resolve_stopped(app->render);
+        int status = sig ? 128 + sig : AO_EXIT_RUNTIME;
+        ao_cluster_await_release(cluster, LINGER_SECONDS, &status);
+        return status;
     }
-    char missing[256], why[320];
+    ao_cluster_halt(cluster);
+    char missing[256], ranks[256], why[600], copy_text[96] = "";
     ao_cluster_missing(cluster, ANSWER_SECONDS, missing, sizeof missing);
-    int alone_sig, alone = ao_cluster_interrupted(cluster, &alone_sig);
-    if (!sig) /* mpirun's SIGTERM to every rank may reach rank 0 after another rank's answer */
-        sig = atomic_load(&app->interrupt.caught);
-    int status = missing[0] ? AO_EXIT_RUNTIME : 128 + sig;
-    if (!sig && alone > 0) {
-        snprintf(why, sizeof why, "rank %d interrupted by %s, stopped", alone, ao_app_signal_name(alone_sig));
-        status = alone_sig > 0 ? 128 + alone_sig : AO_EXIT_RUNTIME;
-    } else if (missing[0]) {
-        snprintf(why, sizeof why, "rank %s lost (killed or crashed), stopped", missing);
-    } else {
-        snprintf(why, sizeof why, "interrupted by %s", ao_app_signal_name(sig));
+    int theirs = ao_cluster_signalled(cluster, ranks, sizeof ranks);
+    sig = atomic_load(&app->interrupt.caught); /* mpirun's SIGTERM may come after another rank's answer */
+    const struct ao_frame *copy = ao_render_take_frame(app->render), *frame = NULL;
+    double age = ao_cluster_copy_age(cluster);
+    if (copy)
+        snprintf(copy_text, sizeof copy_text, "the last copy, gathered %.1f s ago, stopped", age);
+    if (!missing[0]) {
+        ao_cluster_salvage(cluster, SALVAGE_SECONDS);
+        frame = ao_render_resolve_stopped(app->render);
     }
-    const struct ao_frame *frame = ao_render_take_frame(app->render);
+    /* "interrupted by SIGTERM" with the ranks' image, "...; the last copy, gathered 1.2 s ago, stopped"
+     * with the copy; ao_app_write adds " at N spp" */
+    const char *copied = frame || !copy ? "" : copy_text, *then = copied[0] ? "; " : "";
+    int status = sig ? 128 + sig : theirs ? 128 + theirs : AO_EXIT_RUNTIME;
+    if (missing[0]) {
+        snprintf(why, sizeof why, "rank %s lost (killed or crashed)%s%s", missing, then, copied);
+        status = AO_EXIT_RUNTIME;
+    } else if (sig) {
+        snprintf(why, sizeof why, "interrupted by %s%s%s", ao_app_signal_name(sig), then, copied);
+    } else if (ranks[0]) {
+        snprintf(why, sizeof why, "rank %s %s%s%s%s", ranks, theirs ? "interrupted by " : "failed",
+                 theirs ? ao_app_signal_name(theirs) : "", then, copied);
+    } else {
+        snprintf(why, sizeof why, "stopped%s%s", then, copied);
+    }
+    frame = frame ? frame : copy;
     if (!frame)
-        fprintf(stderr, "\naoview: %s before the first pass was merged: nothing written\n", why);
-    return ao_app_write(app, opts, frame, why, false, !frame ? AO_EXIT_RUNTIME : status);
+        fprintf(stderr, "\naoview: %s before the first image was gathered: nothing written\n", why);
+    status = ao_app_write(app, opts, frame, why, false, frame ? status : AO_EXIT_RUNTIME);
+    ao_cluster_release(cluster, status);
+    return status;
 }
 
 /* Rank 0: shows the window until the user quits; false where no window can be opened (after one
@@ -172,13 +251,35 @@ static bool show_window(struct ao_app *app, const struct ao_options *opts, int *
     return false;
 }
 
+/* What the cluster's listener stops: the renderer, or rank 0's window at once (as a signal to it
+ * would), naming the rank that ended the run. */
+struct listener {
+    struct ao_app *app;
+    struct ao_cluster *cluster;
+    atomic_bool window;
+};
+
+/* ao_cluster_listen's callback. */
+static void stop_run(void *user)
+{
+    struct listener *l = user;
+    if (atomic_load(&l->window)) {
+        char ranks[256];
+        int sig = ao_cluster_signalled(l->cluster, ranks, sizeof ranks);
+        fprintf(stderr, "aoview: rank %s %s%s: the run ends\n", ranks[0] ? ranks : "?",
+                sig ? "interrupted by " : "failed", sig ? ao_app_signal_name(sig) : "");
+        _exit(sig ? 128 + sig : AO_EXIT_RUNTIME);
+    }
+    ao_render_stop(l->app->render);
+}
+
 /* Renders on every rank; rank 0 shows the window or writes. Returns the exit status; *clean says
  * whether every rank got to the end alike (MPI may then be finalized). */
-static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool *clean)
+static int run(struct ao_app *app, const struct ao_options *opts, double copy, int rank, bool *clean)
 {
     struct ao_options mine = *opts;
-    if (rank != 0) /* only rank 0 shows, reports and writes */
-        mine.quiet = mine.headless = true, mine.stats_path = NULL, mine.reference_path = NULL, mine.output = NULL;
+    if (rank != 0) /* only rank 0 shows, reports and writes; every rank takes its tiles' RMSE */
+        mine.quiet = mine.headless = true, mine.stats_path = NULL, mine.output = NULL;
     struct ao_render_config config;
     struct ao_settings settings;
     /* Rank 0's -o before loading, so that a run never renders for nothing. */
@@ -192,6 +293,7 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool
     struct ao_cluster *cluster = ao_cluster_create();
     if (!cluster)
         return AO_EXIT_RUNTIME;
+    ao_cluster_set_interval(cluster, mine.headless ? copy : FRAME_SECONDS);
     config.share = ao_cluster_share(cluster);
     app->render = ao_render_create(&config, &settings);
     if (!ao_cluster_agree(app->render != NULL)) {
@@ -199,19 +301,23 @@ static int run(struct ao_app *app, const struct ao_options *opts, int rank, bool
         return AO_EXIT_RUNTIME;
     }
     ao_app_watch(app, app->render);
+    struct listener listener = {.app = app, .cluster = cluster};
+    atomic_init(&listener.window, !mine.headless);
+    ao_cluster_listen(cluster, stop_run, &listener);
 
     /* Rank 0's window, or headless (also where no window can be opened): the other ranks follow
      * rank 0's passes until its render thread ends theirs. */
     bool shown = !mine.headless && show_window(app, &mine, &status);
     if (!shown) {
+        atomic_store(&listener.window, false);
+        ao_cluster_set_interval(cluster, copy);
         atomic_store(&app->interrupt.graceful, true);
         int sig;
         bool finished = ao_app_wait(app, &sig);
-        if (!finished && (sig || rank == 0)) {
+        if (!finished && (sig || rank == 0 || !ao_cluster_ended(cluster))) {
             *clean = false;
             ao_cluster_stop(cluster);
-            bool alone = rank == 0 && ao_cluster_interrupted(cluster, NULL) > 0;
-            return sig || alone ? interrupted(app, cluster, &mine, rank, sig) : AO_EXIT_RUNTIME;
+            return interrupted(app, cluster, &mine, rank, sig);
         }
     }
     if (rank == 0)
@@ -239,19 +345,26 @@ int main(int argc, char **argv)
     if (!ao_cluster_init(&argc, &argv, &rank, &size))
         return AO_EXIT_RUNTIME;
     struct ao_options opts;
-    int status = parse(argc, argv, rank, &opts);
+    double copy = SAFETY_COPY_SECONDS;
+    int status = parse(argc, argv, rank, &opts, &copy);
     if (status || opts.help || opts.version) {
-        if (!status && rank == 0 && !ao_app_print(opts.help ? ao_cli_usage() : "aoview-mpi " AO_VERSION "\n"))
-            status = AO_EXIT_RUNTIME;
+        bool printed = status || rank != 0 ||
+                       (opts.help ? ao_app_print(ao_cli_usage()) &&
+                                    ao_app_print("\naoview-mpi also takes:\n"
+                                                 "  --safety-copy S       headless: rank 0 gathers the image every S "
+                                                 "seconds (default\n"
+                                                 "                        5; 0: never), which it writes if a rank is "
+                                                 "lost\n")
+                                  : ao_app_print("aoview-mpi " AO_VERSION "\n"));
         ao_cluster_finalize();
-        return status;
+        return printed ? status : AO_EXIT_RUNTIME;
     }
     if (!ao_cluster_agree(ao_app_start_watcher(&app, rank != 0))) {
         ao_cluster_finalize();
         return AO_EXIT_RUNTIME;
     }
     bool clean = true;
-    status = ao_app_finish(&app, run(&app, &opts, rank, &clean));
+    status = ao_app_finish(&app, run(&app, &opts, copy, rank, &clean));
     if (clean)
         ao_cluster_finalize();
     return status;

@@ -47,6 +47,15 @@ struct tile_state {
     double mean;                         /* over its pixels, the sum of their averages */
 };
 
+/* One tile of the image as a gather moves it (struct ao_render_share's gather): its running average
+ * (its pixels row by row, clipped to the image), its error estimate (as struct ao_frame's) and the
+ * fewest samples a pixel of it has. */
+struct tile_record {
+    float rgb[3 * TILE * TILE];
+    float error;
+    uint32_t fewest;
+};
+
 /* A thread's share of a pass: the tiles of the pass's work list in tile rows k, k + threads,
  * k + 2 threads, ... for thread k, taken in order from `next`. Each thread keeps the same pixels
  * pass after pass, so their sums stay in its own cache (handed round between threads, they crossed
@@ -86,10 +95,31 @@ struct ao_render {
     double image_mean;                   /* of the running average, as of the last survey */
     int *work;                           /* the pass's tiles, grouped by share */
     struct share *shares;                /* one per thread, the render thread's first */
-    struct ao_vec3 *pass_sums;           /* with a share: TILE x TILE per work-list entry */
-    bool *added;                         /* with a share, the leader: the entries of the pass
-                                            added to the accumulation */
     atomic_uint_fast64_t eye_rays, shadow_rays;
+
+    /* What the last survey planned (or a restart: nothing sampled yet), for select_tiles and the
+     * next pass's size: the busiest tile's spp and the largest gain among the tiles short of the
+     * target, and the pixels the next pass traces without and with adaptive sampling (known[k]:
+     * counted; with adaptive sampling off the survey counts only the first). */
+    uint32_t busiest;
+    double fastest;
+    uint64_t next_pixels[2];
+    bool next_known[2];
+
+    /* With a share (aoview-mpi): the tiles this process owns; its work list as one span of entries
+     * [front, back) (front in the low half) that its threads take from the front and the share
+     * lends from the back; the lent entries' sums (TILE x TILE an entry); whether the share gave
+     * the pass up; the records of a gather (this process's tiles', and the leader's of every
+     * tile); the leader's passes not gathered yet; seconds in the share's waits since the last
+     * pass, which count in the next. */
+    unsigned char *mine;                 /* per tile; every tile without a share */
+    atomic_uint_fast64_t span;
+    struct ao_vec3 *pass_sums;
+    atomic_bool given_up;
+    struct ao_share_pass share_pass;
+    struct tile_record *records, *all_records;
+    bool ungathered;
+    double share_seconds;
     struct ao_preview preview;           /* the preview in flight */
 
     pthread_t thread;
@@ -199,26 +229,20 @@ static void add_tile(struct ao_render *r, int t, const struct ao_tile_work *work
     ts->variance = variance > rounding * rounding * pixels ? variance : 0.0;
 }
 
-/* Traces entry n of the work list: alone or leading, adds its sums at once; following, leaves them
- * in the pass's sums, to be sent to the leader. */
+/* Traces entry n of the work list and adds its sums. */
 static void render_tile(struct ao_render *r, int n, uint64_t *eye, uint64_t *shadow)
 {
     int t = r->work[n];
     struct ao_tile rect = tile_rect(r, t);
     uint32_t next;
     struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
-    struct ao_vec3 own[AO_TILE_PIXELS];
-    bool follows = r->config.share && r->config.share->follows;
-    struct ao_vec3 *sums = follows ? r->pass_sums + (size_t)n * TILE * TILE : own;
+    struct ao_vec3 sums[AO_TILE_PIXELS];
     ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow);
-    if (follows)
-        return;
     add_tile(r, t, &work, next, sums);
-    if (r->config.share)
-        r->added[n] = true;
 }
 
-/* The leader adds entries [begin, end) of the pass's sums, which other processes traced. */
+/* With a share: adds entries [begin, end) of the work list, which another process traced for this
+ * one, from the pass's sums. */
 static void add_entries(struct ao_render *r, int begin, int end)
 {
     for (int n = begin; n < end; n++) {
@@ -226,15 +250,53 @@ static void add_entries(struct ao_render *r, int begin, int end)
         uint32_t next;
         struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
         add_tile(r, t, &work, next, r->pass_sums + (size_t)n * TILE * TILE);
-        r->added[n] = true;
     }
 }
 
-/* The pass in flight, as a share numbers it. */
-static struct ao_share_pass share_pass(const struct ao_render *r)
+/* With a share: the next entry of this process's list for its threads, or -1 when none is left. */
+static int take_entry(struct ao_render *r)
 {
-    return (struct ao_share_pass){.serial = r->pass_serial, .count = r->shares[r->config.threads - 1].end,
-                                  .sums = r->pass_sums, .pixels = TILE * TILE};
+    uint_fast64_t span = atomic_load_explicit(&r->span, memory_order_relaxed);
+    for (;;) {
+        uint32_t front = (uint32_t)span, back = (uint32_t)(span >> 32);
+        if (front >= back)
+            return -1;
+        if (atomic_compare_exchange_weak_explicit(&r->span, &span, span + 1, memory_order_relaxed,
+                                                  memory_order_relaxed))
+            return (int)front;
+    }
+}
+
+/* struct ao_share_pass's left: the entries not begun. */
+static int entries_left(void *renderer)
+{
+    uint_fast64_t span = atomic_load_explicit(&((struct ao_render *)renderer)->span, memory_order_relaxed);
+    uint32_t front = (uint32_t)span, back = (uint32_t)(span >> 32);
+    return back > front ? (int)(back - front) : 0;
+}
+
+/* struct ao_share_pass's lend: up to `most` entries not begun, from the end of the list, for
+ * another process. */
+static int lend_entries(void *renderer, int most, int *first, int *tiles, struct ao_tile_work *works)
+{
+    struct ao_render *r = renderer;
+    uint_fast64_t span = atomic_load_explicit(&r->span, memory_order_relaxed);
+    uint32_t back, count;
+    do {
+        uint32_t front = (uint32_t)span;
+        back = (uint32_t)(span >> 32);
+        count = back > front ? back - front : 0;
+        count = count < (uint32_t)most ? count : (uint32_t)most;
+        if (count == 0)
+            return 0;
+    } while (!atomic_compare_exchange_weak_explicit(&r->span, &span, span - ((uint_fast64_t)count << 32),
+                                                    memory_order_relaxed, memory_order_relaxed));
+    *first = (int)(back - count);
+    for (uint32_t k = 0; k < count; k++) {
+        tiles[k] = r->work[*first + (int)k];
+        works[k] = tile_work(r, &r->tiles[tiles[k]], NULL);
+    }
+    return (int)count;
 }
 
 /* Thread `self`'s part of a pass: its own share, then what is left of the others'. */
@@ -242,17 +304,7 @@ static void render_tiles(struct ao_render *r, int self)
 {
     int threads = r->config.threads;
     uint64_t eye = 0, shadow = 0;
-    const struct ao_render_share *share = r->config.share;
-    struct ao_share_pass pass = share_pass(r);
-    for (int n = -1; share && !aborted(r);) { /* the entries this process claims, in any order */
-        int arrived[2] = {0, 0};
-        n = share->claim(share->user, &pass, n, arrived);
-        add_entries(r, arrived[0], arrived[1]);
-        if (n < 0)
-            break;
-        render_tile(r, n, &eye, &shadow);
-    }
-    for (int v = 0; v < threads && !share && !aborted(r); v++) {
+    for (int v = 0; v < threads && !aborted(r); v++) {
         struct share *sh = &r->shares[(self + v) % threads];
         for (;;) {
             int n = sh->begin + atomic_fetch_add_explicit(&sh->next, 1, memory_order_relaxed);
@@ -265,37 +317,70 @@ static void render_tiles(struct ao_render *r, int self)
     atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
 }
 
-/* The pool's job for a pass: render_tiles on every thread. */
-static void pass_job(void *user, int self)
-{
-    render_tiles(user, self);
-}
-
-/* Runs one pass on all threads; false when it was aborted by a restart or stop. */
-static bool run_pass(struct ao_render *r)
-{
-    for (int k = 0; k < r->config.threads; k++)
-        atomic_store(&r->shares[k].next, 0);
-    if (r->added)
-        memset(r->added, 0, (size_t)r->shares[r->config.threads - 1].end * sizeof *r->added);
-    r->pass_serial++;
-    ao_pool_run(r->pool, pass_job, r);
-    return !aborted(r);
-}
-
-/* With a share, after a pass this process finished or gave up: gathers the pass's rays and seconds
- * from the processes, and the leader adds the tiles the others traced to the accumulation; false
- * when the pass does not count (given up somewhere, or the run stops). */
-static bool merge_pass(struct ao_render *r, bool finished, uint64_t rays[2], double *seconds)
+/* With a share, any thread's part of a pass: the entries of this process's list, adding those that
+ * other processes traced for it as their sums come, then tiles borrowed from other processes. */
+static void render_shared(struct ao_render *r)
 {
     const struct ao_render_share *share = r->config.share;
-    struct ao_share_pass pass = share_pass(r);
-    if (!share->merge(share->user, &pass, finished, rays, seconds))
-        return false;
-    for (int n = 0; n < pass.count && !share->follows; n++)
-        if (!r->added[n])
-            add_entries(r, n, n + 1);
-    return true;
+    const struct ao_share_pass *pass = &r->share_pass;
+    uint64_t eye = 0, shadow = 0;
+    while (!aborted(r)) {
+        int arrived[2] = {0, 0};
+        bool going = share->poll(share->user, pass, arrived);
+        add_entries(r, arrived[0], arrived[1]);
+        if (!going) {
+            atomic_store(&r->given_up, true);
+            break;
+        }
+        int n = take_entry(r);
+        if (n >= 0) {
+            render_tile(r, n, &eye, &shadow);
+            continue;
+        }
+        struct ao_share_loan loan;
+        if (!share->borrow(share->user, pass, &loan))
+            break;
+        struct ao_tile rect = tile_rect(r, loan.tile);
+        ao_estimate_tile(&r->ctx, &rect, &loan.work, loan.sums, &eye, &shadow);
+        share->repay(share->user, pass, &loan);
+    }
+    atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
+    atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
+}
+
+/* The pool's job for a pass: render_tiles (or render_shared) on every thread. */
+static void pass_job(void *user, int self)
+{
+    struct ao_render *r = user;
+    if (r->config.share)
+        render_shared(r);
+    else
+        render_tiles(r, self);
+}
+
+/* Runs one pass on all threads; false when it was aborted by a restart or stop, or given up by the
+ * share. With a share, the entries this process lent are added once their sums are back. */
+static bool run_pass(struct ao_render *r)
+{
+    int count = r->shares[r->config.threads - 1].end;
+    for (int k = 0; k < r->config.threads; k++)
+        atomic_store(&r->shares[k].next, 0);
+    atomic_store(&r->span, (uint_fast64_t)count << 32);
+    atomic_store(&r->given_up, false);
+    r->pass_serial++;
+    r->share_pass = (struct ao_share_pass){.serial = r->pass_serial, .count = count, .pixels = TILE * TILE,
+                                           .sums = r->pass_sums, .left = entries_left, .lend = lend_entries,
+                                           .renderer = r};
+    ao_pool_run(r->pool, pass_job, r);
+    bool finished = !aborted(r) && !atomic_load(&r->given_up);
+    const struct ao_render_share *share = r->config.share;
+    for (int arrived[2] = {0, 1}; share && arrived[0] < arrived[1];) {
+        arrived[0] = arrived[1] = 0;
+        if (!share->settle(share->user, &r->share_pass, finished, arrived))
+            return false;
+        add_entries(r, arrived[0], arrived[1]);
+    }
+    return finished;
 }
 
 /* ---- planning: run by the render thread between passes ---- */
@@ -328,20 +413,16 @@ static double gain(const struct ao_render *r, int t)
     return ts->variance / tile_pixels(r, t) / tile_spp(ts);
 }
 
-/* Fills the work list with the tiles the next pass traces, dealt to the threads' shares by tile
- * row, and returns how many pixels they hold: every tile short of target_spp, or with adaptive
- * sampling those among them that MIN_PASSES's rule picks. */
+/* Fills the work list with the tiles of this process's (every tile without a share) that the next
+ * pass traces, dealt to the threads' shares by tile row, and returns how many pixels they hold:
+ * every tile short of target_spp, or with adaptive sampling those among them that MIN_PASSES's
+ * rule picks, with the busiest tile and the largest gain that the last survey found. */
 static size_t select_tiles(struct ao_render *r, bool adaptive)
 {
-    /* With a share, one list in row order, the same in every process whatever its threads. */
+    /* With a share, one list in row order, the same whatever the threads. */
     int threads = r->config.threads, groups = r->config.share ? 1 : threads, tiles = r->tiles_x * r->tiles_y;
-    uint32_t target = r->config.target_spp, busiest = 0;
-    double fastest = 0.0;
-    for (int t = 0; adaptive && t < tiles; t++)
-        if (tile_spp(&r->tiles[t]) < target) {
-            busiest = tile_spp(&r->tiles[t]) > busiest ? tile_spp(&r->tiles[t]) : busiest;
-            fastest = settled(&r->tiles[t]) && gain(r, t) > fastest ? gain(r, t) : fastest;
-        }
+    uint32_t target = r->config.target_spp, busiest = r->busiest;
+    double fastest = r->fastest;
     size_t pixels = 0;
     int n = 0;
     for (int k = 0; k < threads; k++) {
@@ -353,7 +434,7 @@ static size_t select_tiles(struct ao_render *r, bool adaptive)
         for (int t = k * r->tiles_x; t < tiles; t++) {
             const struct tile_state *ts = &r->tiles[t];
             uint32_t spp = tile_spp(ts);
-            bool wanted = spp < target &&
+            bool wanted = r->mine[t] && spp < target &&
                           (!adaptive || !settled(ts) || (gain(r, t) > 0.0 && gain(r, t) >= SKIP_BELOW * fastest) ||
                            (uint64_t)spp * RECHECK < busiest);
             if (wanted) {
@@ -368,33 +449,151 @@ static size_t select_tiles(struct ao_render *r, bool adaptive)
     return pixels;
 }
 
-/* Fills in info's per-pixel counts, error estimate, converged share and whether the run is done,
- * keeps the image mean, and selects the next pass's tiles. */
-static void survey(struct ao_render *r, struct ao_frame_info *info, bool adaptive)
+/* What the processes add up or maximise after a pass (struct ao_share_tally's slots). */
+enum { EXACT_VARIANCE, EXACT_MEAN, EXACT_SQUARES };
+enum { TOTAL_EYE, TOTAL_SHADOW, TOTAL_SAMPLES, TOTAL_SHORT };
+enum { MOST_SECONDS, MOST_GAVE_UP, MOST_SPPPP, MOST_SPP, MOST_BUSIEST, MOST_FASTEST, MOST_UNHALVED, MOST_UNSETTLED };
+_Static_assert((int)EXACT_SQUARES < (int)AO_TALLY_EXACT && (int)TOTAL_SHORT < (int)AO_TALLY_TOTAL &&
+                   (int)MOST_UNSETTLED < (int)AO_TALLY_MOST,
+               "the tally's slots");
+
+/* Whether the reference (if any) has the image's size: the RMSE is taken only then. */
+static bool has_reference(const struct ao_render *r)
 {
-    int tiles = r->tiles_x * r->tiles_y;
-    double image = (double)r->width * (double)r->height, samples = 0.0, variance = 0.0, mean = 0.0;
-    bool halves = true, all_settled = true;
-    info->spp = 0;
-    for (int t = 0; t < tiles; t++) {
+    return r->config.reference && r->config.reference_width == r->width &&
+           r->config.reference_height == r->height;
+}
+
+/* Over the pixels of tile t, the sum of the squared differences of their running average (as
+ * ao_accum_resolve makes it) from the reference, in row order. */
+static double tile_squares(const struct ao_render *r, int t)
+{
+    struct ao_tile rect = tile_rect(r, t);
+    const struct ao_accum *a = &r->accum;
+    double sum = 0.0;
+    for (int j = rect.y0; j < rect.y1; j++)
+        for (int i = rect.x0; i < rect.x1; i++) {
+            size_t p = (size_t)j * (size_t)r->width + (size_t)i;
+            double inv = a->count[p] ? 1.0 / a->count[p] : 0.0;
+            for (int c = 0; c < 3; c++) {
+                double d = (double)(float)(a->sum[3 * p + c] * inv) - (double)r->config.reference[3 * p + c];
+                sum += d * d;
+            }
+        }
+    return sum;
+}
+
+/* Fills in tally for the tiles this process owns: their per-pixel counts, error estimate, mean and
+ * squared error from the reference as exact sums (so that any split of the tiles adds up to the
+ * same bits), and what select_tiles and the target error decide on. */
+static void tally_tiles(const struct ao_render *r, struct ao_share_tally *tally)
+{
+    uint32_t target = r->config.target_spp;
+    bool reference = has_reference(r);
+    for (int t = 0; t < r->tiles_x * r->tiles_y; t++) {
+        if (!r->mine[t])
+            continue;
         const struct tile_state *ts = &r->tiles[t];
         uint32_t spp = tile_spp(ts);
-        info->spp = spp > info->spp ? spp : info->spp;
-        samples += (double)spp * tile_pixels(r, t);
-        variance += ts->variance;
-        mean += ts->mean;
-        halves = halves && ts->passes >= 2;
-        all_settled = all_settled && (settled(ts) || spp >= r->config.target_spp);
+        double *most = tally->most;
+        most[MOST_SPP] = spp > most[MOST_SPP] ? spp : most[MOST_SPP];
+        tally->total[TOTAL_SAMPLES] += (uint64_t)spp * (uint64_t)tile_pixels(r, t);
+        ao_sum_add(&tally->exact[EXACT_VARIANCE], ts->variance);
+        ao_sum_add(&tally->exact[EXACT_MEAN], ts->mean);
+        if (reference)
+            ao_sum_add(&tally->exact[EXACT_SQUARES], tile_squares(r, t));
+        if (ts->passes < 2)
+            most[MOST_UNHALVED] = 1.0;
+        if (!settled(ts) && spp < target)
+            most[MOST_UNSETTLED] = 1.0;
+        if (spp < target) {
+            tally->total[TOTAL_SHORT] += (uint64_t)tile_pixels(r, t);
+            most[MOST_BUSIEST] = spp > most[MOST_BUSIEST] ? spp : most[MOST_BUSIEST];
+            if (settled(ts) && gain(r, t) > most[MOST_FASTEST])
+                most[MOST_FASTEST] = gain(r, t);
+        }
     }
-    info->mean_spp = samples / image;
+    for (int k = 0; k < AO_TALLY_EXACT; k++)
+        ao_sum_normalize(&tally->exact[k]);
+}
+
+/* The pixels of the next pass with adaptive sampling (`adaptive`) or without: counted by the last
+ * survey, or here (over the processes: every one takes the same path). False when the share stops. */
+static bool next_pixels(struct ao_render *r, bool adaptive, uint64_t *pixels)
+{
+    if (!r->next_known[adaptive]) {
+        uint64_t own = select_tiles(r, adaptive);
+        const struct ao_render_share *share = r->config.share;
+        double start = now_seconds();
+        if (share && !share->add_up(share->user, &own, 1))
+            return false;
+        if (share)
+            r->share_seconds += now_seconds() - start;
+        r->next_pixels[adaptive] = own;
+        r->next_known[adaptive] = true;
+    }
+    *pixels = r->next_pixels[adaptive];
+    return true;
+}
+
+/* After a pass this process ran (finished or not), with the pass's rays, seconds and largest share
+ * of samples: combines the tally over the processes (with a share), adds the pass's rays and
+ * seconds to info and, when every process finished it, fills in info's per-pixel counts, error
+ * estimate, RMSE, converged share and whether the run is done, keeps the image mean and plans the
+ * next pass. *counts: whether the pass counts; false when the share stops. */
+static bool survey(struct ao_render *r, struct ao_frame_info *info, bool adaptive, bool finished, uint64_t rays[2],
+                   double seconds, uint32_t spppp, bool *counts)
+{
+    struct ao_share_tally tally;
+    memset(&tally, 0, sizeof tally);
+    tally.total[TOTAL_EYE] = rays[0];
+    tally.total[TOTAL_SHADOW] = rays[1];
+    tally.most[MOST_SECONDS] = seconds + r->share_seconds;
+    tally.most[MOST_GAVE_UP] = finished ? 0.0 : 1.0;
+    tally.most[MOST_SPPPP] = spppp;
+    if (finished || r->config.share)
+        tally_tiles(r, &tally);
+    const struct ao_render_share *share = r->config.share;
+    double start = now_seconds();
+    if (share && !share->combine(share->user, &tally))
+        return false;
+    r->share_seconds = share ? now_seconds() - start : 0.0;
+    info->eye_rays += tally.total[TOTAL_EYE];
+    info->shadow_rays += tally.total[TOTAL_SHADOW];
+    info->seconds += tally.most[MOST_SECONDS];
+    *counts = tally.most[MOST_GAVE_UP] == 0.0;
+    if (!*counts)
+        return true;
+
+    double image = (double)r->width * (double)r->height;
+    double variance = ao_sum_value(&tally.exact[EXACT_VARIANCE]), mean = ao_sum_value(&tally.exact[EXACT_MEAN]);
+    info->pass++;
+    info->spppp = (uint32_t)tally.most[MOST_SPPPP];
+    info->spp = (uint32_t)tally.most[MOST_SPP];
+    info->mean_spp = (double)tally.total[TOTAL_SAMPLES] / image;
     r->image_mean = mean / image;
     /* sqrt(variance / image) / (mean / image), 0 or infinite for a black image */
-    info->error = !halves ? NAN : mean > 0.0 ? sqrt(variance * image) / mean : variance > 0.0 ? INFINITY : 0.0;
-    size_t next = select_tiles(r, adaptive);
+    info->error = tally.most[MOST_UNHALVED] > 0.0 ? NAN
+                  : mean > 0.0                    ? sqrt(variance * image) / mean
+                  : variance > 0.0                ? INFINITY
+                                                  : 0.0;
+    info->rmse = has_reference(r) ? sqrt(ao_sum_value(&tally.exact[EXACT_SQUARES]) / (3.0 * image)) : NAN;
+
+    /* The next pass's plan, and what it says of this one. */
+    r->busiest = (uint32_t)tally.most[MOST_BUSIEST];
+    r->fastest = tally.most[MOST_FASTEST];
+    r->next_pixels[0] = tally.total[TOTAL_SHORT];
+    r->next_known[0] = true;
+    r->next_known[1] = false;
+    uint64_t next;
+    if (!next_pixels(r, adaptive, &next))
+        return false;
     info->converged = adaptive ? 1.0 - (double)next / image : 0.0;
-    bool error_reached = r->config.target_error > 0.0 && all_settled && info->error <= r->config.target_error;
+    bool error_reached = r->config.target_error > 0.0 && tally.most[MOST_UNSETTLED] == 0.0 &&
+                         info->error <= r->config.target_error;
     bool time_up = r->config.time_limit > 0.0 && info->seconds >= r->config.time_limit;
     info->done = next == 0 || error_reached || time_up;
+    return true;
 }
 
 /* The AO samples per pixel of the next pass: the setting, or with auto the most a tile may take
@@ -433,21 +632,15 @@ static double rmse(const float *image, const float *reference, size_t count)
     return sqrt(sum / (double)count);
 }
 
-/* Resolves the running average into the back frame with its tile errors and info, its RMSE filled
- * in where the reference has the image's size; the frame, or NULL when memory is short. */
-static struct ao_frame *resolve(struct ao_render *r, struct ao_frame_info *info)
+/* Tile t's estimated error, as struct ao_frame's tile_error holds it. */
+static float tile_error(const struct ao_render *r, int t)
 {
-    struct ao_frame *f = ao_frames_back(&r->frames, r->width, r->height, r->tiles_x * r->tiles_y);
-    if (!f)
-        return NULL;
-    size_t count = 3 * (size_t)f->width * (size_t)f->height;
-    ao_accum_resolve(&r->accum, f->rgb);
-    bool matches = r->config.reference && r->config.reference_width == r->width &&
-                   r->config.reference_height == r->height;
-    info->rmse = matches ? rmse(f->rgb, r->config.reference, count) : NAN;
-    for (int t = 0; t < r->tiles_x * r->tiles_y; t++)
-        f->tile_error[t] = r->image_mean > 0.0 ? (float)(sqrt(r->tiles[t].variance / tile_pixels(r, t)) / r->image_mean)
-                                               : 0.0f;
+    return r->image_mean > 0.0 ? (float)(sqrt(r->tiles[t].variance / tile_pixels(r, t)) / r->image_mean) : 0.0f;
+}
+
+/* Frame f's facts for a whole image of this run, info's included. */
+static void frame_facts(const struct ao_render *r, struct ao_frame *f, const struct ao_frame_info *info)
+{
     f->tile = TILE;
     f->tiles_x = r->tiles_x;
     f->tiles_y = r->tiles_y;
@@ -455,15 +648,92 @@ static struct ao_frame *resolve(struct ao_render *r, struct ao_frame_info *info)
     f->image_width = r->width;
     f->image_height = r->height;
     f->info = *info;
+}
+
+/* Resolves the running average into the back frame with its tile errors and info; the frame, or
+ * NULL when memory is short. */
+static struct ao_frame *resolve(struct ao_render *r, const struct ao_frame_info *info)
+{
+    struct ao_frame *f = ao_frames_back(&r->frames, r->width, r->height, r->tiles_x * r->tiles_y);
+    if (!f)
+        return NULL;
+    ao_accum_resolve(&r->accum, f->rgb);
+    for (int t = 0; t < r->tiles_x * r->tiles_y; t++)
+        f->tile_error[t] = tile_error(r, t);
+    frame_facts(r, f, info);
     return f;
 }
 
 /* Publishes the pass just surveyed; false when memory is short. */
-static bool publish(struct ao_render *r, struct ao_frame_info *info)
+static bool publish(struct ao_render *r, const struct ao_frame_info *info)
 {
     if (!resolve(r, info))
         return false;
     ao_frames_publish(&r->frames);
+    return true;
+}
+
+/* With a share: the records of this process's tiles, in tile order (a tile not traced in this run
+ * is black, with no samples); returns how many. */
+static int pack_records(struct ao_render *r)
+{
+    const struct ao_accum *a = &r->accum;
+    int count = 0;
+    for (int t = 0; t < r->tiles_x * r->tiles_y; t++) {
+        if (!r->mine[t])
+            continue;
+        struct tile_record *record = &r->records[count++];
+        struct ao_tile rect = tile_rect(r, t);
+        bool traced = r->tiles[t].passes > 0;
+        float *rgb = record->rgb;
+        record->fewest = UINT32_MAX;
+        for (int j = rect.y0; j < rect.y1; j++)
+            for (int i = rect.x0; i < rect.x1; i++) {
+                size_t p = (size_t)j * (size_t)r->width + (size_t)i;
+                uint32_t n = traced ? a->count[p] : 0;
+                double inv = n ? 1.0 / n : 0.0;
+                for (int c = 0; c < 3; c++)
+                    *rgb++ = traced ? (float)(a->sum[3 * p + c] * inv) : 0.0f;
+                record->fewest = n < record->fewest ? n : record->fewest;
+            }
+        record->error = tile_error(r, t);
+    }
+    return count;
+}
+
+/* With a share: gathers every process's tiles; the leader resolves them into the back frame with
+ * info, its spp the fewest samples of a pixel when `fewest` (after an interruption). False when the
+ * share stops (or, the leader, memory is short). */
+static bool gather(struct ao_render *r, const struct ao_frame_info *info, bool fewest)
+{
+    const struct ao_render_share *share = r->config.share;
+    int count = pack_records(r);
+    double start = now_seconds();
+    bool leads = !share->follows;
+    if (!share->gather(share->user, r->records, count, sizeof *r->records, leads ? r->all_records : NULL,
+                       r->tiles_x * r->tiles_y))
+        return false;
+    r->share_seconds += now_seconds() - start;
+    if (!leads)
+        return true;
+    struct ao_frame *f = ao_frames_back(&r->frames, r->width, r->height, r->tiles_x * r->tiles_y);
+    if (!f)
+        return false;
+    uint32_t least = UINT32_MAX;
+    for (int t = 0; t < r->tiles_x * r->tiles_y; t++) {
+        const struct tile_record *record = &r->all_records[t];
+        struct ao_tile rect = tile_rect(r, t);
+        size_t row = 3 * (size_t)(rect.x1 - rect.x0) * sizeof(float);
+        for (int j = rect.y0; j < rect.y1; j++)
+            memcpy(f->rgb + 3 * ((size_t)j * (size_t)r->width + (size_t)rect.x0),
+                   record->rgb + 3 * (size_t)(j - rect.y0) * (size_t)(rect.x1 - rect.x0), row);
+        f->tile_error[t] = record->error;
+        least = record->fewest < least ? record->fewest : least;
+    }
+    frame_facts(r, f, info);
+    if (fewest)
+        f->info.spp = least;
+    r->ungathered = false;
     return true;
 }
 
@@ -540,10 +810,10 @@ struct pass_start {
     uint64_t own, restarts;
 };
 
-/* Takes the settings for the next pass and, with a share, begins it on every process: the tile
- * states follow unless the pass starts a run other than `run`. Called with r->lock held, which it
- * releases; false when the share ended the run. */
-static bool take_pass(struct ao_render *r, struct pass_start *p, uint64_t run)
+/* Takes the settings for the next pass and, with a share, begins it on every process (another
+ * process than the leader takes part in the leader's gathers while it waits); info: the facts of
+ * the last pass. Called with r->lock held, which it releases; false when the share ended the run. */
+static bool take_pass(struct ao_render *r, struct pass_start *p, const struct ao_frame_info *info)
 {
     p->settings = r->settings;
     p->own = p->restarts = r->restarts;
@@ -551,10 +821,26 @@ static bool take_pass(struct ao_render *r, struct pass_start *p, uint64_t run)
     const struct ao_render_share *share = r->config.share;
     if (!share)
         return true;
-    if (!share->begin(share->user, &p->settings, &p->restarts))
+    for (;;) {
+        enum ao_share_step step = share->begin(share->user, AO_SHARE_PASS, &p->settings, &p->restarts);
+        if (step != AO_SHARE_GATHER)
+            return step == AO_SHARE_PASS;
+        if (!gather(r, info, false))
+            return false;
+    }
+}
+
+/* The leader with a share: gathers the image from every process and publishes it with info; false
+ * when the share stops or memory is short. */
+static bool gather_frame(struct ao_render *r, const struct ao_frame_info *info)
+{
+    const struct ao_render_share *share = r->config.share;
+    struct ao_settings settings = r->settings;
+    uint64_t restarts = 0;
+    if (share->begin(share->user, AO_SHARE_GATHER, &settings, &restarts) != AO_SHARE_GATHER || !gather(r, info, false))
         return false;
-    return p->restarts != run ||
-           share->states(share->user, r->tiles, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
+    ao_frames_publish(&r->frames);
+    return true;
 }
 
 /* Allocates the accumulation, tile states and work lists of a width x height run; false with one
@@ -565,15 +851,21 @@ static bool allocate_run(struct ao_render *r)
     r->tiles_y = (r->height + TILE - 1) / TILE;
     if (!ao_accum_init(&r->accum, r->width, r->height))
         return false;
-    size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y;
+    size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y, owned = 0;
+    const struct ao_render_share *share = r->config.share;
     r->tiles = calloc(tiles, sizeof *r->tiles);
     r->work = calloc(tiles, sizeof *r->work);
-    bool leads = r->config.share && !r->config.share->follows;
-    if (r->config.share)
+    r->mine = malloc(tiles);
+    if (r->mine)
+        for (size_t t = 0; t < tiles; t++)
+            owned += r->mine[t] = !share || share->owns(share->user, (int)t, (int)tiles);
+    if (share) {
         r->pass_sums = malloc(tiles * TILE * TILE * sizeof *r->pass_sums);
-    if (leads)
-        r->added = calloc(tiles, sizeof *r->added);
-    if (!r->tiles || !r->work || (r->config.share && !r->pass_sums) || (leads && !r->added)) {
+        r->records = malloc((owned ? owned : 1) * sizeof *r->records);
+        r->all_records = share->follows ? NULL : malloc(tiles * sizeof *r->all_records);
+    }
+    if (!r->tiles || !r->work || !r->mine ||
+        (share && (!r->pass_sums || !r->records || (!share->follows && !r->all_records)))) {
         fprintf(stderr, "aoview: out of memory for a %dx%d image\n", r->width, r->height);
         return false;
     }
@@ -586,12 +878,15 @@ static void free_run(struct ao_render *r)
     ao_accum_finish(&r->accum);
     free(r->tiles);
     free(r->work);
+    free(r->mine);
     free(r->pass_sums);
-    free(r->added);
+    free(r->records);
+    free(r->all_records);
     r->tiles = NULL;
     r->work = NULL;
+    r->mine = NULL;
     r->pass_sums = NULL;
-    r->added = NULL;
+    r->records = r->all_records = NULL;
 }
 
 /* Starts a run of the settings s (restarts `restarts`): tile states cleared (the sums follow, tile
@@ -606,6 +901,12 @@ static bool start_run(struct ao_render *r, const struct ao_settings *s, uint64_t
             return false;
     }
     memset(r->tiles, 0, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
+    /* Nothing sampled: every tile short of the target (all of them) joins the first pass. */
+    r->busiest = 0;
+    r->fastest = 0.0;
+    r->next_pixels[0] = r->next_pixels[1] = r->config.target_spp ? (uint64_t)r->width * (uint64_t)r->height : 0;
+    r->next_known[0] = r->next_known[1] = true;
+    r->ungathered = false;
     *info = (struct ao_frame_info){.restarts = restarts, .target_spp = r->config.target_spp,
                                    .target_error = r->config.target_error, .time_limit = r->config.time_limit,
                                    .sampling = s->sampling, .aa = s->aa, .output = s->output, .shading = s->shading};
@@ -616,7 +917,7 @@ static void *render_main(void *arg)
 {
     struct ao_render *r = arg;
     const struct ao_render_share *share = r->config.share;
-    bool follows = share && share->follows;
+    bool follows = share && share->follows, leads = share && !follows;
     struct ao_frame_info info = {.restarts = UINT64_MAX};
     struct pass_start next;
     bool begun = false; /* the leader began the next pass before it published the last */
@@ -626,7 +927,7 @@ static void *render_main(void *arg)
         /* Take the settings, unless they were taken; a restart starts a run. */
         if (begun) {
             pthread_mutex_unlock(&r->lock);
-        } else if (!take_pass(r, &next, info.restarts)) {
+        } else if (!take_pass(r, &next, &info)) {
             ao_render_stop(r);
             pthread_mutex_lock(&r->lock);
             break;
@@ -645,43 +946,57 @@ static void *render_main(void *arg)
             break;
         }
 
-        /* Plan the pass: its tiles, its samples. */
-        size_t pixels = select_tiles(r, s.adaptive);
+        /* Plan the pass: its tiles, its samples (from every process's pixels). */
+        uint64_t pixels;
+        if (!next_pixels(r, s.adaptive, &pixels)) {
+            ao_render_stop(r);
+            pthread_mutex_lock(&r->lock);
+            break;
+        }
+        select_tiles(r, s.adaptive);
         r->samples = pass_samples(&s, pixels);
         r->per_ray = s.spppp > 0 ? 0 : AUTO_PER_RAY;
         uint32_t spppp = largest_share(r);
 
-        /* Run it, unless nothing is left to sample (adaptive sampling was just turned on). */
-        bool complete = false;
+        /* Run it, unless nothing is left to sample (adaptive sampling was just turned on), and
+         * survey it (with a share, every process's tiles). */
+        bool counts = false;
         if (pixels) {
             double start = now_seconds();
             ao_camera_view(&s.camera, r->width, r->height, &r->ctx.view);
             atomic_store(&r->eye_rays, 0);
             atomic_store(&r->shadow_rays, 0);
-            complete = run_pass(r);
+            bool finished = run_pass(r);
             uint64_t rays[2] = {atomic_load(&r->eye_rays), atomic_load(&r->shadow_rays)};
-            double seconds = now_seconds() - start;
-            if (share)
-                complete = merge_pass(r, complete, rays, &seconds);
-            info.eye_rays += rays[0];
-            info.shadow_rays += rays[1];
-            info.seconds += seconds;
+            if (!survey(r, &info, s.adaptive, finished, rays, now_seconds() - start, spppp, &counts)) {
+                ao_render_stop(r);
+                pthread_mutex_lock(&r->lock);
+                break;
+            }
         }
 
-        /* Publish it (a follower keeps no image, and plans from the leader's tile states). */
-        if (complete && !follows) {
-            info.pass++;
-            info.spppp = spppp;
-            survey(r, &info, s.adaptive);
-            /* The other processes wait for the next pass: it begins before this one is published. */
-            if (share && !info.done) {
+        /* Publish it: with a share the leader gathers a frame when one is due, for the last pass
+         * and when it pauses, and begins the next pass before it publishes this one (the others
+         * wait for it); the others keep no frames. */
+        if (counts && !follows) {
+            if (leads) {
+                r->ungathered = true;
                 pthread_mutex_lock(&r->lock);
-                if (r->stop || idle(r, &info))
-                    pthread_mutex_unlock(&r->lock);
-                else if (!(begun = take_pass(r, &next, info.restarts)))
+                bool pausing = r->settings.paused;
+                pthread_mutex_unlock(&r->lock);
+                if ((info.done || pausing || share->due(share->user)) && !gather_frame(r, &info)) {
                     ao_render_stop(r);
-            }
-            if (!publish(r, &info)) {
+                    pthread_mutex_lock(&r->lock);
+                    break;
+                }
+                if (!info.done) {
+                    pthread_mutex_lock(&r->lock);
+                    if (r->stop || idle(r, &info))
+                        pthread_mutex_unlock(&r->lock);
+                    else if (!(begun = take_pass(r, &next, &info)))
+                        ao_render_stop(r);
+                }
+            } else if (!publish(r, &info)) {
                 ao_render_stop(r);
                 pthread_mutex_lock(&r->lock);
                 break;
@@ -689,10 +1004,21 @@ static void *render_main(void *arg)
             if (r->config.on_pass)
                 r->config.on_pass(&info, r->config.user);
         }
-        /* Done: the image is finished until the settings change; a follower's run goes on until
-         * the leader ends it. */
+        /* Done: the image is finished until the settings change (the leader gathers what it has
+         * not before it idles); another process's run goes on until the leader ends it. */
+        bool finishes = (counts ? info.done : !pixels) && !follows;
+        if (leads && r->ungathered && !begun) {
+            pthread_mutex_lock(&r->lock);
+            bool idles = !r->stop && ((finishes && own == r->restarts) || idle(r, &info));
+            pthread_mutex_unlock(&r->lock);
+            if (idles && !gather_frame(r, &info)) {
+                ao_render_stop(r);
+                pthread_mutex_lock(&r->lock);
+                break;
+            }
+        }
         pthread_mutex_lock(&r->lock);
-        if ((complete ? info.done : !pixels) && own == r->restarts && !follows) {
+        if (finishes && own == r->restarts) {
             r->done = true;
             pthread_cond_broadcast(&r->finished);
         }
@@ -762,6 +1088,15 @@ const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render)
     struct ao_frame_info info = render->last_info;
     if (!render->accum.count)
         return NULL;
+    if (render->config.share) { /* every process's tiles, not traced in this run black */
+        if (!gather(render, &info, true) || render->config.share->follows)
+            return NULL;
+        /* the frame gather filled, still the back one (already that size) */
+        struct ao_frame *f = ao_frames_back(&render->frames, render->width, render->height,
+                                            render->tiles_x * render->tiles_y);
+        f->info.done = false;
+        return f;
+    }
     for (int t = 0; t < render->tiles_x * render->tiles_y; t++)
         if (render->tiles[t].passes == 0) { /* not traced in this run: sums of an earlier one */
             struct ao_tile rect = tile_rect(render, t);
@@ -776,6 +1111,7 @@ const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render)
         fewest = render->accum.count[p] < fewest ? render->accum.count[p] : fewest;
     f->info.spp = fewest;
     f->info.done = false;
+    f->info.rmse = has_reference(render) ? rmse(f->rgb, render->config.reference, 3 * pixels) : NAN;
     return f;
 }
 

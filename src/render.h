@@ -10,6 +10,7 @@
 #include "camera.h"
 #include "sampling.h"
 #include "scene.h"
+#include "sum.h"
 #include "tracer.h"
 
 /* What the user can change while rendering. */
@@ -66,44 +67,92 @@ struct ao_frame {
     int image_width, image_height;
 };
 
-/* A pass as the processes sharing it number it alike: its work list has `count` entries, whose
- * sums go to sums, `pixels` pixel sums an entry. */
-struct ao_share_pass {
-    uint64_t serial;
-    int count;
-    struct ao_vec3 *sums;
-    int pixels;
+/* What processes sharing an image combine after each pass (struct ao_render_share's combine):
+ * each fills it in for its own pass and the tiles it owns; combined, every process holds the sums
+ * over all of them (`exact` as by ao_sum_merge, `total` as integers) and the maxima (`most`, never
+ * negative), from which each makes one process's decisions. */
+enum { AO_TALLY_EXACT = 3, AO_TALLY_TOTAL = 4, AO_TALLY_MOST = 8 };
+struct ao_share_tally {
+    struct ao_sum exact[AO_TALLY_EXACT];
+    uint64_t total[AO_TALLY_TOTAL];
+    double most[AO_TALLY_MOST];
 };
 
-/* How processes rendering the same image split each pass (aoview-mpi's cluster.c): one process
- * leads (its settings, restarts and stop decide), the others follow; each traces the work-list
- * entries it claims, the followers send the leader the sums of theirs as they trace them, the
- * leader accumulates every entry, and the followers, which keep no image, take its tile states
- * with each pass's settings, so that every process plans the same passes. */
+/* A pass as a share sees it on one process: the entries of this process's work list (its own
+ * tiles) that other processes trace send their sums to `sums`, entry n's at n x pixels. */
+struct ao_share_pass {
+    uint64_t serial;         /* numbers the passes alike on every process */
+    int count;               /* entries in this process's list */
+    int pixels;              /* pixel sums an entry */
+    struct ao_vec3 *sums;
+    /* How many entries of this process's list are not begun yet. Any thread. */
+    int (*left)(void *renderer);
+    /* Hands up to `most` entries this process has not begun, from the end of its list, to another
+     * process: returns how many (0: none left), the first's number in *first, their tiles and work
+     * in tiles and works. Any thread. */
+    int (*lend)(void *renderer, int most, int *first, int *tiles, struct ao_tile_work *works);
+    void *renderer;
+};
+
+/* A tile of another process's that this one traces for it (struct ao_render_share's borrow): its
+ * number, its work in this pass, where its pixel sums go (tile-sized, row by row). */
+struct ao_share_loan {
+    int tile;
+    struct ao_tile_work work;
+    struct ao_vec3 *sums;
+    int ticket;              /* the share's */
+};
+
+/* What a share's leader sends before each pass (and the others wait for): the pass, a gather of
+ * the image, or the end of the run. */
+enum ao_share_step { AO_SHARE_PASS, AO_SHARE_GATHER, AO_SHARE_END };
+
+/* How processes render the same image together (aoview-mpi's cluster.c). Each owns a fixed set of
+ * tiles, keeps their accumulation and state and plans its own part of every pass; after a pass
+ * they combine a few numbers (struct ao_share_tally), so that every one makes the decisions one
+ * process would. One process leads: its settings, restarts and stop decide, and it alone keeps
+ * frames, whose pixels it gathers from the owners when a frame is due. A process whose list runs
+ * out borrows tiles of another's and sends their sums to the owner. */
 struct ao_render_share {
-    /* Before each pass: replaces *settings and *restarts (this process's own) by those every
-     * process renders the pass with, the leader's, which a follower waits here for; false when
-     * the leader ended the run or it is being stopped. Render thread. */
-    bool (*begin)(void *user, struct ao_settings *settings, uint64_t *restarts);
-    /* After begin, unless the pass restarts accumulation: replaces a follower's tile states (size
-     * bytes at tiles, what passes are planned from) by the leader's; false as begin. Render thread. */
-    bool (*states)(void *user, void *tiles, size_t size);
-    /* The next entry of the pass's work list for this process to trace, or -1 when none is left;
-     * `traced` is the entry this thread traced since its last claim of the pass, or -1 (a
-     * follower sends the sums of what it was given once it is traced). On the leader, entries
-     * [arrived[0], arrived[1]) of the pass's sums came from another process, for this thread to
-     * add (empty when none). Any render thread. */
-    int (*claim)(void *user, const struct ao_share_pass *pass, int traced, int arrived[2]);
-    /* At the end of a pass this process finished (or gave up: a restart or stop): waits until the
-     * sums of the other processes' entries are in the leader's pass sums, adds their rays (eye,
-     * shadow) to the leader's rays, and sets seconds to the largest over the processes; true
-     * when the pass counts, false when a process gave it up or the run is being stopped. Render
-     * thread. */
-    bool (*merge)(void *user, const struct ao_share_pass *pass, bool finished, uint64_t rays[2], double *seconds);
-    /* The render thread is ending (stopped): the leader tells the followers. Render thread. */
+    /* The leader sends `step` (with a pass, *settings and *restarts, which every process renders it
+     * with); another process waits for the leader's next step and takes them. AO_SHARE_END when the
+     * leader ended the run or the run is being stopped. Render thread. */
+    enum ao_share_step (*begin)(void *user, enum ao_share_step step, struct ao_settings *settings,
+                                uint64_t *restarts);
+    /* Whether tile t of `tiles` is this process's: the same answer on every process for every
+     * run, each tile owned once. Whichever thread allocates a run (ao_render_create's, the render
+     * thread's on a resize). */
+    bool (*owns)(void *user, int tile, int tiles);
+    /* Before each tile of a pass (any render thread): lends entries to processes that ask, and
+     * sets [arrived[0], arrived[1]) to entries whose sums came back, for this thread to add; false
+     * once the pass is given up somewhere or the run stops. */
+    bool (*poll)(void *user, const struct ao_share_pass *pass, int arrived[2]);
+    /* When this process's list is empty (any render thread): a tile to trace for another process,
+     * or false when the pass has none left to lend or is given up. */
+    bool (*borrow)(void *user, const struct ao_share_pass *pass, struct ao_share_loan *loan);
+    /* The loan's sums are traced: they go to its owner. Any render thread. */
+    void (*repay)(void *user, const struct ao_share_pass *pass, const struct ao_share_loan *loan);
+    /* After this process's part of a pass, `finished` or given up (which the others are told, so
+     * that they stop tracing it): waits for the sums of the entries it lent, a range at a time into
+     * arrived (empty once all are back), as poll; false when the run stops. Render thread. */
+    bool (*settle)(void *user, const struct ao_share_pass *pass, bool finished, int arrived[2]);
+    /* After every pass: combines tally over the processes, in place; false when the run stops.
+     * Render thread. */
+    bool (*combine)(void *user, struct ao_share_tally *tally);
+    /* Sums each of values[0..count) over the processes, in place; false as combine. Render thread. */
+    bool (*add_up)(void *user, uint64_t *values, int count);
+    /* The leader, after a pass: whether a frame is due by the share's clock (a window's frame rate,
+     * a safety copy); the renderer also gathers for the last pass and before it idles. Render thread. */
+    bool (*due)(void *user);
+    /* Gathers the image: `count` records of `size` bytes, this process's tiles' in tile order, go to
+     * the leader, which receives every tile's (`tiles` of them, in tile order) in all (NULL
+     * elsewhere); false when the run stops. Render thread, or main after ao_render_resolve_stopped
+     * joined it. */
+    bool (*gather)(void *user, const void *mine, int count, size_t size, void *all, int tiles);
+    /* The render thread is ending (stopped): the leader tells the others. Render thread. */
     void (*end)(void *user);
-    bool follows;            /* a follower: waits in begin, not for its own settings or pause; keeps
-                                no image (publishes no frame) and is never done by itself */
+    bool follows;            /* not the leader: waits in begin, not for its own settings or pause;
+                                keeps no frames and is never done by itself */
     void *user;
 };
 
@@ -162,8 +211,9 @@ const struct ao_frame *ao_render_take_frame(struct ao_render *render);
 bool ao_render_wait(struct ao_render *render);
 
 /* After an interruption: stops and joins the render thread, then resolves the accumulation as it
- * stands, the aborted pass's finished tiles included (with a share, those the leader added: its own
- * and those whose sums arrived), into a frame whose info.spp is the smallest per-pixel sample count.
+ * stands, the aborted pass's finished tiles included, into a frame whose info.spp is the smallest
+ * per-pixel sample count. With a share every process calls it: each sends its tiles through the
+ * share's gather, and the leader gets the frame (NULL elsewhere, and when the gather failed).
  * Main thread, as the frame consumer; call ao_render_destroy afterwards. */
 const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render);
 

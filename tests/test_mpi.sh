@@ -1,10 +1,13 @@
 #!/usr/bin/env bash
-# aoview-mpi on localhost: the same image and --stats decisions as one aoview process for 2 and 3
-# ranks; a slowed rank takes fewer tiles; a killed rank and SIGINT to mpirun end the run with one
-# line and the image merged so far; so does SIGTERM to one rank other than 0, promptly, naming it;
-# rank 0's window under Xvfb drives every rank (keys and an orbit give one process's image), quits
-# cleanly, and without a display the run goes headless.
-# Usage: test_mpi.sh equal|slow|killed|sigint|term-rank|window
+# aoview-mpi on localhost: the same image, bit for bit, and --stats decisions as one aoview process
+# for 2, 3 and 5 ranks (5 on 2 cores: oversubscribed), with and without adaptive sampling, ranks of
+# other --threads included, and only the final image gathered; ranks given another scene or other
+# options are refused, naming the rank; a slowed rank traces fewer tiles (the others borrow its
+# tiles); a killed rank ends the run with a line naming it and the last safety copy, stated by its
+# age; SIGINT to mpirun and SIGTERM to one rank end it with one line and the ranks' image; rank 0's
+# window under Xvfb drives every rank (keys and an orbit give one process's image), quits cleanly,
+# and without a display the run goes headless.
+# Usage: test_mpi.sh equal|differ|slow|killed|sigterm|sigint|window
 set -u
 bin=${AO_BINARY:?AO_BINARY not set}
 mpi_bin=${AO_MPI_BINARY:?AO_MPI_BINARY not set}
@@ -41,9 +44,9 @@ PY
 decisions() { cut -d, -f1,2,4,5,7- "$1"; }
 
 # same NAME 'ARGS' NP 'RANK ARGS' [MORE...]: one aoview process with ARGS and NP ranks with ARGS
-# and RANK ARGS (then MORE, mpirun's other app contexts) give the same image (up to
-# the order of double additions, |d| <= 1e-5; in fact bit for bit, as one rank alone traces each
-# pixel of a pass) and the same stats rows (passes, spp, rays, RMSE, error, converged share).
+# and RANK ARGS (then MORE, mpirun's other app contexts) give the same image, bit for bit (every
+# pixel's sums are its owner's, and what the ranks decide on they combine exactly), and the same
+# stats rows (passes, spp, rays, RMSE, error, converged share).
 same() {
   local name=$1 args=$2 np=$3 rank_args=$4
   shift 4
@@ -54,12 +57,14 @@ same() {
     || { fail "$name: aoview-mpi -np $np failed: $(cat "$name.err")"; return; }
   local d
   d=$(max_diff "$name-1.pfm" "$name-n.pfm")
-  python3 -c "import sys; sys.exit(0 if '$d' != 'size' and float('$d') <= 1e-5 else 1)" \
-    || fail "$name: -np $np image differs from one process's by $d"
+  [ "$d" = 0.0 ] || fail "$name: -np $np image differs from one process's by $d"
   diff <(decisions "$name-1.csv") <(decisions "$name-n.csv") >/dev/null \
     || fail "$name: -np $np took other decisions: $(diff <(decisions "$name-1.csv") <(decisions "$name-n.csv") | head -4)"
   echo "$name: max |d| = $d over the ranks, $(($(wc -l < "$name-n.csv") - 1)) passes alike"
 }
+
+# gathers_of ERR: the image gathers of the run, from aoview-mpi's last line.
+gathers_of() { sed -n 's/.* bytes in \([0-9]*\) image gathers.*/\1/p' "$1"; }
 
 # tiles_of RANK ERR: the tiles RANK traced, from the "tiles traced by rank" line.
 tiles_of() { sed -n "s/.*tiles traced by rank .*\b$1: \([0-9]*\).*/\1/p" "$2"; }
@@ -72,14 +77,18 @@ rank_pid() {
   done
 }
 
-# A render far too long to finish, started in the background with its --stats; waits for 3 passes.
-# PFM: mpirun kills the ranks a second after its SIGTERM, and a PNG takes half of that to write
-# (OSMesa and LLVM load), too much of it in the sanitizer builds on a busy machine.
+# A render far too long to finish, started in the background with its --stats and ARGS; waits for
+# PASSES passes (3 by default). PFM: mpirun kills the ranks a second after its SIGTERM, and a PNG
+# takes half of that to write (OSMesa and LLVM load), too much of it in the sanitizer builds on a
+# busy machine.
 start_long() {
+  local passes=${1:-3}
+  shift $(($# > 0))
   rm -f long.pfm long.csv
-  "${mpirun[@]}" -np 3 "$mpi_bin" --headless --spp 1000000 --size 96x64 --threads 1 -o long.pfm --stats long.csv 2>long.err &
+  "${mpirun[@]}" -np 3 "$mpi_bin" --headless --spp 1000000 --size 96x64 --threads 1 -o long.pfm --stats long.csv "$@" \
+    2>long.err &
   long_pid=$!
-  for _ in $(seq 200); do [ -f long.csv ] && [ "$(wc -l < long.csv)" -ge 4 ] && break; sleep 0.1; done
+  for _ in $(seq 300); do [ -f long.csv ] && [ "$(wc -l < long.csv)" -gt "$passes" ] && break; sleep 0.1; done
 }
 
 # complete_pfm FILE W H: a whole colour PFM of W x H, no temporary file beside it.
@@ -157,27 +166,53 @@ drive() {
   quit "$name"
 }
 
-case ${1:?equal, slow, killed, sigint, term-rank or window} in
+case ${1:?equal, differ, slow, killed, sigterm, sigint or window} in
 equal)
-  # The defaults (adaptive sampling, auto passes, Sobol) with a reference for the RMSE column.
+  # The defaults (adaptive sampling, auto passes, Sobol) with a reference for the RMSE column, on
+  # 2, 3 and 5 ranks (5 oversubscribe the 2 cores), and the same without adaptive sampling.
   "$bin" --headless -q --size 160x120 --spp 64 --seed 7 -o ref.pfm || fail "reference failed"
-  same defaults "--size 160x120 --reference ref.pfm" 2 ""
-  same defaults3 "--size 160x120 --reference ref.pfm" 3 ""
-  # Ranks with other thread counts (MPMD), a target error, and the textbook estimator.
+  for np in 2 3 5; do
+    same "defaults$np" "--size 160x120 --reference ref.pfm" "$np" ""
+    same "uniform$np" "--size 160x120 --spp 128 --adaptive off" "$np" ""
+  done
+  # Ranks with other thread counts (MPMD): a target error on 1 + 2, the defaults on 1 + 1 + 3.
   same target "--size 160x120 --target-error 0.02" 1 "--threads 1" : -np 2 "$mpi_bin" --threads 2 -q --size 160x120 --target-error 0.02
+  same threads "--size 160x120" 2 "--threads 1" : -np 1 "$mpi_bin" --threads 3 -q --size 160x120
   same textbook "--size 120x90 --spp 32 --sampler random --spppp 4 --adaptive off --sampling uniform" 3 ""
-  # Ranks given other settings would render another image: refused, once, with status 2.
-  "${mpirun[@]}" -np 1 "$mpi_bin" --headless --size 96x64 --spp 64 -o mismatch.pfm : -np 1 "$mpi_bin" --size 96x64 --spp 32 \
+  # Headless, a run shorter than the safety copy's 5 s gathers the image once, at the end.
+  "${mpirun[@]}" -np 3 "$mpi_bin" --headless --size 160x120 --threads 1 -o once.pfm 2>once.err
+  [ "$(gathers_of once.err)" = 1 ] || fail "a 3-rank headless run gathered the image $(gathers_of once.err) times: $(cat once.err)"
+  ;;
+differ)
+  # Ranks given other settings or another scene would render another image: refused, once, with
+  # status 2, naming the first rank that differs.
+  spheres=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
+  "${mpirun[@]}" -np 2 "$mpi_bin" --headless --size 96x64 --spp 64 -o mismatch.pfm : -np 1 "$mpi_bin" --size 96x64 --spp 32 \
     2>mismatch.err
-  [ "$(grep -c "ranks were given different options" mismatch.err)" = 1 ] && [ ! -e mismatch.pfm ] ||
-    fail "ranks with other --spp were not refused once: $(cat mismatch.err)"
+  status=$?
+  [ "$status" = 2 ] && [ "$(grep -c "^aoview-mpi: rank 2 was given other options than rank 0" mismatch.err)" = 1 ] &&
+    [ ! -e mismatch.pfm ] || fail "rank 2 with other --spp was not refused once (status $status): $(cat mismatch.err)"
+  # Another albedo on rank 1 only: the same geometry, camera and options, another image.
+  sed 's/albedo 0.8 *# resting/albedo 0.3 # resting/' "$spheres" > other.scene
+  cmp -s "$spheres" other.scene && fail "other.scene is not another scene"
+  "${mpirun[@]}" -np 1 "$mpi_bin" --headless --size 96x64 --spp 16 -o mismatch.pfm "$spheres" : \
+    -np 2 "$mpi_bin" --size 96x64 --spp 16 other.scene 2>mismatch.err
+  status=$?
+  [ "$status" = 2 ] && [ "$(grep -c "^aoview-mpi: rank 1 loaded another scene than rank 0" mismatch.err)" = 1 ] &&
+    [ ! -e mismatch.pfm ] || fail "rank 1 with another albedo was not refused once (status $status): $(cat mismatch.err)"
+  # The scene missing on rank 2 alone: its own line names it.
+  "${mpirun[@]}" -np 2 "$mpi_bin" --headless --size 96x64 --spp 16 -o mismatch.pfm "$spheres" : \
+    -np 1 "$mpi_bin" --size 96x64 --spp 16 missing.scene 2>mismatch.err
+  status=$?
+  [ "$status" = 1 ] && [ "$(grep -c "^aoview-mpi: rank 2: .*missing.scene" mismatch.err)" = 1 ] && [ ! -e mismatch.pfm ] ||
+    fail "a scene missing on rank 2 was not reported once, naming it (status $status): $(cat mismatch.err)"
   ;;
 slow)
   # Rank 1 sleeps 3 ms a tile (AO_MPI_TEST_DELAY_US, read by src/cluster.c for this test only),
-  # some 30 times a 16x16 tile's cost at these settings here. Rank 0 then traces most tiles: a rank
-  # holds at most two chunks, 1/32 of what is left of the pass each with two ranks, so rank 1 gets
-  # about 1/16 of a pass plus the little it finishes meanwhile; with equal static shares it would
-  # get 1/2. The bound, rank 1 below 1/4 of the tiles, leaves a wide margin for a busy machine.
+  # some 30 times a 16x16 tile's cost at these settings here. Rank 0 then traces most tiles: once
+  # its own are done it borrows rank 1's untraced ones in proportion to their speeds (about 30 to
+  # 1), so rank 1 traces the few it begins before a loan comes; without loans it would trace its
+  # half. The bound, rank 1 below 1/4 of the tiles, leaves a wide margin for a busy machine.
   same slow "--size 160x120 --spp 128" 1 "--threads 1" : -np 1 env AO_MPI_TEST_DELAY_US=3000 "$mpi_bin" -q --size 160x120 --spp 128 --threads 1
   "${mpirun[@]}" -np 1 "$mpi_bin" --headless --size 160x120 --spp 128 --threads 1 -o slow.pfm : \
     -np 1 env AO_MPI_TEST_DELAY_US=3000 "$mpi_bin" --size 160x120 --spp 128 --threads 1 -o slow.pfm 2>slow.err
@@ -187,16 +222,50 @@ slow)
     || fail "the slowed rank traced $slow of $((fast + slow)) tiles: $(cat slow.err)"
   ;;
 killed)
-  start_long
+  # Safety copies every 0.3 s; the kill comes 4 s in at least, so that an age counted from the
+  # start would show (the copy is some 1.5 s old: up to 0.3 s, mpirun's second, rank 0's 0.2 s). Passes of 4 spp without adaptive sampling: the copy at N spp is one aoview
+  # process's image at --spp N, bit for bit. mpirun stops the others a second after the loss.
+  uniform=(--spppp 4 --adaptive off)
+  start_long 3 --safety-copy 0.3 "${uniform[@]}"
+  sleep 4
   victim=$(rank_pid "$long_pid" 2)
   [ -n "$victim" ] || fail "rank 2 not found among mpirun's children"
   kill -KILL "$victim"
   wait "$long_pid"
   status=$?
   [ "$status" != 0 ] || fail "a killed rank ended the run with status 0"
-  grep -q "^aoview: rank 2 lost (killed or crashed), stopped at [0-9]* spp" long.err \
-    || fail "no line naming rank 2: $(cat long.err)"
+  line=$(grep "^aoview: rank 2 lost (killed or crashed); the last copy, gathered [0-9.]* s ago, stopped at [0-9]* spp" long.err)
+  [ -n "$line" ] || fail "no line naming rank 2 and the copy's age: $(cat long.err)"
+  age=$(sed -n 's/.* gathered \([0-9.]*\) s ago.*/\1/p' <<<"$line")
+  spp=$(sed -n 's/.* stopped at \([0-9]*\) spp/\1/p' <<<"$line")
+  echo "lost rank 2: the copy was ${age:-?} s old, at ${spp:-?} spp"
+  python3 -c "import sys; sys.exit(0 if 0 <= float('$age') <= 3.5 else 1)" 2>/dev/null ||
+    fail "the copy's stated age ${age:-?} s is not that of a copy gathered every 0.3 s"
   complete_pfm long.pfm 96 64 || fail "no complete image after the killed rank: $(ls -A)"
+  if [ -n "$spp" ]; then
+    "$bin" --headless -q --size 96x64 --threads 2 --spp "$spp" "${uniform[@]}" -o copy.pfm
+    d=$(max_diff copy.pfm long.pfm)
+    [ "$d" = 0.0 ] || fail "the written image is not the copy at $spp spp: max |d| = $d from one process's"
+    echo "the written image is one process's at $spp spp: max |d| = $d"
+  fi
+  ;;
+sigterm)
+  # SIGTERM to rank 2 alone: the run ends at once (not after rank 2's linger), naming rank 2,
+  # with status 143 and the image the ranks hold.
+  start_long
+  victim=$(rank_pid "$long_pid" 2)
+  [ -n "$victim" ] || fail "rank 2 not found among mpirun's children"
+  started=$(date +%s.%N)
+  kill -TERM "$victim"
+  wait "$long_pid"
+  status=$?
+  took=$(python3 -c "print('%.1f' % ($(date +%s.%N) - $started))")
+  echo "SIGTERM to rank 2: the run ended ${took} s later, status $status"
+  [ "$status" = 143 ] || fail "SIGTERM to rank 2 ended the run with status $status: $(cat long.err)"
+  python3 -c "import sys; sys.exit(0 if $took < 3 else 1)" || fail "the run took $took s to end after SIGTERM to rank 2"
+  grep -q "^aoview: rank 2 interrupted by SIGTERM at [0-9]* spp" long.err || fail "no line naming rank 2: $(cat long.err)"
+  grep -q "lost" long.err && fail "a rank named lost after SIGTERM to rank 2: $(cat long.err)"
+  complete_pfm long.pfm 96 64 || fail "no complete image after SIGTERM to rank 2: $(ls -A)"
   ;;
 sigint)
   start_long
@@ -207,26 +276,6 @@ sigint)
   grep -q "^aoview: interrupted by SIGTERM at [0-9]* spp" long.err || fail "no interruption line: $(cat long.err)"
   grep -q "lost" long.err && fail "a rank named lost after SIGINT: $(cat long.err)"
   complete_pfm long.pfm 96 64 || fail "no complete image after SIGINT: $(ls -A)"
-  ;;
-term-rank)
-  # SIGTERM to rank 2 alone: it tells rank 0, which stops, names it and writes what was merged.
-  # Before, rank 0 waited at the next merge until rank 2's linger ran out and mpirun ended the job
-  # (7 to 8 s), and its line named no rank.
-  start_long
-  victim=$(rank_pid "$long_pid" 2)
-  [ -n "$victim" ] || fail "rank 2 not found among mpirun's children"
-  start=$(date +%s%N)
-  kill -TERM "$victim"
-  wait "$long_pid"
-  status=$? elapsed_ms=$(( ($(date +%s%N) - start) / 1000000 ))
-  echo "SIGTERM to rank 2: status $status after $elapsed_ms ms"
-  [ "$status" = 143 ] || fail "SIGTERM to rank 2 ended the run with status $status, expected 143"
-  grep -q "^aoview: rank 2 interrupted by SIGTERM, stopped at [0-9]* spp" long.err \
-    || fail "no line naming rank 2: $(cat long.err)"
-  grep -q "lost" long.err && fail "a rank named lost after SIGTERM to rank 2: $(cat long.err)"
-  # LINGER_SECONDS is 5: a run that waits for it takes longer, whatever the machine.
-  [ "$elapsed_ms" -lt 4000 ] || fail "SIGTERM to rank 2 took $elapsed_ms ms to end the run"
-  complete_pfm long.pfm 96 64 || fail "no complete image after SIGTERM to rank 2: $(ls -A)"
   ;;
 window)
   spheres=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
