@@ -1,0 +1,106 @@
+/* What the glTF loader's files share (gltf.c: the file, its nodes and meshes; gltf_data.c: JSON
+ * access, the GLB container, buffers and accessors). Only src/load/gltf*.c include this. */
+#ifndef AO_LOAD_GLTF_H
+#define AO_LOAD_GLTF_H
+
+#include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include <json.h>
+
+#include "load/load.h"
+
+/* Largest integer read from the JSON: sums of three of them and products of one with a stride (at
+ * most 252) stay far below 2^64. */
+#define AO_GLTF_MAX_INTEGER 9007199254740992.0
+
+/* Accessor component types. */
+enum { AO_GLTF_UNSIGNED_BYTE = 5121, AO_GLTF_UNSIGNED_SHORT = 5123, AO_GLTF_UNSIGNED_INT = 5125, AO_GLTF_FLOAT = 5126 };
+
+/* A buffer's bytes: the GLB's BIN chunk, a decoded data URI or an external file's contents. */
+struct ao_gltf_buffer {
+    const unsigned char *data;
+    size_t size;          /* the declared byteLength; the data holds at least this many bytes */
+    unsigned char *owned; /* what to free, or NULL */
+};
+
+/* The elements of one accessor, checked to lie inside their buffer. */
+struct ao_gltf_elements {
+    const unsigned char *first;
+    size_t stride, count;
+    int component_type;
+};
+
+/* The file being loaded and the mesh being built. */
+struct ao_gltf {
+    const char *path;
+    json_object *root, *accessors, *views, *meshes, *nodes;
+    struct ao_gltf_buffer *buffers;
+    size_t buffer_count;
+    const unsigned char *bin;     /* GLB BIN chunk, or NULL */
+    size_t bin_size;
+    size_t *parent;               /* per node: its parent, or SIZE_MAX */
+    double (*world)[16];          /* per node: its world matrix, column major */
+    uint64_t triangles, vertices; /* totals of the instances found so far */
+    struct ao_budget *budget;     /* the scene budget */
+    uint64_t taken;               /* what this load took from it, given back at its end */
+    struct mesh_size {
+        uint64_t triangles, vertices;
+        bool known;
+    } *sizes;                     /* per mesh, once counted: instances need not recount */
+    struct ao_load_array positions, normals, lacking, indices; /* ao_vec3, ao_vec3, bool, uint32 */
+    size_t lacking_count;
+};
+
+/* Reports "path: message" and returns false. */
+bool ao_gltf_error(const struct ao_gltf *g, const char *format, ...);
+
+/* Takes bytes from the scene budget for what the load holds until its end; else reports that
+ * `what` would need more than is left. */
+bool ao_gltf_take(struct ao_gltf *g, uint64_t bytes, const char *what);
+
+/* The member key of obj, or NULL when absent (or obj is not an object). */
+json_object *ao_gltf_member(json_object *obj, const char *key);
+
+/* The length of array, 0 when it is NULL (absent) or not an array. */
+size_t ao_gltf_length(json_object *array);
+
+/* The length of an array member (0 when absent); false when present but not an array. */
+bool ao_gltf_array(const struct ao_gltf *g, json_object *obj, const char *key, const char *where,
+                   json_object **out, size_t *length);
+
+/* Reads a whole number in [0, limit] from value (a JSON integer, or a double with no fraction). */
+bool ao_gltf_whole(json_object *value, double limit, uint64_t *out);
+
+/* A whole-number member: *out gets its value, or fallback when absent and not required. */
+bool ao_gltf_integer(const struct ao_gltf *g, json_object *obj, const char *key, bool required,
+                     uint64_t fallback, double limit, const char *where, uint64_t *out);
+
+/* An index into an array of count entries. */
+bool ao_gltf_index(const struct ao_gltf *g, json_object *obj, const char *key, size_t count,
+                   const char *where, size_t *out);
+
+/* A GLB: header, then chunks; the first must be JSON, a BIN chunk may follow. Sets *json. */
+bool ao_gltf_parse_glb(struct ao_gltf *g, const unsigned char *data, size_t size,
+                       const unsigned char **json, size_t *json_size);
+
+/* Loads every buffer of the array buffers: the GLB's BIN chunk (no uri), a data URI or a file in
+ * the glTF's folder. */
+bool ao_gltf_load_buffers(struct ao_gltf *g, json_object *buffers);
+
+/* Accessor i's elements: type ("SCALAR" or "VEC3") and component types as required, every
+ * element inside its bufferView and the view inside its buffer. */
+bool ao_gltf_accessor(struct ao_gltf *g, size_t i, const char *type, bool want_float, const char *use,
+                      struct ao_gltf_elements *out);
+
+/* Element i's component k as a float. */
+float ao_gltf_float(const struct ao_gltf_elements *e, size_t i, int k);
+
+/* Index element i. */
+uint32_t ao_gltf_index_at(const struct ao_gltf_elements *e, size_t i);
+
+/* Frees what the data layer holds (buffers). */
+void ao_gltf_free_data(struct ao_gltf *g);
+
+#endif

@@ -1,0 +1,372 @@
+/* The glTF loader's data layer (see gltf.h): JSON access, the GLB container, buffers (the BIN
+ * chunk, base64 data URIs, files in the model's folder) and accessors, every range checked before
+ * anything is read through it. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "file.h"
+#include "load/gltf.h"
+
+/* GLB container constants: magic "glTF", chunk types "JSON" and "BIN\0". */
+enum { GLB_MAGIC = 0x46546C67, GLB_JSON = 0x4E4F534A, GLB_BIN = 0x004E4942, GLB_HEADER = 12 };
+
+/* Reports "path: message" and returns false. */
+bool ao_gltf_error(const struct ao_gltf *g, const char *format, ...)
+{
+    char message[400];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(message, sizeof message, format, args);
+    va_end(args);
+    ao_load_report(g->path, 0, "%s", message);
+    return false;
+}
+
+/* Takes bytes from the scene budget for what the load holds until its end; else reports that
+ * `what` would need more than is left. */
+bool ao_gltf_take(struct ao_gltf *g, uint64_t bytes, const char *what)
+{
+    if (ao_budget_take(g->budget, bytes)) {
+        g->taken += bytes;
+        return true;
+    }
+    char why[200];
+    ao_budget_explain(g->budget, bytes, why, sizeof why);
+    return ao_gltf_error(g, "%s would %s", what, why);
+}
+
+/* ------------------------------------------------------------------ JSON access */
+
+/* The member key of obj, or NULL when absent (or obj is not an object). */
+json_object *ao_gltf_member(json_object *obj, const char *key)
+{
+    json_object *value = NULL;
+    return json_object_is_type(obj, json_type_object) && json_object_object_get_ex(obj, key, &value)
+               ? value : NULL;
+}
+
+/* The length of array, 0 when it is NULL (absent) or not an array. */
+size_t ao_gltf_length(json_object *array)
+{
+    return json_object_is_type(array, json_type_array) ? json_object_array_length(array) : 0;
+}
+
+/* The length of an array member (0 when absent); false when present but not an array. */
+bool ao_gltf_array(const struct ao_gltf *g, json_object *obj, const char *key, const char *where,
+                         json_object **out, size_t *length)
+{
+    *out = ao_gltf_member(obj, key);
+    *length = 0;
+    if (!*out)
+        return true;
+    if (!json_object_is_type(*out, json_type_array))
+        return ao_gltf_error(g, "%s: '%s' is not an array", where, key);
+    *length = json_object_array_length(*out);
+    return true;
+}
+
+/* Reads a whole number in [0, limit] from value (a JSON integer, or a double with no fraction). */
+bool ao_gltf_whole(json_object *value, double limit, uint64_t *out)
+{
+    if (!value || !(json_object_is_type(value, json_type_int) ||
+                    json_object_is_type(value, json_type_double)))
+        return false;
+    double d = json_object_get_double(value);
+    if (!(d >= 0.0 && d <= limit && d == floor(d)))
+        return false;
+    *out = (uint64_t)d;
+    return true;
+}
+
+/* A whole-number member: *out gets its value, or fallback when absent and not required. */
+bool ao_gltf_integer(const struct ao_gltf *g, json_object *obj, const char *key, bool required,
+                    uint64_t fallback, double limit, const char *where, uint64_t *out)
+{
+    json_object *value = ao_gltf_member(obj, key);
+    *out = fallback;
+    if (!value && !required)
+        return true;
+    if (!value)
+        return ao_gltf_error(g, "%s: no '%s'", where, key);
+    return ao_gltf_whole(value, limit, out) ||
+           ao_gltf_error(g, "%s: '%s' is not a whole number from 0 to %.0f", where, key, limit);
+}
+
+/* An index into an array of count entries. */
+bool ao_gltf_index(const struct ao_gltf *g, json_object *obj, const char *key, size_t count,
+                         const char *where, size_t *out)
+{
+    uint64_t value;
+    *out = 0;
+    if (!ao_gltf_integer(g, obj, key, true, 0, AO_GLTF_MAX_INTEGER, where, &value))
+        return false;
+    if (value >= count)
+        return ao_gltf_error(g, "%s: '%s' %llu is out of range (%zu defined)", where, key,
+                          (unsigned long long)value, count);
+    *out = (size_t)value;
+    return true;
+}
+
+/* n finite numbers of an array member into out; false (reported) when malformed. */
+/* ------------------------------------------------------------------ containers and buffers */
+
+/* A little-endian 32-bit word. */
+static uint32_t le32(const unsigned char *b)
+{
+    return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+
+/* A GLB: header, then chunks; the first must be JSON, a BIN chunk may follow. Sets *json. */
+bool ao_gltf_parse_glb(struct ao_gltf *g, const unsigned char *data, size_t size,
+                      const unsigned char **json, size_t *json_size)
+{
+    if (size < GLB_HEADER || le32(data) != GLB_MAGIC)
+        return ao_gltf_error(g, "not a GLB file (no 'glTF' magic)");
+    if (le32(data + 4) != 2)
+        return ao_gltf_error(g, "GLB version %u; only version 2 is supported", le32(data + 4));
+    if (le32(data + 8) != size)
+        return ao_gltf_error(g, "GLB header says %u bytes, the file has %zu", le32(data + 8), size);
+    *json = NULL;
+    for (size_t offset = GLB_HEADER; offset < size;) {
+        if (size - offset < 8)
+            return ao_gltf_error(g, "GLB chunk header at byte %zu runs past the end", offset);
+        size_t length = le32(data + offset), type = le32(data + offset + 4);
+        if (length > size - offset - 8)
+            return ao_gltf_error(g, "GLB chunk at byte %zu claims %zu bytes, only %zu remain", offset,
+                              length, size - offset - 8);
+        const unsigned char *body = data + offset + 8;
+        if (!*json && type != GLB_JSON)
+            return ao_gltf_error(g, "GLB's first chunk is not JSON");
+        if (!*json) {
+            *json = body;
+            *json_size = length;
+        } else if (type == GLB_BIN && !g->bin) {
+            g->bin = body;
+            g->bin_size = length;
+        }
+        offset += 8 + length;
+    }
+    return *json || ao_gltf_error(g, "GLB without a JSON chunk");
+}
+
+/* The value of one base64 digit, or -1. */
+static int base64_digit(unsigned char c)
+{
+    if (c >= 'A' && c <= 'Z')
+        return c - 'A';
+    if (c >= 'a' && c <= 'z')
+        return c - 'a' + 26;
+    if (c >= '0' && c <= '9')
+        return c - '0' + 52;
+    return c == '+' ? 62 : c == '/' ? 63 : -1;
+}
+
+/* Decodes base64 text (padding optional) into a new buffer; false on a bad digit. */
+static bool decode_base64(const char *text, size_t n, unsigned char **out, size_t *size)
+{
+    while (n > 0 && text[n - 1] == '=')
+        n--;
+    unsigned char *bytes = malloc(n / 4 * 3 + 3);
+    if (!bytes)
+        return false;
+    size_t count = 0;
+    uint32_t bits = 0;
+    for (size_t i = 0; i < n; i++) {
+        int digit = base64_digit((unsigned char)text[i]);
+        if (digit < 0) {
+            free(bytes);
+            return false;
+        }
+        bits = bits << 6 | (uint32_t)digit;
+        if (i % 4 == 3) {
+            bytes[count++] = (unsigned char)(bits >> 16);
+            bytes[count++] = (unsigned char)(bits >> 8);
+            bytes[count++] = (unsigned char)bits;
+        }
+    }
+    if (n % 4 == 1) {
+        free(bytes);
+        return false;
+    }
+    if (n % 4 >= 2)
+        bytes[count++] = (unsigned char)(bits >> (n % 4 == 2 ? 4 : 10));
+    if (n % 4 == 3)
+        bytes[count++] = (unsigned char)(bits >> 2);
+    *out = bytes;
+    *size = count;
+    return true;
+}
+
+/* Reads byteLength bytes of the file a buffer's URI names inside the model's folder (uri.c). */
+static bool read_buffer_file(struct ao_gltf *g, const char *where, const char *uri, uint64_t length,
+                             struct ao_gltf_buffer *b)
+{
+    char path[4096], why[160];
+    int fd;
+    if (!ao_load_uri_decode(uri, path, sizeof path, why, sizeof why) ||
+        !ao_load_uri_open(g->path, path, &fd, why, sizeof why))
+        return ao_gltf_error(g, "%s ('%.60s'): %s", where, uri, why);
+    char *data = NULL, what[100];
+    snprintf(what, sizeof what, "%s ('%.40s'), byteLength %llu,", where, uri, (unsigned long long)length);
+    if (length >= SIZE_MAX || !ao_gltf_take(g, length + 1, what)) {
+        close(fd);
+        return length >= SIZE_MAX && ao_gltf_error(g, "%s too large", what);   /* else take reported */
+    }
+    const char *reason = NULL;
+    bool ok = ao_file_read_prefix(fd, (size_t)length, &data, &reason);
+    close(fd);
+    if (!ok)
+        return ao_gltf_error(g, "%s ('%.60s'), byteLength %llu: %s", where, uri,
+                          (unsigned long long)length, reason);
+    b->data = b->owned = (unsigned char *)data;
+    return true;
+}
+
+/* Loads buffer i: the GLB's BIN chunk (no uri), a data URI or a file in the glTF's folder. */
+static bool load_buffer(struct ao_gltf *g, json_object *json, size_t i)
+{
+    char where[64];
+    snprintf(where, sizeof where, "buffer %zu", i);
+    struct ao_gltf_buffer *b = &g->buffers[i];
+    uint64_t length;
+    if (!ao_gltf_integer(g, json, "byteLength", true, 0, AO_GLTF_MAX_INTEGER, where, &length))
+        return false;
+    json_object *uri_json = ao_gltf_member(json, "uri");
+    const char *uri = json_object_is_type(uri_json, json_type_string)
+                          ? json_object_get_string(uri_json) : NULL;
+    size_t size = 0;
+    if (uri_json && !uri)
+        return ao_gltf_error(g, "%s: 'uri' is not a string", where);
+    if (!uri) {
+        if (i != 0 || !g->bin)
+            return ao_gltf_error(g, "%s has no 'uri' and is not a GLB's BIN chunk", where);
+        b->data = g->bin;
+        size = g->bin_size;
+    } else if (strncmp(uri, "data:", 5) == 0) {
+        const char *comma = strchr(uri, ',');
+        if (!comma || comma - uri < 12 || memcmp(comma - 7, ";base64", 7) != 0)
+            return ao_gltf_error(g, "%s: only base64 data URIs are supported", where);
+        size_t digits = strlen(comma + 1);
+        char what[96];
+        snprintf(what, sizeof what, "%.64s's data URI", where);
+        if (!ao_gltf_take(g, digits / 4 * 3 + 3, what))
+            return false;
+        if (!decode_base64(comma + 1, digits, &b->owned, &size))
+            return ao_gltf_error(g, "%s: bad base64 data (or out of memory)", where);
+        b->data = b->owned;
+    } else {
+        if (!read_buffer_file(g, where, uri, length, b))
+            return false;
+        size = (size_t)length;
+    }
+    if (size < length)
+        return ao_gltf_error(g, "%s: byteLength %llu but only %zu bytes of data", where,
+                          (unsigned long long)length, size);
+    b->size = (size_t)length;
+    return true;
+}
+
+/* ------------------------------------------------------------------ accessors */
+
+/* Accessor i's elements: type ("SCALAR" or "VEC3") and component types as required, every
+ * element inside its bufferView and the view inside its buffer. */
+bool ao_gltf_accessor(struct ao_gltf *g, size_t i, const char *type, bool want_float, const char *use,
+                     struct ao_gltf_elements *out)
+{
+    char where[96];
+    snprintf(where, sizeof where, "accessor %zu (%s)", i, use);
+    json_object *a = json_object_array_get_idx(g->accessors, i);
+    json_object *type_json = ao_gltf_member(a, "type");
+    uint64_t component, count, offset;
+    size_t view_index;
+    if (ao_gltf_member(a, "sparse"))
+        return ao_gltf_error(g, "%s: sparse accessors are not supported", where);
+    if (!ao_gltf_member(a, "bufferView"))
+        return ao_gltf_error(g, "%s: no bufferView (all-zero accessors are not supported)", where);
+    if (!json_object_is_type(type_json, json_type_string) ||
+        strcmp(json_object_get_string(type_json), type) != 0)
+        return ao_gltf_error(g, "%s: type must be %s", where, type);
+    if (!ao_gltf_integer(g, a, "componentType", true, 0, AO_GLTF_MAX_INTEGER, where, &component) ||
+        !ao_gltf_integer(g, a, "count", true, 0, (double)UINT32_MAX, where, &count) ||
+        !ao_gltf_integer(g, a, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, where, &offset) ||
+        !ao_gltf_index(g, a, "bufferView", ao_gltf_length(g->views), where, &view_index))
+        return false;
+    bool is_index = component == AO_GLTF_UNSIGNED_BYTE || component == AO_GLTF_UNSIGNED_SHORT ||
+                    component == AO_GLTF_UNSIGNED_INT;
+    if (want_float ? component != AO_GLTF_FLOAT : !is_index)
+        return ao_gltf_error(g, "%s: componentType %llu; %s", where, (unsigned long long)component,
+                          want_float ? "only float (5126) is supported"
+                                     : "indices must be unsigned byte, short or int");
+    if (count == 0)
+        return ao_gltf_error(g, "%s: count is 0", where);
+    size_t element = component == AO_GLTF_FLOAT ? 12 : component == AO_GLTF_UNSIGNED_INT ? 4
+                   : component == AO_GLTF_UNSIGNED_SHORT ? 2 : 1;
+
+    /* The bufferView, inside its buffer. */
+    char view_where[64];
+    snprintf(view_where, sizeof view_where, "bufferView %zu", view_index);
+    json_object *v = json_object_array_get_idx(g->views, view_index);
+    uint64_t view_offset, view_length, stride;
+    size_t buffer_index;
+    if (!ao_gltf_index(g, v, "buffer", g->buffer_count, view_where, &buffer_index) ||
+        !ao_gltf_integer(g, v, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, view_where, &view_offset) ||
+        !ao_gltf_integer(g, v, "byteLength", true, 0, AO_GLTF_MAX_INTEGER, view_where, &view_length) ||
+        !ao_gltf_integer(g, v, "byteStride", false, element, 252, view_where, &stride))
+        return false;
+    const struct ao_gltf_buffer *b = &g->buffers[buffer_index];
+    if (view_offset + view_length > b->size)
+        return ao_gltf_error(g, "%s: bytes [%llu, %llu) run past buffer %zu (%zu bytes)", view_where,
+                          (unsigned long long)view_offset,
+                          (unsigned long long)(view_offset + view_length), buffer_index, b->size);
+    if (stride < element)
+        return ao_gltf_error(g, "%s: byteStride %llu is smaller than an element (%zu bytes)",
+                          view_where, (unsigned long long)stride, element);
+    /* The last element ends inside the view: offset + stride * (count - 1) + element. */
+    uint64_t end = offset + stride * (count - 1) + element;
+    if (end > view_length)
+        return ao_gltf_error(g, "%s: %llu elements from byte %llu need %llu bytes of bufferView %zu, "
+                          "which has %llu", where, (unsigned long long)count,
+                          (unsigned long long)offset, (unsigned long long)end, view_index,
+                          (unsigned long long)view_length);
+    *out = (struct ao_gltf_elements){b->data + view_offset + offset, (size_t)stride, (size_t)count,
+                             (int)component};
+    return true;
+}
+
+/* Element i's component k as a float. */
+float ao_gltf_float(const struct ao_gltf_elements *e, size_t i, int k)
+{
+    uint32_t bits = le32(e->first + i * e->stride + 4 * (size_t)k);
+    float f;
+    memcpy(&f, &bits, sizeof f);
+    return f;
+}
+
+/* Index element i. */
+uint32_t ao_gltf_index_at(const struct ao_gltf_elements *e, size_t i)
+{
+    const unsigned char *p = e->first + i * e->stride;
+    return e->component_type == AO_GLTF_UNSIGNED_INT ? le32(p)
+           : e->component_type == AO_GLTF_UNSIGNED_SHORT ? (uint32_t)(p[0] | p[1] << 8) : p[0];
+}
+
+/* ------------------------------------------------------------------ loading and freeing */
+
+bool ao_gltf_load_buffers(struct ao_gltf *g, json_object *buffers)
+{
+    bool ok = true;
+    for (size_t i = 0; ok && i < g->buffer_count; i++)
+        ok = load_buffer(g, json_object_array_get_idx(buffers, i), i);
+    return ok;
+}
+
+void ao_gltf_free_data(struct ao_gltf *g)
+{
+    for (size_t i = 0; i < g->buffer_count && g->buffers; i++)
+        free(g->buffers[i].owned);
+    free(g->buffers);
+}
