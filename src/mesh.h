@@ -18,6 +18,8 @@ struct ao_mesh {
     uint32_t *indices;          /* 3 * triangle_count vertex indices */
     size_t triangle_count;
     size_t degenerate_count;    /* zero-area triangles skipped while loading */
+    size_t point_primitives;    /* glTF primitives of points skipped (one per node placing them) */
+    size_t line_primitives;     /* glTF primitives of lines, line loops and line strips skipped */
 };
 
 /* True when path's extension names a mesh format ao_mesh_load reads. */

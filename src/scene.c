@@ -483,6 +483,8 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
     bool ok = transform_mesh(&m, &t, &positions) && add_albedo(s, rho, &a) &&
               add_triangles(s, w, positions, m.normals, m.vertex_count, m.indices, m.triangle_count, a);
     s->degenerate_count += m.degenerate_count;
+    s->point_primitives += m.point_primitives;
+    s->line_primitives += m.line_primitives;
     free(positions);
     ao_mesh_finish(&m);
     return ok || fail(c, "out of memory (or more than 2^32 vertices) adding '%s'", path);
@@ -746,6 +748,8 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budge
               add_albedo(s, ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO), &a) &&
               add_triangles(s, &w, positions, m.normals, m.vertex_count, m.indices, m.triangle_count, a);
     s->degenerate_count = m.degenerate_count;
+    s->point_primitives = m.point_primitives;
+    s->line_primitives = m.line_primitives;
     free(positions);
     ao_mesh_finish(&m);
     if (ok && bounds(s, &w, &lo, &hi)) {

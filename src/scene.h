@@ -45,6 +45,8 @@ struct ao_scene {
     struct ao_vec3 *albedos;
     size_t albedo_count;
     size_t degenerate_count;      /* zero-area triangles skipped by the mesh loaders */
+    size_t point_primitives;      /* glTF primitives of points skipped (mesh.h) */
+    size_t line_primitives;       /* glTF primitives of lines skipped */
 };
 
 /* Loads a .scene file, or a mesh file placed on a ground quad with a framing camera.

@@ -707,6 +707,7 @@ static void test_gltf_nodes(void **state)
     assert_triangle(&mesh, 1, (uint32_t)d, (uint32_t)f, (uint32_t)e);
     for (size_t i = 0; i < 6; i++)
         assert_vec3_near(mesh.normals[i], 0, 0, 1);
+    assert_int_equal(mesh.point_primitives, 1);
     ao_mesh_finish(&mesh);
 }
 
@@ -792,6 +793,102 @@ static void test_gltf_huge_matrix_gives_finite_normals(void **state)
     assert_mesh_valid(&mesh);
     assert_int_equal(mesh.triangle_count, 1);
     ao_mesh_finish(&mesh);
+}
+
+/* base64 of size bytes into out, which holds 4 (size + 2) / 3 + 1 characters. */
+static void base64(const unsigned char *in, size_t size, char *out)
+{
+    static const char digits[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    for (size_t i = 0; i < size; i += 3) {
+        uint32_t bits = (uint32_t)in[i] << 16 | (i + 1 < size ? (uint32_t)in[i + 1] << 8 : 0) |
+                        (i + 2 < size ? in[i + 2] : 0);
+        for (int k = 0; k < 4; k++)
+            *out++ = k <= (int)(size - i) ? digits[bits >> (18 - 6 * k) & 63] : '=';
+    }
+    *out = '\0';
+}
+
+/* A glTF file made of json, a printf format whose one %s becomes a base64 data URI of the bytes
+ * data (and whose %zu, before it, their count); returns its path. */
+static const char *gltf_file(const char *name, const char *json, const void *data, size_t size)
+{
+    char *uri = malloc(64 + 4 * (size + 2) / 3 + 1), *text = malloc(strlen(json) + 96 + 4 * (size + 2) / 3);
+    assert_non_null(uri);
+    assert_non_null(text);
+    strcpy(uri, "data:application/gltf-buffer;base64,");
+    base64(data, size, uri + strlen(uri));
+    int n = sprintf(text, json, size, uri);
+    const char *path = temp_file(name, text, (size_t)n);
+    free(uri);
+    free(text);
+    return path;
+}
+
+/* Triangle strips and fans (modes 5 and 6) load as triangles in glTF's winding. A strip of five
+ * vertices zigzagging in z = 0 makes (0 1 2), (1 3 2), (2 3 4): every one faces -z, so the odd one
+ * is turned round; an indexed fan 4 0 1 2 3 makes (0 1 4), (1 2 4), (2 3 4); a strip of two
+ * vertices makes none. Under a mirroring node (scale -1 in x), each triangle turns round.
+ * The primitive of points beside them is skipped and counted. */
+static void test_gltf_strips_and_fans(void **state)
+{
+    (void)state;
+    struct {
+        float p[5][3];
+        unsigned char index[5], pad[3];
+    } data = {{{0, 0, 0}, {0, 1, 0}, {1, 0, 0}, {1, 1, 0}, {2, 0, 0}}, {4, 0, 1, 2, 3}, {0}};
+    static const char json[] =
+        "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0, \"scale\": [%s, 1, 1]}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"mode\": 5},\n"
+        "                {\"attributes\": {\"POSITION\": 0}, \"indices\": 1, \"mode\": 6},\n"
+        "                {\"attributes\": {\"POSITION\": 2}, \"mode\": 5}, {\"attributes\": {\"POSITION\": 0}, \"mode\": 0}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 5, \"type\": \"VEC3\"},\n"
+        "               {\"bufferView\": 0, \"byteOffset\": 60, \"componentType\": 5121, \"count\": 5, \"type\": \"SCALAR\"},\n"
+        "               {\"bufferView\": 0, \"componentType\": 5126, \"count\": 2, \"type\": \"VEC3\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": %%zu}], \"buffers\": [{\"byteLength\": %%zu, \"uri\": \"%%s\"}]}\n";
+    for (int mirror = 0; mirror < 2; mirror++) {
+        char format[2048];
+        snprintf(format, sizeof format, json, mirror ? "-1" : "1");
+        /* The view and the buffer share the size: print it twice through one %zu each. */
+        char twice[2048];
+        char *at = strstr(format, "%zu}]");
+        assert_non_null(at);
+        snprintf(twice, sizeof twice, "%.*s%zu%s", (int)(at - format), format, sizeof data, at + 3);
+        struct ao_mesh mesh;
+        load_ok(&mesh, gltf_file("strips.gltf", twice, &data, sizeof data));
+        assert_mesh_valid(&mesh);
+        assert_int_equal(mesh.triangle_count, 6);
+        assert_int_equal(mesh.point_primitives, 1);
+        assert_int_equal(mesh.line_primitives, 0);
+        static const uint32_t want[6][3] = {{0, 1, 2}, {1, 3, 2}, {2, 3, 4}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}};
+        for (size_t t = 0; t < 6; t++) {
+            uint32_t base = t < 3 ? 0 : 5;
+            if (mirror)
+                assert_triangle(&mesh, t, base + want[t][0], base + want[t][2], base + want[t][1]);
+            else
+                assert_triangle(&mesh, t, base + want[t][0], base + want[t][1], base + want[t][2]);
+        }
+        /* The strip faces -z, and so do its computed normals; mirrored too (the mirror alone would
+         * turn it to +z, the turned winding back to -z, as a file's normal would be mapped). */
+        for (size_t i = 0; i < 5; i++)
+            assert_vec3_near(mesh.normals[i], 0, 0, -1);
+        ao_mesh_finish(&mesh);
+    }
+}
+
+/* A file of points and lines only has nothing to render: one line names the modes found. */
+static void test_gltf_points_and_lines_only(void **state)
+{
+    (void)state;
+    float p[3][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    static const char json[] =
+        "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"mode\": 0},"
+        " {\"attributes\": {\"POSITION\": 0}, \"mode\": 3}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}], \"buffers\": [{\"byteLength\": %zu, \"uri\": \"%s\"}]}\n";
+    expect_failure(gltf_file("lines.gltf", json, p, sizeof p), ": ",
+                   "no triangles to render: its primitives have the modes 0 (points), 3 (line strip), and aoview "
+                   "draws only triangles");
 }
 
 /* ------------------------------------------------------------------ the scene budget */
@@ -1139,6 +1236,8 @@ int main(void)
         cmocka_unit_test(test_gltf_no_scene),
         cmocka_unit_test(test_gltf_rotation_of_any_length),
         cmocka_unit_test(test_gltf_huge_matrix_gives_finite_normals),
+        cmocka_unit_test(test_gltf_strips_and_fans),
+        cmocka_unit_test(test_gltf_points_and_lines_only),
         cmocka_unit_test(test_loaders_keep_to_the_budget),
         cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
         cmocka_unit_test(test_bad_inputs),

@@ -2,10 +2,11 @@
  * container). The JSON is parsed by json-c; this file and its data layer gltf_data.c (JSON access,
  * containers, buffers, accessors; gltf.h) read what aoview needs from it: the
  * default scene's nodes (or scene 0's, or every root node when there is no scene), their
- * transforms (matrix, or translation/rotation/scale; nested), and their meshes' triangle
- * primitives (mode 4 or absent; indexed by any unsigned type or not indexed) with float VEC3
- * POSITION and NORMAL. Everything else (materials, texture coordinates, animations, cameras, other
- * primitive modes) is ignored; sparse accessors and required extensions are refused.
+ * transforms (matrix, or translation/rotation/scale; nested), and their meshes' primitives of
+ * triangles, triangle strips and fans (modes 4, 5, 6; indexed by any unsigned type or not indexed)
+ * with float VEC3 POSITION and NORMAL; points and lines are skipped and counted. Everything else
+ * (materials, texture coordinates, animations, cameras) is ignored; sparse accessors and required
+ * extensions are refused.
  *
  * Every range a file gives is checked before it is read: a GLB's chunk lengths against the file,
  * a bufferView against its buffer, an accessor's last element against its bufferView, indices
@@ -162,9 +163,34 @@ static double normal_matrix(const double m[16], double cof[3][3])
     return a[0] * cof[0][0] + a[3] * cof[0][1] + a[6] * cof[0][2];
 }
 
-/* Appends one primitive under the world matrix m: positions and normals transformed, triangles
- * offset (and turned round where m mirrors). With count_only, adds its size to the totals. */
-static bool add_primitive(struct ao_gltf *g, json_object *primitive, const double m[16],
+/* The glTF primitive modes aoview draws as triangles. */
+enum { MODE_TRIANGLES = 4, MODE_TRIANGLE_STRIP = 5, MODE_TRIANGLE_FAN = 6 };
+
+/* How many triangles a primitive of mode makes of n corners (vertices, or indices when indexed). */
+static size_t triangles_of(uint64_t mode, size_t n)
+{
+    return mode == MODE_TRIANGLES ? n / 3 : n >= 3 ? n - 2 : 0;
+}
+
+/* The corners of triangle k of a primitive of mode, as positions in its corner sequence, in the
+ * winding glTF gives: a list's (3k, 3k + 1, 3k + 2); a strip's (k, k + 1, k + 2) for even k and
+ * (k, k + 2, k + 1) for odd k, so that every triangle of the strip faces the same way; a fan's
+ * (k + 1, k + 2, 0). */
+static void triangle_corners(uint64_t mode, size_t k, size_t out[3])
+{
+    if (mode == MODE_TRIANGLES) {
+        out[0] = 3 * k, out[1] = 3 * k + 1, out[2] = 3 * k + 2;
+    } else if (mode == MODE_TRIANGLE_STRIP) {
+        out[0] = k, out[1] = k + 1 + k % 2, out[2] = k + 2 - k % 2;
+    } else {
+        out[0] = k + 1, out[1] = k + 2, out[2] = 0;
+    }
+}
+
+/* Appends one primitive of triangles (mode 4), a strip (5) or a fan (6) under the world matrix m:
+ * positions and normals transformed, triangles offset (and turned round where m mirrors). With
+ * count_only, adds its size to the totals. */
+static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mode, const double m[16],
                           const char *where, bool count_only)
 {
     json_object *attributes = ao_gltf_member(primitive, "attributes");
@@ -184,12 +210,12 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, const doubl
     if (has_normals && normals.count != positions.count)
         return ao_gltf_error(g, "%s: %zu normals for %zu positions", where, normals.count,
                           positions.count);
-    size_t corners = indexed ? indices.count : positions.count;
-    if (corners % 3)
+    size_t corners = indexed ? indices.count : positions.count, triangles = triangles_of(mode, corners);
+    if (mode == MODE_TRIANGLES && corners % 3)
         return ao_gltf_error(g, "%s: %zu %s, not a whole number of triangles", where, corners,
                           indexed ? "indices" : "vertices");
     if (count_only) {
-        g->triangles += corners / 3;
+        g->triangles += triangles;
         g->vertices += positions.count;
         return true;
     }
@@ -229,30 +255,35 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, const doubl
     g->lacking_count += has_normals ? 0 : positions.count;
     g->vertices += positions.count;
 
-    /* Triangles. */
-    uint32_t *t = ao_load_append(&g->indices, corners);
-    if (!t)
-        return ao_load_out_of_memory(g->path);
-    for (size_t i = 0; i < corners; i++) {
-        uint32_t v = indexed ? ao_gltf_index_at(&indices, i) : (uint32_t)i;
+    /* Triangles, every index checked once (a strip's and a fan's corners serve several). */
+    for (size_t i = 0; indexed && i < corners; i++) {
+        uint32_t v = ao_gltf_index_at(&indices, i);
         if (v >= positions.count)
             return ao_gltf_error(g, "%s: index %u at %zu is out of range (%zu vertices)", where, v, i,
                               positions.count);
-        t[i] = base + v;
     }
-    if (det < 0.0)
-        for (size_t i = 0; i < corners; i += 3) {
-            uint32_t swap = t[i + 1];
-            t[i + 1] = t[i + 2];
-            t[i + 2] = swap;
+    uint32_t *t = ao_load_append(&g->indices, 3 * triangles);
+    if (!t && triangles)
+        return ao_load_out_of_memory(g->path);
+    for (size_t k = 0; k < triangles; k++) {
+        size_t c[3];
+        triangle_corners(mode, k, c);
+        for (int j = 0; j < 3; j++)
+            t[3 * k + j] = base + (indexed ? ao_gltf_index_at(&indices, c[j]) : (uint32_t)c[j]);
+        if (det < 0.0) {
+            uint32_t swap = t[3 * k + 1];
+            t[3 * k + 1] = t[3 * k + 2];
+            t[3 * k + 2] = swap;
         }
-    g->triangles += corners / 3;
+    }
+    g->triangles += triangles;
     return true;
 }
 
-/* The triangle primitives of node's mesh, if any, under the node's world matrix. With count_only,
- * adds their size to the totals, walking each mesh's primitives once however many nodes use it
- * (so that a small file cannot make the count take hours). */
+/* The triangle primitives (lists, strips, fans) of node's mesh, if any, under the node's world
+ * matrix; points and lines are skipped, and counted in the filling pass. With count_only, adds
+ * their size to the totals and notes the modes found, walking each mesh's primitives once however
+ * many nodes use it (so that a small file cannot make the count take hours). */
 static bool add_node_mesh(struct ao_gltf *g, size_t node, bool count_only)
 {
     json_object *node_json = json_object_array_get_idx(g->nodes, node);
@@ -280,8 +311,13 @@ static bool add_node_mesh(struct ao_gltf *g, size_t node, bool count_only)
         snprintf(where, sizeof where, "mesh %zu primitive %zu", mesh, k);
         if (!ao_gltf_integer(g, primitive, "mode", false, 4, 6, where, &mode))
             return false;
-        if (mode == 4 && !add_primitive(g, primitive, g->world[node], where, count_only))
+        g->modes_found |= 1u << mode;
+        if (mode < MODE_TRIANGLES) {
+            g->point_primitives += !count_only && mode == 0;
+            g->line_primitives += !count_only && mode != 0;
+        } else if (!add_primitive(g, primitive, mode, g->world[node], where, count_only)) {
             return false;
+        }
     }
     if (count_only)
         *size = (struct mesh_size){g->triangles - before.triangles, g->vertices - before.vertices,
@@ -437,6 +473,21 @@ static bool check_asset(struct ao_gltf *g)
     return true;
 }
 
+/* Refuses a file whose primitives make no triangle because they are points and lines: one line
+ * naming the modes found. */
+static bool only_points_and_lines(const struct ao_gltf *g)
+{
+    static const char *const names[7] = {"0 (points)", "1 (lines)", "2 (line loop)", "3 (line strip)",
+                                         "4 (triangles)", "5 (triangle strip)", "6 (triangle fan)"};
+    char list[160] = "";
+    size_t used = 0;
+    for (int mode = 0; mode < 7; mode++)
+        if (g->modes_found & 1u << mode)
+            used += (size_t)snprintf(list + used, sizeof list - used, "%s%s", used ? ", " : "", names[mode]);
+    return ao_gltf_error(g, "no triangles to render: its primitives have the modes %s, and aoview draws "
+                         "only triangles", list);
+}
+
 /* Everything after the JSON is parsed: arrays, buffers, the node tree, the instances. */
 static bool read_scene(struct ao_gltf *g)
 {
@@ -466,6 +517,7 @@ static bool read_scene(struct ao_gltf *g)
      * that does not fit in the budget beside what the load holds already. Then fill. */
     for (size_t i = 0; ok && i < node_count; i++)
         ok = !placed[i] || add_node_mesh(g, i, true);
+    ok = ok && (g->triangles > 0 || !(g->modes_found & 0xf) || only_points_and_lines(g));
     ok = ok && ao_load_fits(g->budget, g->triangles, g->vertices, g->path, 0);
     g->triangles = g->vertices = 0;
     for (size_t i = 0; ok && i < node_count; i++)
@@ -494,6 +546,8 @@ bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size
         mesh->vertex_count = g.positions.count;
         mesh->positions = ao_load_take(&g.positions);
         mesh->triangle_count = g.indices.count / 3;
+        mesh->point_primitives = g.point_primitives;
+        mesh->line_primitives = g.line_primitives;
         mesh->indices = ao_load_take(&g.indices);
         bool all_lacking = g.lacking_count == mesh->vertex_count;
         mesh->normals = ao_load_take(&g.normals);

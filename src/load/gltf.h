@@ -51,6 +51,8 @@ struct ao_gltf {
     } *sizes;                     /* per mesh, once counted: instances need not recount */
     struct ao_load_array positions, normals, lacking, indices; /* ao_vec3, ao_vec3, bool, uint32 */
     size_t lacking_count;
+    unsigned modes_found;         /* bit m: a primitive of mode m was found */
+    size_t point_primitives, line_primitives;   /* skipped, each time a node placed them */
 };
 
 /* Reports "path: message" and returns false. */
