@@ -300,6 +300,9 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
         return AO_EXIT_RUNTIME;
     if (!opts->quiet)
         report_skipped(&app->scene);
+    if (!opts->quiet && app->scene.notes[0])
+        fprintf(stderr, "aoview: %s\n", ao_text_escape(app->scene.notes, (char[sizeof app->scene.notes * 4]){0},
+                                                        sizeof app->scene.notes * 4));
     ao_text_escape(app->scene.name, name, sizeof name);
     if (!opts->quiet)
         fprintf(stderr, "aoview: %s: %zu triangles, %zu spheres, traced by %s\n", name,

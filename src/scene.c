@@ -277,6 +277,20 @@ static bool add_triangles(struct ao_scene *s, struct world *w, const struct dvec
     return true;
 }
 
+/* Adds a mesh's note (mesh.h), if any, to the scene's notes as "name: note", after a "; " when
+ * there are others; what does not fit is left out. */
+static void add_note(struct ao_scene *s, const char *path, const char *note)
+{
+    if (!note[0])
+        return;
+    const char *slash = strrchr(path, '/');
+    size_t used = strlen(s->notes);
+    if (used + 4 < sizeof s->notes &&
+        snprintf(s->notes + used, sizeof s->notes - used, "%s%s: %s", used ? "; " : "", slash ? slash + 1 : path,
+                 note) < 0)
+        s->notes[used] = '\0';
+}
+
 /* ---- statements ---- */
 
 /* Scale, then rotation about a unit axis, then translation (SPEC.md's order), in double. */
@@ -485,6 +499,7 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
     s->degenerate_count += m.degenerate_count;
     s->point_primitives += m.point_primitives;
     s->line_primitives += m.line_primitives;
+    add_note(s, path, m.note);
     free(positions);
     ao_mesh_finish(&m);
     return ok || fail(c, "out of memory (or more than 2^32 vertices) adding '%s'", path);
@@ -750,6 +765,7 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budge
     s->degenerate_count = m.degenerate_count;
     s->point_primitives = m.point_primitives;
     s->line_primitives = m.line_primitives;
+    add_note(s, path, m.note);
     free(positions);
     ao_mesh_finish(&m);
     if (ok && bounds(s, &w, &lo, &hi)) {

@@ -47,6 +47,7 @@ struct ao_scene {
     size_t degenerate_count;      /* zero-area triangles skipped by the mesh loaders */
     size_t point_primitives;      /* glTF primitives of points skipped (mesh.h) */
     size_t line_primitives;       /* glTF primitives of lines skipped */
+    char notes[512];              /* the meshes' notes (mesh.h), "name: note; name: note", or "" */
 };
 
 /* Loads a .scene file, or a mesh file placed on a ground quad with a framing camera.

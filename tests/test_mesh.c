@@ -875,6 +875,45 @@ static void test_gltf_strips_and_fans(void **state)
     }
 }
 
+/* A one-triangle glTF whose top level also holds members (e.g. "\"extensionsRequired\": [...]"). */
+static const char *triangle_gltf(const char *name, const char *members)
+{
+    float p[3][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    char json[1024];
+    snprintf(json, sizeof json,
+             "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0}], %s,\n"
+             " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}],\n"
+             " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}],\n"
+             " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}], \"buffers\": [{\"byteLength\": %%zu, \"uri\": \"%%s\"}]}\n",
+             members);
+    return gltf_file(name, json, p, sizeof p);
+}
+
+/* Required extensions that change only how surfaces look load, with one note naming them (printed
+ * by the front end); one that changes the geometry and is not read, or one aoview does not know,
+ * is refused naming it. */
+static void test_gltf_required_extensions(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    load_ok(&mesh, triangle_gltf("looks.gltf", "\"extensionsRequired\": [\"KHR_texture_basisu\", "
+                                 "\"KHR_materials_transmission\", \"KHR_texture_transform\", \"KHR_lights_punctual\"]"));
+    assert_int_equal(mesh.triangle_count, 1);
+    assert_string_equal(mesh.note, "materials, textures and lights are ignored (it requires KHR_texture_basisu, "
+                                   "KHR_materials_transmission, KHR_texture_transform, KHR_lights_punctual)");
+    ao_mesh_finish(&mesh);
+    load_ok(&mesh, triangle_gltf("plain.gltf", "\"extensionsUsed\": [\"FOO_anything\"]"));
+    assert_string_equal(mesh.note, "");
+    ao_mesh_finish(&mesh);
+    expect_failure(triangle_gltf("instancing.gltf", "\"extensionsRequired\": [\"KHR_materials_unlit\", "
+                                 "\"EXT_mesh_gpu_instancing\"]"), ": ",
+                   "requires extension 'EXT_mesh_gpu_instancing', which places meshes many times");
+    expect_failure(triangle_gltf("unknown.gltf", "\"extensionsRequired\": [\"FOO_geometry\"]"), ": ",
+                   "requires extension 'FOO_geometry', which aoview does not know (it may change the geometry)");
+    expect_failure(triangle_gltf("number.gltf", "\"extensionsRequired\": [7]"), ": ",
+                   "extensionsRequired: entry 0 is not a string");
+}
+
 /* A file of points and lines only has nothing to render: one line names the modes found. */
 static void test_gltf_points_and_lines_only(void **state)
 {
@@ -1032,7 +1071,8 @@ static const struct {
     {"bad_gltf_json.gltf", ":3: ", "JSON: unexpected character"},
     {"bad_gltf_asset.gltf", ": ", "no asset.version"},
     {"bad_gltf_version.gltf", ": ", "glTF version '1.0'; only 2.x is supported"},
-    {"bad_gltf_extension.gltf", ": ", "requires extension 'KHR_draco_mesh_compression'"},
+    {"bad_gltf_extension.gltf", ": ", "requires extension 'EXT_mesh_gpu_instancing', which places meshes many times "
+                                      "and which aoview does not read"},
     {"bad_gltf_sparse.gltf", ": ", "accessor 0 (POSITION): sparse accessors are not supported"},
     {"bad_gltf_position_type.gltf", ": ", "componentType 5123; only float (5126)"},
     {"bad_gltf_index_count.gltf", ": ", "2 indices, not a whole number of triangles"},
@@ -1238,6 +1278,7 @@ int main(void)
         cmocka_unit_test(test_gltf_huge_matrix_gives_finite_normals),
         cmocka_unit_test(test_gltf_strips_and_fans),
         cmocka_unit_test(test_gltf_points_and_lines_only),
+        cmocka_unit_test(test_gltf_required_extensions),
         cmocka_unit_test(test_loaders_keep_to_the_budget),
         cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
         cmocka_unit_test(test_bad_inputs),

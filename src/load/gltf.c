@@ -455,7 +455,39 @@ static bool parse_json(struct ao_gltf *g, const char *text, size_t size)
     return true;
 }
 
-/* The asset version and required extensions. */
+/* Required extensions that change only how surfaces look (materials, textures, lights) or what
+ * aoview ignores anyway (animation, metadata): a file that requires them loads, with a note. By
+ * name prefix, then whole names. */
+static const char *const LOOKS_PREFIXES[] = {"KHR_materials_", "KHR_texture_", "EXT_texture_", "MSFT_texture_",
+                                             "ADOBE_materials_", "KHR_techniques_", NULL};
+static const char *const LOOKS[] = {"KHR_lights_punctual", "EXT_lights_image_based", "KHR_xmp_json_ld", "KHR_xmp",
+                                    "KHR_animation_pointer", NULL};
+/* Required extensions that change the geometry and that aoview reads. */
+static const char *const GEOMETRY[] = {NULL};
+/* Required extensions known to change the geometry that aoview does not read, and how. */
+static const struct {
+    const char *name, *what;
+} UNREAD[] = {{"KHR_mesh_quantization", "stores positions and normals as integers"},
+              {"EXT_meshopt_compression", "compresses the geometry"},
+              {"KHR_draco_mesh_compression", "compresses the geometry"},
+              {"EXT_mesh_gpu_instancing", "places meshes many times"},
+              {"MSFT_lod", "chooses among meshes by distance"}};
+
+/* True when name is in the NULL-terminated list, or starts with one of prefixes (may be NULL). */
+static bool listed(const char *name, const char *const *names, const char *const *prefixes)
+{
+    for (; names && *names; names++)
+        if (strcmp(name, *names) == 0)
+            return true;
+    for (; prefixes && *prefixes; prefixes++)
+        if (strncmp(name, *prefixes, strlen(*prefixes)) == 0)
+            return true;
+    return false;
+}
+
+/* The asset version and required extensions: those that change only how surfaces look load, and
+ * are noted once in g->note; those that change the geometry load when aoview reads them; any other
+ * is refused, as it may change what is drawn. */
 static bool check_asset(struct ao_gltf *g)
 {
     json_object *version = ao_gltf_member(ao_gltf_member(g->root, "asset"), "version"), *required;
@@ -467,9 +499,28 @@ static bool check_asset(struct ao_gltf *g)
                           json_object_get_string(version));
     if (!ao_gltf_array(g, g->root, "extensionsRequired", "file", &required, &n))
         return false;
-    if (n > 0)
-        return ao_gltf_error(g, "requires extension '%.60s', which aoview does not support",
-                          json_object_get_string(json_object_array_get_idx(required, 0)));
+    char looks[160] = "";
+    size_t used = 0;
+    for (size_t i = 0; i < n; i++) {
+        json_object *item = json_object_array_get_idx(required, i);
+        if (!json_object_is_type(item, json_type_string))
+            return ao_gltf_error(g, "extensionsRequired: entry %zu is not a string", i);
+        const char *name = json_object_get_string(item);
+        if (listed(name, GEOMETRY, NULL))
+            continue;
+        for (size_t k = 0; k < sizeof UNREAD / sizeof UNREAD[0]; k++)
+            if (strcmp(name, UNREAD[k].name) == 0)
+                return ao_gltf_error(g, "requires extension '%s', which %s and which aoview does not read",
+                                     name, UNREAD[k].what);
+        if (!listed(name, LOOKS, LOOKS_PREFIXES))
+            return ao_gltf_error(g, "requires extension '%.60s', which aoview does not know (it may change "
+                                 "the geometry)", name);
+        if (used < sizeof looks)
+            used += (size_t)snprintf(looks + used, sizeof looks - used, "%s%.60s", used ? ", " : "", name);
+    }
+    if (used)
+        snprintf(g->note, sizeof g->note, "materials, textures and lights are ignored (it requires %s%s)", looks,
+                 used >= sizeof looks ? "..." : "");
     return true;
 }
 
@@ -547,6 +598,7 @@ bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size
         mesh->positions = ao_load_take(&g.positions);
         mesh->triangle_count = g.indices.count / 3;
         mesh->point_primitives = g.point_primitives;
+        snprintf(mesh->note, sizeof mesh->note, "%s", g.note);
         mesh->line_primitives = g.line_primitives;
         mesh->indices = ao_load_take(&g.indices);
         bool all_lacking = g.lacking_count == mesh->vertex_count;

@@ -53,6 +53,7 @@ struct ao_gltf {
     size_t lacking_count;
     unsigned modes_found;         /* bit m: a primitive of mode m was found */
     size_t point_primitives, line_primitives;   /* skipped, each time a node placed them */
+    char note[AO_MESH_NOTE_SIZE]; /* what was ignored that the user should hear of (mesh.h) */
 };
 
 /* Reports "path: message" and returns false. */
