@@ -795,6 +795,14 @@ static void test_gltf_huge_matrix_gives_finite_normals(void **state)
     ao_mesh_finish(&mesh);
 }
 
+/* The size of the file at path. */
+static uint64_t file_size(const char *path)
+{
+    struct stat st;
+    assert_int_equal(stat(path, &st), 0);
+    return (uint64_t)st.st_size;
+}
+
 /* base64 of size bytes into out, which holds 4 (size + 2) / 3 + 1 characters. */
 static void base64(const unsigned char *in, size_t size, char *out)
 {
@@ -914,6 +922,83 @@ static void test_gltf_required_extensions(void **state)
                    "extensionsRequired: entry 0 is not a string");
 }
 
+/* A GLB of the JSON text and the BIN chunk bin (both padded to 4 bytes), with extra bytes after it
+ * that its header does not count; returns its path. */
+static const char *glb_file(const char *name, const char *json, const void *bin, size_t bin_size, size_t extra)
+{
+    size_t json_size = (strlen(json) + 3) / 4 * 4, padded = (bin_size + 3) / 4 * 4;
+    size_t total = 12 + 8 + json_size + 8 + padded;
+    unsigned char *data = calloc(1, total + extra);
+    assert_non_null(data);
+    uint32_t words[5] = {0x46546C67, 2, (uint32_t)total, (uint32_t)json_size, 0x4E4F534A};
+    for (int k = 0; k < 5; k++)
+        for (int b = 0; b < 4; b++)
+            data[4 * k + b] = (unsigned char)(words[k] >> (8 * b));
+    memset(data + 20, ' ', json_size);
+    memcpy(data + 20, json, strlen(json));
+    uint32_t bin_words[2] = {(uint32_t)padded, 0x004E4942};
+    for (int k = 0; k < 2; k++)
+        for (int b = 0; b < 4; b++)
+            data[20 + json_size + 4 * k + b] = (unsigned char)(bin_words[k] >> (8 * b));
+    memcpy(data + 28 + json_size, bin, bin_size);
+    memset(data + total, 0x5a, extra);
+    const char *path = temp_file(name, data, total + extra);
+    free(data);
+    return path;
+}
+
+/* Where the glTF validator only warns, files load: bytes after a GLB's stated length (ignored, and
+ * said in the note), a data URI that is not base64 (percent-encoded bytes), a buffer without a
+ * uri that nothing reads. A buffer without data that a view reads, and a bad escape, are refused. */
+static void test_gltf_leniency(void **state)
+{
+    (void)state;
+    float p[3][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    static const char glb_json[] =
+        "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0}],"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}],"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}],"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}], \"buffers\": [{\"byteLength\": 36},"
+        " {\"byteLength\": 1000}]}";
+    struct ao_mesh mesh;
+    const char *path = glb_file("trailing.glb", glb_json, p, sizeof p, 13);
+    load_ok(&mesh, path);
+    assert_int_equal(mesh.triangle_count, 1);
+    char want[160];
+    snprintf(want, sizeof want, "13 bytes after the GLB's stated length of %llu are ignored",
+             (unsigned long long)file_size(path) - 13);
+    assert_string_equal(mesh.note, want);
+    ao_mesh_finish(&mesh);
+    load_ok(&mesh, glb_file("exact.glb", glb_json, p, sizeof p, 0));
+    assert_string_equal(mesh.note, "");
+    ao_mesh_finish(&mesh);
+
+    /* The triangle's 36 bytes percent-encoded: %00 for zero bytes, %3F and the letter '?' alike. */
+    static const char text[] =
+        "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0}],"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}],"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}],"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}],"
+        " \"buffers\": [{\"byteLength\": 36, \"uri\": \"data:application/octet-stream,"
+        "%00%00%00%00%00%00%00%00%00%00%00%00%00%00%80%3F%00%00%00%00%00%00%00%00%00%00%00%00%00%00%80?"
+        "%00%00%00%00\"}, {\"byteLength\": 8}]}";
+    load_ok(&mesh, temp_file("percent.gltf", text, sizeof text - 1));
+    assert_int_equal(mesh.triangle_count, 1);
+    assert_vec3_near(mesh.positions[1], 1, 0, 0);
+    assert_vec3_near(mesh.positions[2], 0, 1, 0);
+    ao_mesh_finish(&mesh);
+    char bad[sizeof text];
+    strcpy(bad, text);
+    memcpy(strstr(bad, "%80%3F"), "%80%G0", 6);
+    expect_failure(temp_file("bad_percent.gltf", bad, sizeof text - 1), ": ",
+                   "buffer 0: bad percent-encoding at byte 45 of its data URI's data");
+    strcpy(bad, text);
+    memcpy(strstr(bad, "\"buffer\": 0"), "\"buffer\": 1", 11);
+    memcpy(strstr(bad, "{\"byteLength\": 8}"), "{\"byteLength\":36}", 17);
+    expect_failure(temp_file("no_data.gltf", bad, sizeof text - 1), ": ",
+                   "buffer 1 has no 'uri' and is not a GLB's BIN chunk: it has no data");
+}
+
 /* A file of points and lines only has nothing to render: one line names the modes found. */
 static void test_gltf_points_and_lines_only(void **state)
 {
@@ -931,14 +1016,6 @@ static void test_gltf_points_and_lines_only(void **state)
 }
 
 /* ------------------------------------------------------------------ the scene budget */
-
-/* The size of the file at path. */
-static uint64_t file_size(const char *path)
-{
-    struct stat st;
-    assert_int_equal(stat(path, &st), 0);
-    return (uint64_t)st.st_size;
-}
 
 /* The loaders refuse, at the right place, a mesh whose charge (ao_budget_mesh) does not fit beside
  * the file (charged while it is read): OBJ and ASCII formats as the counts grow, binary PLY and STL
@@ -1279,6 +1356,7 @@ int main(void)
         cmocka_unit_test(test_gltf_strips_and_fans),
         cmocka_unit_test(test_gltf_points_and_lines_only),
         cmocka_unit_test(test_gltf_required_extensions),
+        cmocka_unit_test(test_gltf_leniency),
         cmocka_unit_test(test_loaders_keep_to_the_budget),
         cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
         cmocka_unit_test(test_bad_inputs),

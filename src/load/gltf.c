@@ -519,8 +519,8 @@ static bool check_asset(struct ao_gltf *g)
             used += (size_t)snprintf(looks + used, sizeof looks - used, "%s%.60s", used ? ", " : "", name);
     }
     if (used)
-        snprintf(g->note, sizeof g->note, "materials, textures and lights are ignored (it requires %s%s)", looks,
-                 used >= sizeof looks ? "..." : "");
+        ao_gltf_note(g, "materials, textures and lights are ignored (it requires %s%s)", looks,
+                     used >= sizeof looks ? "..." : "");
     return true;
 }
 
@@ -542,24 +542,21 @@ static bool only_points_and_lines(const struct ao_gltf *g)
 /* Everything after the JSON is parsed: arrays, buffers, the node tree, the instances. */
 static bool read_scene(struct ao_gltf *g)
 {
-    json_object *buffers;
     size_t node_count, mesh_count, count;
     if (!check_asset(g) || !ao_gltf_array(g, g->root, "accessors", "file", &g->accessors, &count) ||
         !ao_gltf_array(g, g->root, "bufferViews", "file", &g->views, &count) ||
         !ao_gltf_array(g, g->root, "meshes", "file", &g->meshes, &mesh_count) ||
         !ao_gltf_array(g, g->root, "nodes", "file", &g->nodes, &node_count) ||
-        !ao_gltf_array(g, g->root, "buffers", "file", &buffers, &g->buffer_count))
+        !ao_gltf_array(g, g->root, "buffers", "file", &g->buffer_json, &g->buffer_count))
         return false;
     /* The per-node, per-buffer and per-mesh arrays: each of those is a JSON object, whose charge
      * (json_cost) covers them. */
-    g->buffers = calloc(g->buffer_count ? g->buffer_count : 1, sizeof *g->buffers);
     g->parent = malloc((node_count ? node_count : 1) * sizeof *g->parent);
     g->world = malloc((node_count ? node_count : 1) * sizeof *g->world);
     bool *flags = calloc(node_count ? 2 * node_count : 1, sizeof *flags);
     g->sizes = calloc(mesh_count ? mesh_count : 1, sizeof *g->sizes);
-    bool ok = (g->buffers && g->parent && g->world && flags && g->sizes) ||
-              ao_load_out_of_memory(g->path);
-    ok = ok && ao_gltf_load_buffers(g, buffers);
+    bool ok = ((g->parent && g->world && flags && g->sizes) || ao_load_out_of_memory(g->path)) &&
+              ao_gltf_begin_data(g);
     bool *is_root = flags, *placed = flags + node_count;
     ok = ok && check_tree(g, node_count) && find_roots(g, node_count, is_root) &&
          place_nodes(g, node_count, is_root, placed);

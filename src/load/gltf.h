@@ -18,11 +18,21 @@
 /* Accessor component types. */
 enum { AO_GLTF_UNSIGNED_BYTE = 5121, AO_GLTF_UNSIGNED_SHORT = 5123, AO_GLTF_UNSIGNED_INT = 5125, AO_GLTF_FLOAT = 5126 };
 
-/* A buffer's bytes: the GLB's BIN chunk, a decoded data URI or an external file's contents. */
+/* A buffer: its declared byteLength, read at its first use, and its bytes (the GLB's BIN chunk, a
+ * decoded data URI or an external file's contents), loaded when a bufferView is first read. */
 struct ao_gltf_buffer {
     const unsigned char *data;
     size_t size;          /* the declared byteLength; the data holds at least this many bytes */
     unsigned char *owned; /* what to free, or NULL */
+    bool known, loaded;   /* size read; data loaded */
+};
+
+/* A bufferView's bytes, checked against its buffer at its first use. */
+struct ao_gltf_view {
+    const unsigned char *data;
+    size_t length, stride;   /* stride 0: not given (the elements are packed) */
+    unsigned char *owned;    /* decoded data of its own (EXT_meshopt_compression), or NULL */
+    bool ready;
 };
 
 /* The elements of one accessor, checked to lie inside their buffer. */
@@ -36,8 +46,10 @@ struct ao_gltf_elements {
 struct ao_gltf {
     const char *path;
     json_object *root, *accessors, *views, *meshes, *nodes;
+    json_object *buffer_json;     /* the buffers array */
     struct ao_gltf_buffer *buffers;
     size_t buffer_count;
+    struct ao_gltf_view *view_cache;   /* per bufferView */
     const unsigned char *bin;     /* GLB BIN chunk, or NULL */
     size_t bin_size;
     size_t *parent;               /* per node: its parent, or SIZE_MAX */
@@ -88,9 +100,13 @@ bool ao_gltf_index(const struct ao_gltf *g, json_object *obj, const char *key, s
 bool ao_gltf_parse_glb(struct ao_gltf *g, const unsigned char *data, size_t size,
                        const unsigned char **json, size_t *json_size);
 
-/* Loads every buffer of the array buffers: the GLB's BIN chunk (no uri), a data URI or a file in
- * the glTF's folder. */
-bool ao_gltf_load_buffers(struct ao_gltf *g, json_object *buffers);
+/* Allocates the per-buffer and per-bufferView state once g->buffer_json, g->buffer_count and
+ * g->views are set; buffers and views are read at their first use. */
+bool ao_gltf_begin_data(struct ao_gltf *g);
+
+/* Appends a printf-formatted note (what was ignored) to g->note, after a "; " when there are others;
+ * what does not fit is left out. */
+void ao_gltf_note(struct ao_gltf *g, const char *format, ...);
 
 /* Accessor i's elements: type ("SCALAR" or "VEC3") and component types as required, every
  * element inside its bufferView and the view inside its buffer. */
@@ -103,7 +119,7 @@ float ao_gltf_float(const struct ao_gltf_elements *e, size_t i, int k);
 /* Index element i. */
 uint32_t ao_gltf_index_at(const struct ao_gltf_elements *e, size_t i);
 
-/* Frees what the data layer holds (buffers). */
+/* Frees what the data layer holds (buffers, decoded views). */
 void ao_gltf_free_data(struct ao_gltf *g);
 
 #endif

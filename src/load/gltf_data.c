@@ -6,6 +6,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <unistd.h>
 
 #include "file.h"
@@ -111,7 +112,6 @@ bool ao_gltf_index(const struct ao_gltf *g, json_object *obj, const char *key, s
     return true;
 }
 
-/* n finite numbers of an array member into out; false (reported) when malformed. */
 /* ------------------------------------------------------------------ containers and buffers */
 
 /* A little-endian 32-bit word. */
@@ -128,8 +128,13 @@ bool ao_gltf_parse_glb(struct ao_gltf *g, const unsigned char *data, size_t size
         return ao_gltf_error(g, "not a GLB file (no 'glTF' magic)");
     if (le32(data + 4) != 2)
         return ao_gltf_error(g, "GLB version %u; only version 2 is supported", le32(data + 4));
-    if (le32(data + 8) != size)
-        return ao_gltf_error(g, "GLB header says %u bytes, the file has %zu", le32(data + 8), size);
+    /* Bytes after the stated length are ignored (the validator only warns), and said so. */
+    size_t stated = le32(data + 8);
+    if (stated > size || stated < GLB_HEADER)
+        return ao_gltf_error(g, "GLB header says %zu bytes, the file has %zu", stated, size);
+    if (stated < size)
+        ao_gltf_note(g, "%zu bytes after the GLB's stated length of %zu are ignored", size - stated, stated);
+    size = stated;
     *json = NULL;
     for (size_t offset = GLB_HEADER; offset < size;) {
         if (size - offset < 8)
@@ -201,6 +206,38 @@ static bool decode_base64(const char *text, size_t n, unsigned char **out, size_
     return true;
 }
 
+/* The value of a hexadecimal digit, or -1. */
+static int hex_digit(unsigned char c)
+{
+    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+}
+
+/* Decodes the percent-encoded text of a data URI that is not base64 (RFC 2397: bytes as they are,
+ * or %XX) into a new buffer; false at a bad escape, with its offset in *bad. */
+static bool decode_percent(const char *text, size_t n, unsigned char **out, size_t *size, size_t *bad)
+{
+    unsigned char *bytes = malloc(n ? n : 1);
+    size_t count = 0;
+    *bad = SIZE_MAX;
+    for (size_t i = 0; bytes && i < n; i++) {
+        int high = 0, low = 0;
+        if (text[i] == '%' && (i + 2 >= n || (high = hex_digit((unsigned char)text[i + 1])) < 0 ||
+                               (low = hex_digit((unsigned char)text[i + 2])) < 0)) {
+            *bad = i;
+            break;
+        }
+        bytes[count++] = text[i] == '%' ? (unsigned char)(high << 4 | low) : (unsigned char)text[i];
+        i += text[i] == '%' ? 2 : 0;
+    }
+    if (!bytes || *bad != SIZE_MAX) {
+        free(bytes);
+        return false;
+    }
+    *out = bytes;
+    *size = count;
+    return true;
+}
+
 /* Reads byteLength bytes of the file a buffer's URI names inside the model's folder (uri.c). */
 static bool read_buffer_file(struct ao_gltf *g, const char *where, const char *uri, uint64_t length,
                              struct ao_gltf_buffer *b)
@@ -226,15 +263,17 @@ static bool read_buffer_file(struct ao_gltf *g, const char *where, const char *u
     return true;
 }
 
-/* Loads buffer i: the GLB's BIN chunk (no uri), a data URI or a file in the glTF's folder. */
-static bool load_buffer(struct ao_gltf *g, json_object *json, size_t i)
+/* Loads buffer i's bytes: the GLB's BIN chunk (no uri), a data URI or a file in the glTF's
+ * folder. Buffers load when a bufferView is first read from them: one that is never read (an
+ * unused buffer, a fallback without data) may have none. */
+static bool load_buffer(struct ao_gltf *g, size_t i)
 {
     char where[64];
     snprintf(where, sizeof where, "buffer %zu", i);
     struct ao_gltf_buffer *b = &g->buffers[i];
-    uint64_t length;
-    if (!ao_gltf_integer(g, json, "byteLength", true, 0, AO_GLTF_MAX_INTEGER, where, &length))
-        return false;
+    json_object *json = json_object_array_get_idx(g->buffer_json, i);
+    uint64_t length = b->size;
+    b->loaded = true;
     json_object *uri_json = ao_gltf_member(json, "uri");
     const char *uri = json_object_is_type(uri_json, json_type_string)
                           ? json_object_get_string(uri_json) : NULL;
@@ -243,20 +282,26 @@ static bool load_buffer(struct ao_gltf *g, json_object *json, size_t i)
         return ao_gltf_error(g, "%s: 'uri' is not a string", where);
     if (!uri) {
         if (i != 0 || !g->bin)
-            return ao_gltf_error(g, "%s has no 'uri' and is not a GLB's BIN chunk", where);
+            return ao_gltf_error(g, "%s has no 'uri' and is not a GLB's BIN chunk: it has no data", where);
         b->data = g->bin;
         size = g->bin_size;
     } else if (strncmp(uri, "data:", 5) == 0) {
+        /* data:[<media type>][;base64],<data>; without ;base64 the data is percent-encoded. */
         const char *comma = strchr(uri, ',');
-        if (!comma || comma - uri < 12 || memcmp(comma - 7, ";base64", 7) != 0)
-            return ao_gltf_error(g, "%s: only base64 data URIs are supported", where);
-        size_t digits = strlen(comma + 1);
+        if (!comma)
+            return ao_gltf_error(g, "%s: a data URI without a comma", where);
+        bool base64 = comma - uri >= 12 && strncasecmp(comma - 7, ";base64", 7) == 0;
+        size_t digits = strlen(comma + 1), bad;
         char what[96];
         snprintf(what, sizeof what, "%.64s's data URI", where);
-        if (!ao_gltf_take(g, digits / 4 * 3 + 3, what))
+        if (!ao_gltf_take(g, base64 ? digits / 4 * 3 + 3 : digits + 1, what))
             return false;
-        if (!decode_base64(comma + 1, digits, &b->owned, &size))
+        if (base64 && !decode_base64(comma + 1, digits, &b->owned, &size))
             return ao_gltf_error(g, "%s: bad base64 data (or out of memory)", where);
+        if (!base64 && !decode_percent(comma + 1, digits, &b->owned, &size, &bad))
+            return bad == SIZE_MAX ? ao_load_out_of_memory(g->path)
+                                   : ao_gltf_error(g, "%s: bad percent-encoding at byte %zu of its data URI's data",
+                                                   where, bad);
         b->data = b->owned;
     } else {
         if (!read_buffer_file(g, where, uri, length, b))
@@ -266,7 +311,58 @@ static bool load_buffer(struct ao_gltf *g, json_object *json, size_t i)
     if (size < length)
         return ao_gltf_error(g, "%s: byteLength %llu but only %zu bytes of data", where,
                           (unsigned long long)length, size);
-    b->size = (size_t)length;
+    return true;
+}
+
+/* Buffer i, its byteLength read (and with need_data its bytes loaded) on first use. */
+static bool buffer(struct ao_gltf *g, size_t i, bool need_data, const struct ao_gltf_buffer **out)
+{
+    struct ao_gltf_buffer *b = &g->buffers[i];
+    *out = b;
+    if (!b->known) {
+        char where[64];
+        uint64_t length;
+        snprintf(where, sizeof where, "buffer %zu", i);
+        if (!ao_gltf_integer(g, json_object_array_get_idx(g->buffer_json, i), "byteLength", true, 0,
+                             AO_GLTF_MAX_INTEGER, where, &length))
+            return false;
+        if (length > SIZE_MAX / 2)
+            return ao_gltf_error(g, "%s: byteLength %llu is too large", where, (unsigned long long)length);
+        b->size = (size_t)length;
+        b->known = true;
+    }
+    return !need_data || b->loaded || load_buffer(g, i);
+}
+
+/* bufferView index, read and checked against its buffer on first use: its bytes and stride. */
+static bool view(struct ao_gltf *g, size_t index, const struct ao_gltf_view **out)
+{
+    struct ao_gltf_view *v = &g->view_cache[index];
+    *out = v;
+    if (v->ready)
+        return true;
+    char where[64];
+    snprintf(where, sizeof where, "bufferView %zu", index);
+    json_object *json = json_object_array_get_idx(g->views, index);
+    uint64_t offset, length, stride;
+    size_t buffer_index;
+    const struct ao_gltf_buffer *b;
+    if (!ao_gltf_index(g, json, "buffer", g->buffer_count, where, &buffer_index) ||
+        !ao_gltf_integer(g, json, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, where, &offset) ||
+        !ao_gltf_integer(g, json, "byteLength", true, 0, AO_GLTF_MAX_INTEGER, where, &length) ||
+        !ao_gltf_integer(g, json, "byteStride", false, 0, 252, where, &stride) ||
+        !buffer(g, buffer_index, false, &b))
+        return false;
+    if (offset + length > b->size)
+        return ao_gltf_error(g, "%s: bytes [%llu, %llu) run past buffer %zu (%zu bytes)", where,
+                          (unsigned long long)offset, (unsigned long long)(offset + length), buffer_index,
+                          b->size);
+    if (!buffer(g, buffer_index, true, &b))
+        return false;
+    v->data = b->data + offset;
+    v->length = (size_t)length;
+    v->stride = (size_t)stride;
+    v->ready = true;
     return true;
 }
 
@@ -307,24 +403,13 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, const char *type, bool want_f
                    : component == AO_GLTF_UNSIGNED_SHORT ? 2 : 1;
 
     /* The bufferView, inside its buffer. */
-    char view_where[64];
-    snprintf(view_where, sizeof view_where, "bufferView %zu", view_index);
-    json_object *v = json_object_array_get_idx(g->views, view_index);
-    uint64_t view_offset, view_length, stride;
-    size_t buffer_index;
-    if (!ao_gltf_index(g, v, "buffer", g->buffer_count, view_where, &buffer_index) ||
-        !ao_gltf_integer(g, v, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, view_where, &view_offset) ||
-        !ao_gltf_integer(g, v, "byteLength", true, 0, AO_GLTF_MAX_INTEGER, view_where, &view_length) ||
-        !ao_gltf_integer(g, v, "byteStride", false, element, 252, view_where, &stride))
+    const struct ao_gltf_view *v;
+    if (!view(g, view_index, &v))
         return false;
-    const struct ao_gltf_buffer *b = &g->buffers[buffer_index];
-    if (view_offset + view_length > b->size)
-        return ao_gltf_error(g, "%s: bytes [%llu, %llu) run past buffer %zu (%zu bytes)", view_where,
-                          (unsigned long long)view_offset,
-                          (unsigned long long)(view_offset + view_length), buffer_index, b->size);
+    uint64_t view_length = v->length, stride = v->stride ? v->stride : element;
     if (stride < element)
-        return ao_gltf_error(g, "%s: byteStride %llu is smaller than an element (%zu bytes)",
-                          view_where, (unsigned long long)stride, element);
+        return ao_gltf_error(g, "bufferView %zu: byteStride %llu is smaller than an element (%zu bytes)",
+                          view_index, (unsigned long long)stride, element);
     /* The last element ends inside the view: offset + stride * (count - 1) + element. */
     uint64_t end = offset + stride * (count - 1) + element;
     if (end > view_length)
@@ -332,8 +417,7 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, const char *type, bool want_f
                           "which has %llu", where, (unsigned long long)count,
                           (unsigned long long)offset, (unsigned long long)end, view_index,
                           (unsigned long long)view_length);
-    *out = (struct ao_gltf_elements){b->data + view_offset + offset, (size_t)stride, (size_t)count,
-                             (int)component};
+    *out = (struct ao_gltf_elements){v->data + offset, (size_t)stride, (size_t)count, (int)component};
     return true;
 }
 
@@ -356,12 +440,26 @@ uint32_t ao_gltf_index_at(const struct ao_gltf_elements *e, size_t i)
 
 /* ------------------------------------------------------------------ loading and freeing */
 
-bool ao_gltf_load_buffers(struct ao_gltf *g, json_object *buffers)
+bool ao_gltf_begin_data(struct ao_gltf *g)
 {
-    bool ok = true;
-    for (size_t i = 0; ok && i < g->buffer_count; i++)
-        ok = load_buffer(g, json_object_array_get_idx(buffers, i), i);
-    return ok;
+    size_t views = ao_gltf_length(g->views);
+    g->buffers = calloc(g->buffer_count ? g->buffer_count : 1, sizeof *g->buffers);
+    g->view_cache = calloc(views ? views : 1, sizeof *g->view_cache);
+    return (g->buffers && g->view_cache) || ao_load_out_of_memory(g->path);
+}
+
+void ao_gltf_note(struct ao_gltf *g, const char *format, ...)
+{
+    size_t used = strlen(g->note);
+    if (used + 4 >= sizeof g->note)
+        return;
+    if (used)
+        used += (size_t)snprintf(g->note + used, sizeof g->note - used, "; ");
+    va_list args;
+    va_start(args, format);
+    if (vsnprintf(g->note + used, sizeof g->note - used, format, args) < 0)
+        g->note[used] = '\0';
+    va_end(args);
 }
 
 void ao_gltf_free_data(struct ao_gltf *g)
@@ -369,4 +467,7 @@ void ao_gltf_free_data(struct ao_gltf *g)
     for (size_t i = 0; i < g->buffer_count && g->buffers; i++)
         free(g->buffers[i].owned);
     free(g->buffers);
+    for (size_t i = 0; i < ao_gltf_length(g->views) && g->view_cache; i++)
+        free(g->view_cache[i].owned);
+    free(g->view_cache);
 }
