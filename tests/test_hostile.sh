@@ -256,6 +256,26 @@ if [ "$got" != 0 ] || [ -s err.txt ]; then fail "grid.gltf under --scene-budget 
 else echo "loaded in $((kb / 1024)) MB: grid.gltf under --scene-budget 32M"; fi
 rm -f instanced.gltf grid.gltf three.scene million.gltf string.gltf sparse.gltf grid.pfm
 
+# ---- glTF as exporters write it, with counts and strides that lie: quantized positions (6-byte
+# elements) claiming a billion elements or a stride shorter than one element
+python3 - <<'PY'
+import base64, json, struct
+def gltf(name, accessor, view, data):
+    doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0}],
+           'meshes': [{'primitives': [{'attributes': {'POSITION': 0}}]}], 'accessors': [accessor],
+           'bufferViews': [view], 'buffers': [{'byteLength': len(data),
+               'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
+    json.dump(doc, open(name, 'w'))
+shorts = struct.pack('<12h', 0, 0, 0, 0, 32767, 0, 0, 0, 0, 32767, 0, 0)
+gltf('quantized_count.gltf', {'bufferView': 0, 'componentType': 5122, 'normalized': True, 'count': 1000000000,
+     'type': 'VEC3'}, {'buffer': 0, 'byteLength': 24, 'byteStride': 8}, shorts)
+gltf('quantized_stride.gltf', {'bufferView': 0, 'componentType': 5122, 'normalized': True, 'count': 3,
+     'type': 'VEC3'}, {'buffer': 0, 'byteLength': 24, 'byteStride': 4}, shorts)
+PY
+refuse 1 "quantized_count.gltf: accessor 0 (POSITION): 1000000000 elements from byte 0 need 7999999998 bytes of bufferView 0, which has 24" quantized_count.gltf
+refuse 1 "quantized_stride.gltf: bufferView 0: byteStride 4 is smaller than an element (6 bytes)" quantized_stride.gltf
+rm -f quantized_count.gltf quantized_stride.gltf
+
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000
 python3 - "$big" <<'PY'

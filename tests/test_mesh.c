@@ -999,6 +999,51 @@ static void test_gltf_leniency(void **state)
                    "buffer 1 has no 'uri' and is not a GLB's BIN chunk: it has no data");
 }
 
+/* KHR_mesh_quantization: positions and normals as 8- and 16-bit integers, normalized or not, in
+ * 4-byte aligned strides, under the node transform that gives them their size (as exporters write
+ * them). Normalized signed values map to c / 127 or c / 32767, at least -1 (so -32768 is -1, as
+ * -32767 is); unsigned ones to c / 255 or c / 65535; others are their integer values. */
+static void test_gltf_quantized(void **state)
+{
+    (void)state;
+    struct {
+        int16_t p[3][4];        /* SHORT normalized, stride 8 */
+        int8_t n[3][4];         /* BYTE normalized, stride 4 */
+        uint8_t q[3][4];        /* UNSIGNED_BYTE, stride 4 */
+        uint16_t r[3][4];       /* UNSIGNED_SHORT normalized, stride 8 */
+    } data = {{{0, 0, 0, 0}, {32767, 0, 0, 0}, {0, -32768, 0, 0}},
+              {{0, 0, -127, 0}, {0, 0, -127, 0}, {0, 0, -128, 0}},
+              {{1, 1, 1, 0}, {3, 1, 1, 0}, {1, 3, 1, 0}},
+              {{0, 0, 65535, 0}, {65535, 0, 65535, 0}, {0, 65535, 65535, 0}}};
+    static const char json[] =
+        "{\"asset\": {\"version\": \"2.0\"}, \"extensionsUsed\": [\"KHR_mesh_quantization\"],"
+        " \"extensionsRequired\": [\"KHR_mesh_quantization\"], \"nodes\": [{\"mesh\": 0, \"scale\": [2, 2, 2]}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1}},"
+        " {\"attributes\": {\"POSITION\": 2}}, {\"attributes\": {\"POSITION\": 3}}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5122, \"normalized\": true, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 1, \"componentType\": 5120, \"normalized\": true, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 2, \"componentType\": 5121, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 3, \"componentType\": 5123, \"normalized\": true, \"count\": 3, \"type\": \"VEC3\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 24, \"byteStride\": 8},"
+        " {\"buffer\": 0, \"byteOffset\": 24, \"byteLength\": 12, \"byteStride\": 4},"
+        " {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 12, \"byteStride\": 4},"
+        " {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 24, \"byteStride\": 8}],\n"
+        " \"buffers\": [{\"byteLength\": %zu, \"uri\": \"%s\"}]}\n";
+    struct ao_mesh mesh;
+    load_ok(&mesh, gltf_file("quantized.gltf", json, &data, sizeof data));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.triangle_count, 3);
+    assert_string_equal(mesh.note, "");
+    static const float want[9][3] = {{0, 0, 0}, {2, 0, 0}, {0, -2, 0}, {2, 2, 2}, {6, 2, 2}, {2, 6, 2},
+                                     {0, 0, 2}, {2, 0, 2}, {0, 2, 2}};
+    for (size_t i = 0; i < 9; i++)
+        assert_true(mesh.positions[i].x == want[i][0] && mesh.positions[i].y == want[i][1] &&
+                    mesh.positions[i].z == want[i][2]);
+    for (size_t i = 0; i < 3; i++)
+        assert_vec3_near(mesh.normals[i], 0, 0, -1);
+    ao_mesh_finish(&mesh);
+}
+
 /* A file of points and lines only has nothing to render: one line names the modes found. */
 static void test_gltf_points_and_lines_only(void **state)
 {
@@ -1151,7 +1196,7 @@ static const struct {
     {"bad_gltf_extension.gltf", ": ", "requires extension 'EXT_mesh_gpu_instancing', which places meshes many times "
                                       "and which aoview does not read"},
     {"bad_gltf_sparse.gltf", ": ", "accessor 0 (POSITION): sparse accessors are not supported"},
-    {"bad_gltf_position_type.gltf", ": ", "componentType 5123; only float (5126)"},
+    {"bad_gltf_position_type.gltf", ": ", "componentType 5125; positions and normals must be float (5126), or byte"},
     {"bad_gltf_index_count.gltf", ": ", "2 indices, not a whole number of triangles"},
     {"bad_gltf_mesh_index.gltf", ": ", "node 1: 'mesh' 7 is out of range (2 defined)"},
     {"bad_gltf_uri.gltf", ": ", "buffer 0 ('http://example.com/x.bin'): the URI scheme 'http:' is not supported"},
@@ -1357,6 +1402,7 @@ int main(void)
         cmocka_unit_test(test_gltf_points_and_lines_only),
         cmocka_unit_test(test_gltf_required_extensions),
         cmocka_unit_test(test_gltf_leniency),
+        cmocka_unit_test(test_gltf_quantized),
         cmocka_unit_test(test_loaders_keep_to_the_budget),
         cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
         cmocka_unit_test(test_bad_inputs),

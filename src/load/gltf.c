@@ -4,7 +4,8 @@
  * default scene's nodes (or scene 0's, or every root node when there is no scene), their
  * transforms (matrix, or translation/rotation/scale; nested), and their meshes' primitives of
  * triangles, triangle strips and fans (modes 4, 5, 6; indexed by any unsigned type or not indexed)
- * with float VEC3 POSITION and NORMAL; points and lines are skipped and counted. Everything else
+ * with VEC3 POSITION and NORMAL of float or (KHR_mesh_quantization) 8- and 16-bit integers; points
+ * and lines are skipped and counted. Everything else
  * (materials, texture coordinates, animations, cameras) is ignored; sparse accessors and required
  * extensions are refused.
  *
@@ -201,11 +202,11 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
     if (!ao_gltf_member(attributes, "POSITION"))
         return ao_gltf_error(g, "%s: no POSITION attribute", where);
     if (!ao_gltf_index(g, attributes, "POSITION", count, where, &position_index) ||
-        !ao_gltf_accessor(g, position_index, "VEC3", true, "POSITION", &positions) ||
+        !ao_gltf_accessor(g, position_index, true, "POSITION", &positions) ||
         (has_normals && (!ao_gltf_index(g, attributes, "NORMAL", count, where, &normal_index) ||
-                         !ao_gltf_accessor(g, normal_index, "VEC3", true, "NORMAL", &normals))) ||
+                         !ao_gltf_accessor(g, normal_index, true, "NORMAL", &normals))) ||
         (indexed && (!ao_gltf_index(g, primitive, "indices", count, where, &index_index) ||
-                     !ao_gltf_accessor(g, index_index, "SCALAR", false, "indices", &indices))))
+                     !ao_gltf_accessor(g, index_index, false, "indices", &indices))))
         return false;
     if (has_normals && normals.count != positions.count)
         return ao_gltf_error(g, "%s: %zu normals for %zu positions", where, normals.count,
@@ -232,8 +233,8 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
     double cof[3][3];
     double det = normal_matrix(m, cof), sign = det < 0.0 ? -1.0 : 1.0;
     for (size_t i = 0; i < positions.count; i++) {
-        double x = ao_gltf_float(&positions, i, 0), y = ao_gltf_float(&positions, i, 1);
-        double z = ao_gltf_float(&positions, i, 2);
+        double x = ao_gltf_value(&positions, i, 0), y = ao_gltf_value(&positions, i, 1);
+        double z = ao_gltf_value(&positions, i, 2);
         p[i] = ao_vec3_make((float)(m[0] * x + m[4] * y + m[8] * z + m[12]),
                             (float)(m[1] * x + m[5] * y + m[9] * z + m[13]),
                             (float)(m[2] * x + m[6] * y + m[10] * z + m[14]));
@@ -242,8 +243,8 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
         lacking[i] = !has_normals;
         n[i] = ao_vec3_make(0.0f, 0.0f, 0.0f);
         if (has_normals) {
-            double a = ao_gltf_float(&normals, i, 0), b = ao_gltf_float(&normals, i, 1);
-            double d = ao_gltf_float(&normals, i, 2);
+            double a = ao_gltf_value(&normals, i, 0), b = ao_gltf_value(&normals, i, 1);
+            double d = ao_gltf_value(&normals, i, 2);
             if (!isfinite(a) || !isfinite(b) || !isfinite(d))
                 return ao_gltf_error(g, "%s: normal %zu is not finite", where, i);
             double t[3];
@@ -463,12 +464,11 @@ static const char *const LOOKS_PREFIXES[] = {"KHR_materials_", "KHR_texture_", "
 static const char *const LOOKS[] = {"KHR_lights_punctual", "EXT_lights_image_based", "KHR_xmp_json_ld", "KHR_xmp",
                                     "KHR_animation_pointer", NULL};
 /* Required extensions that change the geometry and that aoview reads. */
-static const char *const GEOMETRY[] = {NULL};
+static const char *const GEOMETRY[] = {"KHR_mesh_quantization", NULL};
 /* Required extensions known to change the geometry that aoview does not read, and how. */
 static const struct {
     const char *name, *what;
-} UNREAD[] = {{"KHR_mesh_quantization", "stores positions and normals as integers"},
-              {"EXT_meshopt_compression", "compresses the geometry"},
+} UNREAD[] = {{"EXT_meshopt_compression", "compresses the geometry"},
               {"KHR_draco_mesh_compression", "compresses the geometry"},
               {"EXT_mesh_gpu_instancing", "places meshes many times"},
               {"MSFT_lod", "chooses among meshes by distance"}};

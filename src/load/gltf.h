@@ -15,9 +15,6 @@
  * most 252) stay far below 2^64. */
 #define AO_GLTF_MAX_INTEGER 9007199254740992.0
 
-/* Accessor component types. */
-enum { AO_GLTF_UNSIGNED_BYTE = 5121, AO_GLTF_UNSIGNED_SHORT = 5123, AO_GLTF_UNSIGNED_INT = 5125, AO_GLTF_FLOAT = 5126 };
-
 /* A buffer: its declared byteLength, read at its first use, and its bytes (the GLB's BIN chunk, a
  * decoded data URI or an external file's contents), loaded when a bufferView is first read. */
 struct ao_gltf_buffer {
@@ -39,7 +36,9 @@ struct ao_gltf_view {
 struct ao_gltf_elements {
     const unsigned char *first;
     size_t stride, count;
-    int component_type;
+    int component_type;          /* quantize.h's types */
+    size_t component_size;       /* bytes */
+    bool normalized;
 };
 
 /* The file being loaded and the mesh being built. */
@@ -108,13 +107,14 @@ bool ao_gltf_begin_data(struct ao_gltf *g);
  * what does not fit is left out. */
 void ao_gltf_note(struct ao_gltf *g, const char *format, ...);
 
-/* Accessor i's elements: type ("SCALAR" or "VEC3") and component types as required, every
- * element inside its bufferView and the view inside its buffer. */
-bool ao_gltf_accessor(struct ao_gltf *g, size_t i, const char *type, bool want_float, const char *use,
-                      struct ao_gltf_elements *out);
+/* Accessor i's elements, for use (named in messages): with attribute, VEC3 positions or normals,
+ * float or (KHR_mesh_quantization) 8- and 16-bit integers, normalized or not; else SCALAR indices
+ * of unsigned byte, short or int. Every element lies inside its bufferView and the view inside its
+ * buffer. */
+bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *use, struct ao_gltf_elements *out);
 
-/* Element i's component k as a float. */
-float ao_gltf_float(const struct ao_gltf_elements *e, size_t i, int k);
+/* Element i's component k as a number (quantize.h: integers as glTF maps them when normalized). */
+double ao_gltf_value(const struct ao_gltf_elements *e, size_t i, int k);
 
 /* Index element i. */
 uint32_t ao_gltf_index_at(const struct ao_gltf_elements *e, size_t i);

@@ -11,6 +11,7 @@
 
 #include "file.h"
 #include "load/gltf.h"
+#include "load/quantize.h"
 
 /* GLB container constants: magic "glTF", chunk types "JSON" and "BIN\0". */
 enum { GLB_MAGIC = 0x46546C67, GLB_JSON = 0x4E4F534A, GLB_BIN = 0x004E4942, GLB_HEADER = 12 };
@@ -368,15 +369,14 @@ static bool view(struct ao_gltf *g, size_t index, const struct ao_gltf_view **ou
 
 /* ------------------------------------------------------------------ accessors */
 
-/* Accessor i's elements: type ("SCALAR" or "VEC3") and component types as required, every
- * element inside its bufferView and the view inside its buffer. */
-bool ao_gltf_accessor(struct ao_gltf *g, size_t i, const char *type, bool want_float, const char *use,
-                     struct ao_gltf_elements *out)
+bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *use, struct ao_gltf_elements *out)
 {
+    const char *type = attribute ? "VEC3" : "SCALAR";
     char where[96];
     snprintf(where, sizeof where, "accessor %zu (%s)", i, use);
     json_object *a = json_object_array_get_idx(g->accessors, i);
     json_object *type_json = ao_gltf_member(a, "type");
+    json_object *normalized = ao_gltf_member(a, "normalized");
     uint64_t component, count, offset;
     size_t view_index;
     if (ao_gltf_member(a, "sparse"))
@@ -391,16 +391,21 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, const char *type, bool want_f
         !ao_gltf_integer(g, a, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, where, &offset) ||
         !ao_gltf_index(g, a, "bufferView", ao_gltf_length(g->views), where, &view_index))
         return false;
-    bool is_index = component == AO_GLTF_UNSIGNED_BYTE || component == AO_GLTF_UNSIGNED_SHORT ||
-                    component == AO_GLTF_UNSIGNED_INT;
-    if (want_float ? component != AO_GLTF_FLOAT : !is_index)
+    /* Positions and normals: float, or (KHR_mesh_quantization) 8- or 16-bit integers, normalized
+     * or not; indices: unsigned integers. */
+    bool is_index = component == AO_QUANTIZE_UNSIGNED_BYTE || component == AO_QUANTIZE_UNSIGNED_SHORT ||
+                    component == AO_QUANTIZE_UNSIGNED_INT;
+    bool is_attribute = component != AO_QUANTIZE_UNSIGNED_INT && ao_quantize_size((int)component) > 0;
+    if (attribute ? !is_attribute : !is_index)
         return ao_gltf_error(g, "%s: componentType %llu; %s", where, (unsigned long long)component,
-                          want_float ? "only float (5126) is supported"
-                                     : "indices must be unsigned byte, short or int");
+                          attribute ? "positions and normals must be float (5126), or byte, unsigned byte, short "
+                                      "or unsigned short (5120 to 5123, KHR_mesh_quantization)"
+                                    : "indices must be unsigned byte, short or int");
+    if (normalized && !json_object_is_type(normalized, json_type_boolean))
+        return ao_gltf_error(g, "%s: 'normalized' is not true or false", where);
     if (count == 0)
         return ao_gltf_error(g, "%s: count is 0", where);
-    size_t element = component == AO_GLTF_FLOAT ? 12 : component == AO_GLTF_UNSIGNED_INT ? 4
-                   : component == AO_GLTF_UNSIGNED_SHORT ? 2 : 1;
+    size_t size = ao_quantize_size((int)component), element = (attribute ? 3 : 1) * size;
 
     /* The bufferView, inside its buffer. */
     const struct ao_gltf_view *v;
@@ -417,25 +422,22 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, const char *type, bool want_f
                           "which has %llu", where, (unsigned long long)count,
                           (unsigned long long)offset, (unsigned long long)end, view_index,
                           (unsigned long long)view_length);
-    *out = (struct ao_gltf_elements){v->data + offset, (size_t)stride, (size_t)count, (int)component};
+    *out = (struct ao_gltf_elements){v->data + offset, (size_t)stride, (size_t)count, (int)component, size,
+                                     normalized && json_object_get_boolean(normalized)};
     return true;
 }
 
-/* Element i's component k as a float. */
-float ao_gltf_float(const struct ao_gltf_elements *e, size_t i, int k)
+double ao_gltf_value(const struct ao_gltf_elements *e, size_t i, int k)
 {
-    uint32_t bits = le32(e->first + i * e->stride + 4 * (size_t)k);
-    float f;
-    memcpy(&f, &bits, sizeof f);
-    return f;
+    return ao_quantize_value(e->first + i * e->stride + (size_t)k * e->component_size, e->component_type,
+                             e->normalized);
 }
 
-/* Index element i. */
 uint32_t ao_gltf_index_at(const struct ao_gltf_elements *e, size_t i)
 {
     const unsigned char *p = e->first + i * e->stride;
-    return e->component_type == AO_GLTF_UNSIGNED_INT ? le32(p)
-           : e->component_type == AO_GLTF_UNSIGNED_SHORT ? (uint32_t)(p[0] | p[1] << 8) : p[0];
+    return e->component_type == AO_QUANTIZE_UNSIGNED_INT ? le32(p)
+           : e->component_type == AO_QUANTIZE_UNSIGNED_SHORT ? (uint32_t)(p[0] | p[1] << 8) : p[0];
 }
 
 /* ------------------------------------------------------------------ loading and freeing */
