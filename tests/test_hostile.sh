@@ -271,10 +271,25 @@ gltf('quantized_count.gltf', {'bufferView': 0, 'componentType': 5122, 'normalize
      'type': 'VEC3'}, {'buffer': 0, 'byteLength': 24, 'byteStride': 8}, shorts)
 gltf('quantized_stride.gltf', {'bufferView': 0, 'componentType': 5122, 'normalized': True, 'count': 3,
      'type': 'VEC3'}, {'buffer': 0, 'byteLength': 24, 'byteStride': 4}, shorts)
+# Sparse accessors: a billion entries in 24 bytes, an index that wraps to -1, and four billion
+# zeros without a bufferView (gathered into memory of their own, so charged first).
+def sparse(entries, at=0):
+    return {'count': entries, 'indices': {'bufferView': 0, 'componentType': 5125, 'byteOffset': 20},
+            'values': {'bufferView': 0, 'byteOffset': 8}}
+floats = struct.pack('<5f', 0, 0, 0, 1, 0) + struct.pack('<I', 4294967295)
+gltf('sparse_count.gltf', {'componentType': 5126, 'count': 3, 'type': 'VEC3', 'sparse': sparse(1000000000)},
+     {'buffer': 0, 'byteLength': 24}, floats)
+gltf('sparse_index.gltf', {'componentType': 5126, 'count': 3, 'type': 'VEC3', 'sparse': sparse(1)},
+     {'buffer': 0, 'byteLength': 24}, floats)
+gltf('zeros.gltf', {'componentType': 5126, 'count': 4000000000, 'type': 'VEC3'}, {'buffer': 0, 'byteLength': 24},
+     floats)
 PY
 refuse 1 "quantized_count.gltf: accessor 0 (POSITION): 1000000000 elements from byte 0 need 7999999998 bytes of bufferView 0, which has 24" quantized_count.gltf
 refuse 1 "quantized_stride.gltf: bufferView 0: byteStride 4 is smaller than an element (6 bytes)" quantized_stride.gltf
-rm -f quantized_count.gltf quantized_stride.gltf
+refuse 1 "sparse_count.gltf: accessor 0 (POSITION) sparse indices: 1000000000 elements from byte 20 need 4000000020 bytes of bufferView 0, which has 24" sparse_count.gltf
+refuse 1 "sparse_index.gltf: accessor 0 (POSITION) sparse: index 4294967295 at 0 is out of range (3 elements)" sparse_index.gltf
+refuse 1 "zeros.gltf: accessor 0 (POSITION): its 4000000000 values would need about 44.7 GiB, more than the" zeros.gltf
+rm -f quantized_count.gltf quantized_stride.gltf sparse_count.gltf sparse_index.gltf zeros.gltf
 
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000

@@ -1044,6 +1044,54 @@ static void test_gltf_quantized(void **state)
     ao_mesh_finish(&mesh);
 }
 
+/* Sparse accessors: entries written over the bufferView's elements, or over zeros without one; an
+ * accessor without a bufferView or sparse entries is zeros. Positions: the triangle (0,0,0) (1,0,0)
+ * (0,1,0) with its last vertex moved to (0,2,0) by a sparse entry; then the same triangle from zeros
+ * and two entries (unsigned short indices); indices 0 0 0 with entries making them 0 1 2; NORMAL
+ * all zeros. A sparse index past the count is refused. */
+static void test_gltf_sparse(void **state)
+{
+    (void)state;
+    struct {
+        float p[3][3];
+        float moved[3];
+        uint16_t at[2];
+        float two[2][3];
+        uint8_t index_at[2], index_value[2];
+    } data = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {0, 2, 0}, {1, 2}, {{1, 0, 0}, {0, 1, 0}}, {1, 2}, {1, 2}};
+    static const char json[] =
+        "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 2}},"
+        " {\"attributes\": {\"POSITION\": 1}, \"indices\": 3}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\",\n"
+        "    \"sparse\": {\"count\": 1, \"indices\": {\"bufferView\": 0, \"byteOffset\": 50, \"componentType\": 5123},"
+        " \"values\": {\"bufferView\": 0, \"byteOffset\": 36}}},\n"
+        "   {\"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\", \"sparse\": {\"count\": 2,"
+        " \"indices\": {\"bufferView\": 0, \"byteOffset\": 48, \"componentType\": 5123}, \"values\": {\"bufferView\": 0,"
+        " \"byteOffset\": 52}}},\n"
+        "   {\"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "   {\"componentType\": 5121, \"count\": 3, \"type\": \"SCALAR\", \"sparse\": {\"count\": 2, \"indices\":"
+        " {\"bufferView\": 0, \"byteOffset\": 76, \"componentType\": 5121}, \"values\": {\"bufferView\": 0,"
+        " \"byteOffset\": 78}}}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 80}],\n"
+        " \"buffers\": [{\"byteLength\": %zu, \"uri\": \"%s\"}]}\n";
+    struct ao_mesh mesh;
+    load_ok(&mesh, gltf_file("sparse.gltf", json, &data, sizeof data));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.triangle_count, 2);
+    assert_vec3_near(mesh.positions[2], 0, 2, 0);
+    assert_vec3_near(mesh.positions[3], 0, 0, 0);
+    assert_vec3_near(mesh.positions[4], 1, 0, 0);
+    assert_vec3_near(mesh.positions[5], 0, 1, 0);
+    assert_vec3_near(mesh.normals[0], 0, 0, 0);     /* the file's normals: zeros */
+    assert_vec3_near(mesh.normals[3], 0, 0, 1);     /* computed */
+    assert_triangle(&mesh, 1, 3, 4, 5);
+    ao_mesh_finish(&mesh);
+    data.at[1] = 3;
+    expect_failure(gltf_file("sparse_range.gltf", json, &data, sizeof data), ": ",
+                   "accessor 0 (POSITION) sparse: index 3 at 0 is out of range (3 elements)");
+}
+
 /* A file of points and lines only has nothing to render: one line names the modes found. */
 static void test_gltf_points_and_lines_only(void **state)
 {
@@ -1195,7 +1243,7 @@ static const struct {
     {"bad_gltf_version.gltf", ": ", "glTF version '1.0'; only 2.x is supported"},
     {"bad_gltf_extension.gltf", ": ", "requires extension 'EXT_mesh_gpu_instancing', which places meshes many times "
                                       "and which aoview does not read"},
-    {"bad_gltf_sparse.gltf", ": ", "accessor 0 (POSITION): sparse accessors are not supported"},
+    {"bad_gltf_sparse.gltf", ": ", "accessor 0 (POSITION) sparse: no 'indices' and 'values' objects"},
     {"bad_gltf_position_type.gltf", ": ", "componentType 5125; positions and normals must be float (5126), or byte"},
     {"bad_gltf_index_count.gltf", ": ", "2 indices, not a whole number of triangles"},
     {"bad_gltf_mesh_index.gltf", ": ", "node 1: 'mesh' 7 is out of range (2 defined)"},
@@ -1403,6 +1451,7 @@ int main(void)
         cmocka_unit_test(test_gltf_required_extensions),
         cmocka_unit_test(test_gltf_leniency),
         cmocka_unit_test(test_gltf_quantized),
+        cmocka_unit_test(test_gltf_sparse),
         cmocka_unit_test(test_loaders_keep_to_the_budget),
         cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
         cmocka_unit_test(test_bad_inputs),

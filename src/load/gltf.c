@@ -1,22 +1,22 @@
-/* glTF 2.0: .gltf (JSON, buffers in external files or base64 data URIs) and .glb (binary
- * container). The JSON is parsed by json-c; this file and its data layer gltf_data.c (JSON access,
- * containers, buffers, accessors; gltf.h) read what aoview needs from it: the
- * default scene's nodes (or scene 0's, or every root node when there is no scene), their
- * transforms (matrix, or translation/rotation/scale; nested), and their meshes' primitives of
- * triangles, triangle strips and fans (modes 4, 5, 6; indexed by any unsigned type or not indexed)
- * with VEC3 POSITION and NORMAL of float or (KHR_mesh_quantization) 8- and 16-bit integers; points
- * and lines are skipped and counted. Everything else
- * (materials, texture coordinates, animations, cameras) is ignored; sparse accessors and required
- * extensions are refused.
+/* glTF 2.0: .gltf (JSON, buffers in external files or data URIs) and .glb (binary container). The
+ * JSON is parsed by json-c; this file and its data layer gltf_data.c (JSON access, containers,
+ * buffers, bufferViews, accessors; gltf.h) read what aoview needs from it: the default scene's
+ * nodes (or scene 0's, or every root node when there is no scene), their transforms (matrix, or
+ * translation/rotation/scale; nested), and their meshes' primitives of triangles, triangle strips
+ * and fans (modes 4, 5, 6; indexed by any unsigned type or not indexed) with VEC3 POSITION and
+ * NORMAL of float or (KHR_mesh_quantization) 8- and 16-bit integers, sparse or not; points and
+ * lines are skipped and counted. Required extensions that change only how surfaces look are noted
+ * (materials, textures, lights are ignored); others are refused unless read here.
  *
  * Every range a file gives is checked before it is read: a GLB's chunk lengths against the file,
  * a bufferView against its buffer, an accessor's last element against its bufferView, indices
- * against their vertex count. Integers are read only up to 2^53, so that sums of three of them and
- * products of one with a stride (at most 252) stay far below 2^64. Nodes must form trees: a node
- * with two parents, or a cycle, is refused before anything is traversed. Whatever the load holds
- * is charged to the scene budget before it is allocated: the JSON tree json-c will build and the
- * per-node arrays (both estimated from the text, json_cost), each buffer, and the mesh its nodes
- * instance, counted in a first pass, so that a small file cannot demand gigabytes. */
+ * (sparse ones too) against their count. Integers are read only up to 2^53, so that sums of three
+ * of them and products of one with a stride (at most 252) stay far below 2^64. Nodes must form
+ * trees: a node with two parents, or a cycle, is refused before anything is traversed. Whatever
+ * the load holds is charged to the scene budget before it is allocated: the JSON tree json-c will
+ * build and the per-node arrays (both estimated from the text, json_cost), each buffer, each
+ * accessor gathered into memory of its own, and the mesh its nodes instance, counted in a first
+ * pass, so that a small file cannot demand gigabytes. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>

@@ -49,6 +49,8 @@ struct ao_gltf {
     struct ao_gltf_buffer *buffers;
     size_t buffer_count;
     struct ao_gltf_view *view_cache;   /* per bufferView */
+    unsigned char **gathered;     /* per accessor: its elements in memory of their own (sparse, or
+                                     without a bufferView), or NULL */
     const unsigned char *bin;     /* GLB BIN chunk, or NULL */
     size_t bin_size;
     size_t *parent;               /* per node: its parent, or SIZE_MAX */
@@ -110,7 +112,8 @@ void ao_gltf_note(struct ao_gltf *g, const char *format, ...);
 /* Accessor i's elements, for use (named in messages): with attribute, VEC3 positions or normals,
  * float or (KHR_mesh_quantization) 8- and 16-bit integers, normalized or not; else SCALAR indices
  * of unsigned byte, short or int. Every element lies inside its bufferView and the view inside its
- * buffer. */
+ * buffer; an accessor without a bufferView is zeros; sparse entries are written over a copy (each
+ * index checked against the count), made once and charged to the budget. */
 bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *use, struct ao_gltf_elements *out);
 
 /* Element i's component k as a number (quantize.h: integers as glTF maps them when normalized). */

@@ -369,6 +369,91 @@ static bool view(struct ao_gltf *g, size_t index, const struct ao_gltf_view **ou
 
 /* ------------------------------------------------------------------ accessors */
 
+/* count elements of element bytes from byte offset of bufferView index, stride bytes apart (0:
+ * packed), checked to lie inside the view; where and what name them in messages. */
+static bool view_elements(struct ao_gltf *g, size_t index, uint64_t offset, uint64_t count, size_t element,
+                          bool strided, const char *where, const unsigned char **first, size_t *stride)
+{
+    const struct ao_gltf_view *v;
+    if (!view(g, index, &v))
+        return false;
+    uint64_t step = strided && v->stride ? v->stride : element;
+    if (step < element)
+        return ao_gltf_error(g, "bufferView %zu: byteStride %llu is smaller than an element (%zu bytes)", index,
+                             (unsigned long long)step, element);
+    /* The last element ends inside the view: offset + step * (count - 1) + element. */
+    uint64_t end = offset + step * (count - 1) + element;
+    if (end > v->length)
+        return ao_gltf_error(g, "%s: %llu elements from byte %llu need %llu bytes of bufferView %zu, which has %zu",
+                             where, (unsigned long long)count, (unsigned long long)offset, (unsigned long long)end,
+                             index, v->length);
+    *first = v->data + offset;
+    *stride = (size_t)step;
+    return true;
+}
+
+/* The accessor's elements gathered into memory of their own (packed, element bytes each), charged
+ * to the budget: a copy of those of its bufferView, or zeros without one, with the sparse entries,
+ * if any, written over them. Each sparse index is checked against the count. */
+static bool gather(struct ao_gltf *g, size_t i, json_object *a, const char *where, uint64_t count, size_t element,
+                   const struct ao_gltf_elements *base)
+{
+    char what[128];
+    snprintf(what, sizeof what, "%s: its %llu values", where, (unsigned long long)count);
+    if (!ao_gltf_take(g, count * element, what))
+        return false;
+    unsigned char *dense = calloc((size_t)count, element);
+    if (!dense)
+        return ao_load_out_of_memory(g->path);
+    g->gathered[i] = dense;
+    for (size_t k = 0; base && k < count; k++)
+        memcpy(dense + k * element, base->first + k * base->stride, element);
+    json_object *sparse = ao_gltf_member(a, "sparse");
+    if (!sparse)
+        return true;
+
+    /* sparse: count entries; indices (unsigned integers) and values, each in a bufferView. */
+    char sparse_where[128];
+    snprintf(sparse_where, sizeof sparse_where, "%s sparse", where);
+    json_object *indices = ao_gltf_member(sparse, "indices"), *values = ao_gltf_member(sparse, "values");
+    uint64_t entries, index_type, index_offset, value_offset;
+    if (!json_object_is_type(indices, json_type_object) || !json_object_is_type(values, json_type_object))
+        return ao_gltf_error(g, "%s: no 'indices' and 'values' objects", sparse_where);
+    size_t index_view, value_view, index_stride, value_stride;
+    const unsigned char *index_first, *value_first;
+    if (!ao_gltf_integer(g, sparse, "count", true, 0, (double)UINT32_MAX, sparse_where, &entries) ||
+        !ao_gltf_integer(g, indices, "componentType", true, 0, AO_GLTF_MAX_INTEGER, sparse_where, &index_type) ||
+        !ao_gltf_integer(g, indices, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, sparse_where, &index_offset) ||
+        !ao_gltf_index(g, indices, "bufferView", ao_gltf_length(g->views), sparse_where, &index_view) ||
+        !ao_gltf_integer(g, values, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, sparse_where, &value_offset) ||
+        !ao_gltf_index(g, values, "bufferView", ao_gltf_length(g->views), sparse_where, &value_view))
+        return false;
+    if (entries == 0)
+        return ao_gltf_error(g, "%s: count is 0", sparse_where);
+    if (index_type != AO_QUANTIZE_UNSIGNED_BYTE && index_type != AO_QUANTIZE_UNSIGNED_SHORT &&
+        index_type != AO_QUANTIZE_UNSIGNED_INT)
+        return ao_gltf_error(g, "%s: indices' componentType %llu; they must be unsigned byte, short or int",
+                             sparse_where, (unsigned long long)index_type);
+    struct ao_gltf_elements at_list = {.component_type = (int)index_type};
+    snprintf(what, sizeof what, "%s sparse indices", where);
+    if (!view_elements(g, index_view, index_offset, entries, ao_quantize_size((int)index_type), false, what,
+                       &index_first, &index_stride))
+        return false;
+    snprintf(what, sizeof what, "%s sparse values", where);
+    if (!view_elements(g, value_view, value_offset, entries, element, false, what, &value_first, &value_stride))
+        return false;
+    at_list.first = index_first;
+    at_list.stride = index_stride;
+    for (size_t k = 0; k < entries; k++) {
+        uint32_t at = ao_gltf_index_at(&at_list, k);
+        if (at >= count)
+            return ao_gltf_error(g, "%s: index %u at %zu is out of range (%llu elements)", sparse_where, at, k,
+                                 (unsigned long long)count);
+        memcpy(dense + (size_t)at * element, value_first + k * value_stride, element);
+    }
+    return true;
+}
+
 bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *use, struct ao_gltf_elements *out)
 {
     const char *type = attribute ? "VEC3" : "SCALAR";
@@ -377,19 +462,16 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *u
     json_object *a = json_object_array_get_idx(g->accessors, i);
     json_object *type_json = ao_gltf_member(a, "type");
     json_object *normalized = ao_gltf_member(a, "normalized");
+    bool has_view = ao_gltf_member(a, "bufferView") != NULL, sparse = ao_gltf_member(a, "sparse") != NULL;
     uint64_t component, count, offset;
-    size_t view_index;
-    if (ao_gltf_member(a, "sparse"))
-        return ao_gltf_error(g, "%s: sparse accessors are not supported", where);
-    if (!ao_gltf_member(a, "bufferView"))
-        return ao_gltf_error(g, "%s: no bufferView (all-zero accessors are not supported)", where);
+    size_t view_index = 0;
     if (!json_object_is_type(type_json, json_type_string) ||
         strcmp(json_object_get_string(type_json), type) != 0)
         return ao_gltf_error(g, "%s: type must be %s", where, type);
     if (!ao_gltf_integer(g, a, "componentType", true, 0, AO_GLTF_MAX_INTEGER, where, &component) ||
         !ao_gltf_integer(g, a, "count", true, 0, (double)UINT32_MAX, where, &count) ||
         !ao_gltf_integer(g, a, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, where, &offset) ||
-        !ao_gltf_index(g, a, "bufferView", ao_gltf_length(g->views), where, &view_index))
+        (has_view && !ao_gltf_index(g, a, "bufferView", ao_gltf_length(g->views), where, &view_index)))
         return false;
     /* Positions and normals: float, or (KHR_mesh_quantization) 8- or 16-bit integers, normalized
      * or not; indices: unsigned integers. */
@@ -406,24 +488,18 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *u
     if (count == 0)
         return ao_gltf_error(g, "%s: count is 0", where);
     size_t size = ao_quantize_size((int)component), element = (attribute ? 3 : 1) * size;
-
-    /* The bufferView, inside its buffer. */
-    const struct ao_gltf_view *v;
-    if (!view(g, view_index, &v))
-        return false;
-    uint64_t view_length = v->length, stride = v->stride ? v->stride : element;
-    if (stride < element)
-        return ao_gltf_error(g, "bufferView %zu: byteStride %llu is smaller than an element (%zu bytes)",
-                          view_index, (unsigned long long)stride, element);
-    /* The last element ends inside the view: offset + stride * (count - 1) + element. */
-    uint64_t end = offset + stride * (count - 1) + element;
-    if (end > view_length)
-        return ao_gltf_error(g, "%s: %llu elements from byte %llu need %llu bytes of bufferView %zu, "
-                          "which has %llu", where, (unsigned long long)count,
-                          (unsigned long long)offset, (unsigned long long)end, view_index,
-                          (unsigned long long)view_length);
-    *out = (struct ao_gltf_elements){v->data + offset, (size_t)stride, (size_t)count, (int)component, size,
+    *out = (struct ao_gltf_elements){NULL, element, (size_t)count, (int)component, size,
                                      normalized && json_object_get_boolean(normalized)};
+    if (has_view && !view_elements(g, view_index, offset, count, element, true, where, &out->first, &out->stride))
+        return false;
+
+    /* Without a bufferView (zeros) or with sparse entries: gathered once into memory of its own. */
+    if (has_view && !sparse)
+        return true;
+    if (!g->gathered[i] && !gather(g, i, a, where, count, element, has_view ? out : NULL))
+        return false;
+    out->first = g->gathered[i];
+    out->stride = element;
     return true;
 }
 
@@ -447,7 +523,8 @@ bool ao_gltf_begin_data(struct ao_gltf *g)
     size_t views = ao_gltf_length(g->views);
     g->buffers = calloc(g->buffer_count ? g->buffer_count : 1, sizeof *g->buffers);
     g->view_cache = calloc(views ? views : 1, sizeof *g->view_cache);
-    return (g->buffers && g->view_cache) || ao_load_out_of_memory(g->path);
+    g->gathered = calloc(ao_gltf_length(g->accessors) + 1, sizeof *g->gathered);
+    return (g->buffers && g->view_cache && g->gathered) || ao_load_out_of_memory(g->path);
 }
 
 void ao_gltf_note(struct ao_gltf *g, const char *format, ...)
@@ -472,4 +549,7 @@ void ao_gltf_free_data(struct ao_gltf *g)
     for (size_t i = 0; i < ao_gltf_length(g->views) && g->view_cache; i++)
         free(g->view_cache[i].owned);
     free(g->view_cache);
+    for (size_t i = 0; i < ao_gltf_length(g->accessors) && g->gathered; i++)
+        free(g->gathered[i]);
+    free(g->gathered);
 }
