@@ -16,6 +16,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <meshoptimizer.h>
+
 #include "mesh.h"
 #include "scene.h"
 
@@ -1092,6 +1094,173 @@ static void test_gltf_sparse(void **state)
                    "accessor 0 (POSITION) sparse: index 3 at 0 is out of range (3 elements)");
 }
 
+/* A glTF of one mesh, every view of it compressed with EXT_meshopt_compression by the library's
+ * own encoders, in buffer 0, and the fallback buffer 1 without data (as gltfpack writes them):
+ * positions (float, or with quantized shorts), normals octahedral-filtered into bytes, and the
+ * indices as a triangle list (TRIANGLES) and as a strip (INDICES, mode 5). */
+struct meshopt_file {
+    unsigned char data[4096];
+    size_t size;
+    char views[2048];
+    size_t view_count;
+};
+
+/* Encodes count elements of stride bytes as mode into f's buffer and adds its bufferView. */
+static void meshopt_add(struct meshopt_file *f, const char *mode, const char *filter, const void *elements,
+                        size_t count, size_t stride)
+{
+    size_t room = sizeof f->data - f->size, n;
+    if (strcmp(mode, "ATTRIBUTES") == 0)
+        n = meshopt_encodeVertexBuffer(f->data + f->size, room, elements, count, stride);
+    else if (strcmp(mode, "TRIANGLES") == 0)
+        n = meshopt_encodeIndexBuffer(f->data + f->size, room, elements, count);
+    else
+        n = meshopt_encodeIndexSequence(f->data + f->size, room, elements, count);
+    assert_true(n > 0);
+    size_t used = strlen(f->views);
+    snprintf(f->views + used, sizeof f->views - used,
+             "%s{\"buffer\": 1, \"byteLength\": %zu%s, \"extensions\": {\"EXT_meshopt_compression\": {\"buffer\": 0,"
+             " \"byteOffset\": %zu, \"byteLength\": %zu, \"byteStride\": %zu, \"count\": %zu, \"mode\": \"%s\"%s%s%s}}}",
+             f->view_count ? ", " : "", count * stride, strcmp(mode, "ATTRIBUTES") ? "" : ", \"byteStride\": 0",
+             f->size, n, stride, count, mode, filter ? ", \"filter\": \"" : "", filter ? filter : "", filter ? "\"" : "");
+    if (strcmp(mode, "ATTRIBUTES") == 0) {   /* the view's byteStride is the extension's */
+        char *zero = strstr(f->views + used, "\"byteStride\": 0");
+        char stride_text[32];
+        int k = snprintf(stride_text, sizeof stride_text, "\"byteStride\": %zu", stride);
+        memmove(zero + k, zero + 15, strlen(zero + 15) + 1);
+        memcpy(zero, stride_text, (size_t)k);
+    }
+    f->size += (n + 3) / 4 * 4;
+    f->view_count++;
+}
+
+/* The test's file: accessors over views 0 (positions), 1 (normals), 2 (indices), 3 (quantized
+ * positions, under a node scaling by 2), 4 (strip indices, 32 bits). */
+static const char *meshopt_gltf(const char *name, const struct meshopt_file *f, size_t index_count)
+{
+    char *json = malloc(16384);
+    assert_non_null(json);
+    int n = snprintf(json, 16384,
+        "{\"asset\": {\"version\": \"2.0\"}, \"extensionsUsed\": [\"EXT_meshopt_compression\", \"KHR_mesh_quantization\"],"
+        " \"extensionsRequired\": [\"EXT_meshopt_compression\", \"KHR_mesh_quantization\"],\n"
+        " \"nodes\": [{\"mesh\": 0}, {\"mesh\": 1, \"scale\": [2, 2, 2]}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1}, \"indices\": 2}]},\n"
+        "   {\"primitives\": [{\"attributes\": {\"POSITION\": 3}, \"indices\": 4, \"mode\": 5}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 9, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 1, \"componentType\": 5120, \"normalized\": true, \"count\": 9, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 2, \"componentType\": 5123, \"count\": %zu, \"type\": \"SCALAR\"},\n"
+        "   {\"bufferView\": 3, \"componentType\": 5122, \"normalized\": true, \"count\": 9, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 4, \"componentType\": 5125, \"count\": 5, \"type\": \"SCALAR\"}],\n"
+        " \"bufferViews\": [%s],\n"
+        " \"buffers\": [{\"byteLength\": %%zu, \"uri\": \"%%s\"}, {\"byteLength\": 4096,"
+        " \"extensions\": {\"EXT_meshopt_compression\": {\"fallback\": true}}}]}\n", index_count, f->views);
+    assert_true(n > 0 && n < 16384);
+    const char *path = gltf_file(name, json, f->data, f->size);
+    free(json);
+    return path;
+}
+
+/* EXT_meshopt_compression decodes to exactly what was encoded: the float positions of a 3 x 3
+ * grid, its 8 triangles, its quantized positions (exactly, under the node's scale) and a strip; the
+ * octahedral normals within their 8 bits; the triangle codec may rotate a triangle's corners, not
+ * its winding. Then what the library or the extension refuses: a
+ * triangle index past the vertices, a stream cut short, a codec version 0.18 cannot decode, a
+ * stride the attribute codec does not take, a view length that is not count * stride. */
+static void test_gltf_meshopt(void **state)
+{
+    (void)state;
+    float p[9][3];
+    int8_t normal[9][4];
+    int16_t q[9][4];
+    float up[9][4];
+    for (int i = 0; i < 9; i++) {
+        p[i][0] = (float)(i % 3), p[i][1] = (float)(i / 3), p[i][2] = 0.25f * (float)(i % 2);
+        q[i][0] = (int16_t)(i % 3 * 16383), q[i][1] = (int16_t)(i / 3 * 16383), q[i][2] = 0, q[i][3] = 0;
+        up[i][0] = 0, up[i][1] = 0, up[i][2] = 1, up[i][3] = 0;
+    }
+    meshopt_encodeFilterOct(normal, 9, 4, 8, &up[0][0]);
+    uint16_t triangles[24];
+    for (int c = 0, k = 0; c < 4; c++) {
+        uint16_t a = (uint16_t)(c / 2 * 3 + c % 2);   /* the cell's lower left corner */
+        uint16_t t[6] = {a, (uint16_t)(a + 1), (uint16_t)(a + 3), (uint16_t)(a + 1), (uint16_t)(a + 4), (uint16_t)(a + 3)};
+        memcpy(triangles + k, t, sizeof t);
+        k += 6;
+    }
+    unsigned int triangles32[24], strip[5] = {0, 3, 1, 4, 2};
+    for (int k = 0; k < 24; k++)
+        triangles32[k] = triangles[k];
+    meshopt_encodeIndexVersion(1);   /* the version EXT_meshopt_compression names (0xe1) */
+    struct meshopt_file f = {.size = 0};
+    meshopt_add(&f, "ATTRIBUTES", NULL, p, 9, 12);
+    meshopt_add(&f, "ATTRIBUTES", "OCTAHEDRAL", normal, 9, 4);
+    meshopt_add(&f, "TRIANGLES", NULL, triangles32, 24, 2);
+    meshopt_add(&f, "ATTRIBUTES", NULL, q, 9, 8);
+    meshopt_add(&f, "INDICES", NULL, strip, 5, 4);
+    struct ao_mesh mesh;
+    load_ok(&mesh, meshopt_gltf("meshopt.gltf", &f, 24));
+    assert_mesh_valid(&mesh);
+    assert_int_equal(mesh.triangle_count, 8 + 3);
+    for (size_t i = 0; i < 9; i++) {
+        assert_true(mesh.positions[i].x == p[i][0] && mesh.positions[i].y == p[i][1] &&
+                    mesh.positions[i].z == p[i][2]);
+        assert_vec3_near(mesh.normals[i], 0, 0, 1);
+        /* q / 32767 * 2: 16383 / 32767 * 2 rounds to 0.99996948 in single precision. */
+        assert_float_equal(mesh.positions[9 + i].x, (float)(q[i][0] / 32767.0 * 2.0), 0.0f);
+        assert_float_equal(mesh.positions[9 + i].y, (float)(q[i][1] / 32767.0 * 2.0), 0.0f);
+    }
+    /* The triangle codec keeps the triangles' order and winding but may rotate their corners. */
+    for (size_t t = 0; t < 8; t++) {
+        const uint32_t *got = mesh.indices + 3 * t;
+        int r = got[0] == triangles[3 * t] ? 0 : got[1] == triangles[3 * t] ? 2 : 1;
+        for (int k = 0; k < 3; k++)
+            assert_int_equal(got[(k + 3 - r) % 3], triangles[3 * t + k]);
+    }
+    assert_triangle(&mesh, 8, 9 + 0, 9 + 3, 9 + 1);
+    assert_triangle(&mesh, 9, 9 + 3, 9 + 4, 9 + 1);
+    assert_triangle(&mesh, 10, 9 + 1, 9 + 4, 9 + 2);
+    ao_mesh_finish(&mesh);
+
+    /* A triangle index past the 9 vertices: the codec carries any index; the loader refuses it. */
+    struct meshopt_file bad = {.size = 0};
+    triangles32[23] = 9;
+    meshopt_add(&bad, "ATTRIBUTES", NULL, p, 9, 12);
+    meshopt_add(&bad, "ATTRIBUTES", "OCTAHEDRAL", normal, 9, 4);
+    meshopt_add(&bad, "TRIANGLES", NULL, triangles32, 24, 2);
+    meshopt_add(&bad, "ATTRIBUTES", NULL, q, 9, 8);
+    meshopt_add(&bad, "INDICES", NULL, strip, 5, 4);
+    expect_failure(meshopt_gltf("meshopt_range.gltf", &bad, 24), ": ",
+                   "mesh 0 primitive 0: index 9 at 23 is out of range (9 vertices)");
+    /* The positions' stream cut short by 8 bytes. */
+    char *at = strstr(f.views, "\"byteLength\": ");
+    at = strstr(at + 14, "\"byteLength\": ") + 14;   /* the extension's length of view 0 */
+    size_t length = strtoul(at, NULL, 10);
+    struct meshopt_file cut = f;
+    snprintf(cut.views, sizeof cut.views, "%.*s%zu%s", (int)(at - f.views), f.views, length - 8,
+             at + strspn(at, "0123456789"));
+    expect_failure(meshopt_gltf("meshopt_cut.gltf", &cut, 24), ": ",
+                   "bufferView 0 (EXT_meshopt_compression): its ");
+    /* Vertex codec version 1 (meshoptimizer 0.23's, and KHR_meshopt_compression's). */
+    struct meshopt_file v1 = f;
+    v1.data[0] = 0xa1;
+    expect_failure(meshopt_gltf("meshopt_v1.gltf", &v1, 24), ": ",
+                   "bufferView 0 (EXT_meshopt_compression): its data is of codec version 1, and libmeshoptimizer "
+                   "0.18 decodes up to version 0");
+    /* The indices' view says 46 bytes where the extension decodes 24 of 2 bytes. */
+    struct meshopt_file lying = f;
+    char *length48 = strstr(lying.views, "{\"buffer\": 1, \"byteLength\": 48,");
+    assert_non_null(length48);
+    memcpy(length48 + 28, "46", 2);
+    expect_failure(meshopt_gltf("meshopt_count.gltf", &lying, 24), ": ",
+                   "bufferView 2 (EXT_meshopt_compression): the view's byteLength 46 is not byteStride 2 times count 24");
+    /* A stride the attribute codec does not take. */
+    struct meshopt_file odd = f;
+    char *stride12 = strstr(odd.views, "\"byteStride\": 12, \"count\": 9");
+    assert_non_null(stride12);
+    memcpy(stride12 + 14, "10", 2);
+    expect_failure(meshopt_gltf("meshopt_stride.gltf", &odd, 24), ": ",
+                   "bufferView 0 (EXT_meshopt_compression): attributes need a byteStride that is a multiple of 4");
+}
+
 /* A file of points and lines only has nothing to render: one line names the modes found. */
 static void test_gltf_points_and_lines_only(void **state)
 {
@@ -1452,6 +1621,7 @@ int main(void)
         cmocka_unit_test(test_gltf_leniency),
         cmocka_unit_test(test_gltf_quantized),
         cmocka_unit_test(test_gltf_sparse),
+        cmocka_unit_test(test_gltf_meshopt),
         cmocka_unit_test(test_loaders_keep_to_the_budget),
         cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
         cmocka_unit_test(test_bad_inputs),

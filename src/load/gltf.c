@@ -464,12 +464,11 @@ static const char *const LOOKS_PREFIXES[] = {"KHR_materials_", "KHR_texture_", "
 static const char *const LOOKS[] = {"KHR_lights_punctual", "EXT_lights_image_based", "KHR_xmp_json_ld", "KHR_xmp",
                                     "KHR_animation_pointer", NULL};
 /* Required extensions that change the geometry and that aoview reads. */
-static const char *const GEOMETRY[] = {"KHR_mesh_quantization", NULL};
+static const char *const GEOMETRY[] = {"KHR_mesh_quantization", "EXT_meshopt_compression", NULL};
 /* Required extensions known to change the geometry that aoview does not read, and how. */
 static const struct {
     const char *name, *what;
-} UNREAD[] = {{"EXT_meshopt_compression", "compresses the geometry"},
-              {"KHR_draco_mesh_compression", "compresses the geometry"},
+} UNREAD[] = {{"KHR_draco_mesh_compression", "compresses the geometry"},
               {"EXT_mesh_gpu_instancing", "places meshes many times"},
               {"MSFT_lod", "chooses among meshes by distance"}};
 

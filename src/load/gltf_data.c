@@ -11,6 +11,7 @@
 
 #include "file.h"
 #include "load/gltf.h"
+#include "load/meshopt.h"
 #include "load/quantize.h"
 
 /* GLB container constants: magic "glTF", chunk types "JSON" and "BIN\0". */
@@ -335,6 +336,67 @@ static bool buffer(struct ao_gltf *g, size_t i, bool need_data, const struct ao_
     return !need_data || b->loaded || load_buffer(g, i);
 }
 
+/* The bufferView json (index) whose EXT_meshopt_compression extension ext holds its data
+ * compressed: the compressed bytes checked against their buffer, the mode, filter, count and
+ * stride against what the library accepts and the view's byteLength against count * stride; the
+ * decoded data, charged to the budget first, becomes the view's own. The view's own buffer (a
+ * fallback, often without data) is not read. */
+static bool meshopt_view(struct ao_gltf *g, size_t index, json_object *json, json_object *ext,
+                         struct ao_gltf_view *v)
+{
+    char where[96], why[200];
+    snprintf(where, sizeof where, "bufferView %zu (EXT_meshopt_compression)", index);
+    uint64_t offset, length, stride, count, view_length, view_stride;
+    size_t source, fallback;
+    json_object *mode_json = ao_gltf_member(ext, "mode"), *filter_json = ao_gltf_member(ext, "filter");
+    enum ao_meshopt_mode mode;
+    enum ao_meshopt_filter filter;
+    const struct ao_gltf_buffer *b;
+    if (!ao_gltf_index(g, json, "buffer", g->buffer_count, where, &fallback) ||
+        !ao_gltf_integer(g, json, "byteLength", true, 0, AO_GLTF_MAX_INTEGER, where, &view_length) ||
+        !ao_gltf_integer(g, json, "byteStride", false, 0, 252, where, &view_stride) ||
+        !ao_gltf_index(g, ext, "buffer", g->buffer_count, where, &source) ||
+        !ao_gltf_integer(g, ext, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, where, &offset) ||
+        !ao_gltf_integer(g, ext, "byteLength", true, 0, AO_GLTF_MAX_INTEGER, where, &length) ||
+        !ao_gltf_integer(g, ext, "byteStride", true, 0, 256, where, &stride) ||
+        !ao_gltf_integer(g, ext, "count", true, 0, (double)UINT32_MAX, where, &count))
+        return false;
+    if (!json_object_is_type(mode_json, json_type_string) ||
+        (filter_json && !json_object_is_type(filter_json, json_type_string)) ||
+        !ao_meshopt_parse(json_object_get_string(mode_json), filter_json ? json_object_get_string(filter_json) : NULL,
+                          &mode, &filter))
+        return ao_gltf_error(g, "%s: 'mode' must be ATTRIBUTES, TRIANGLES or INDICES and 'filter' NONE, OCTAHEDRAL, "
+                             "QUATERNION or EXPONENTIAL", where);
+    if (!ao_meshopt_check(mode, filter, (size_t)count, (size_t)stride, why, sizeof why))
+        return ao_gltf_error(g, "%s: %s", where, why);
+    if (view_length != stride * count)
+        return ao_gltf_error(g, "%s: the view's byteLength %llu is not byteStride %llu times count %llu", where,
+                             (unsigned long long)view_length, (unsigned long long)stride, (unsigned long long)count);
+    if (view_stride && view_stride != stride)
+        return ao_gltf_error(g, "%s: the view's byteStride %llu differs from the extension's %llu", where,
+                             (unsigned long long)view_stride, (unsigned long long)stride);
+    if (!buffer(g, source, false, &b))
+        return false;
+    if (offset + length > b->size)
+        return ao_gltf_error(g, "%s: bytes [%llu, %llu) run past buffer %zu (%zu bytes)", where,
+                             (unsigned long long)offset, (unsigned long long)(offset + length), source, b->size);
+    char what[160];
+    snprintf(what, sizeof what, "%s: decoding %llu elements of %llu bytes", where, (unsigned long long)count,
+             (unsigned long long)stride);
+    if (!buffer(g, source, true, &b) || !ao_gltf_take(g, view_length, what))
+        return false;
+    if (!(v->owned = malloc(view_length ? (size_t)view_length : 1)))
+        return ao_load_out_of_memory(g->path);
+    if (!ao_meshopt_decode(mode, filter, (size_t)count, (size_t)stride, b->data + offset, (size_t)length, v->owned,
+                           why, sizeof why))
+        return ao_gltf_error(g, "%s: %s", where, why);
+    v->data = v->owned;
+    v->length = (size_t)view_length;
+    v->stride = (size_t)view_stride;
+    v->ready = true;
+    return true;
+}
+
 /* bufferView index, read and checked against its buffer on first use: its bytes and stride. */
 static bool view(struct ao_gltf *g, size_t index, const struct ao_gltf_view **out)
 {
@@ -345,6 +407,9 @@ static bool view(struct ao_gltf *g, size_t index, const struct ao_gltf_view **ou
     char where[64];
     snprintf(where, sizeof where, "bufferView %zu", index);
     json_object *json = json_object_array_get_idx(g->views, index);
+    json_object *ext = ao_gltf_member(ao_gltf_member(json, "extensions"), "EXT_meshopt_compression");
+    if (ext)
+        return meshopt_view(g, index, json, ext, v);
     uint64_t offset, length, stride;
     size_t buffer_index;
     const struct ao_gltf_buffer *b;
