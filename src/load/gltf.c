@@ -188,14 +188,54 @@ static void triangle_corners(uint64_t mode, size_t k, size_t out[3])
     }
 }
 
+/* Appends a primitive's vertices under the world matrix m: p' = M (p, 1); n' along M's inverse
+ * transpose times n (cof, sign: normal_matrix), or flagged as lacking when normals is NULL. */
+static bool add_vertices(struct ao_gltf *g, const struct ao_gltf_elements *positions,
+                         const struct ao_gltf_elements *normals, const double m[16], double cof[3][3],
+                         double sign, const char *where)
+{
+    if (g->vertices + positions->count >= AO_LOAD_NO_INDEX)
+        return ao_gltf_error(g, "more than %u vertices in all", AO_LOAD_NO_INDEX - 1);
+    struct ao_vec3 *p = ao_load_append(&g->positions, positions->count);
+    struct ao_vec3 *n = ao_load_append(&g->normals, positions->count);
+    bool *lacking = ao_load_append(&g->lacking, positions->count);
+    if (!p || !n || !lacking)
+        return ao_load_out_of_memory(g->path);
+    for (size_t i = 0; i < positions->count; i++) {
+        double x = ao_gltf_value(positions, i, 0), y = ao_gltf_value(positions, i, 1);
+        double z = ao_gltf_value(positions, i, 2);
+        p[i] = ao_vec3_make((float)(m[0] * x + m[4] * y + m[8] * z + m[12]),
+                            (float)(m[1] * x + m[5] * y + m[9] * z + m[13]),
+                            (float)(m[2] * x + m[6] * y + m[10] * z + m[14]));
+        if (!ao_vec3_is_finite(p[i]))
+            return ao_gltf_error(g, "%s: vertex %zu is not a finite float once transformed", where, i);
+        lacking[i] = !normals;
+        n[i] = ao_vec3_make(0.0f, 0.0f, 0.0f);
+        if (normals) {
+            double a = ao_gltf_value(normals, i, 0), b = ao_gltf_value(normals, i, 1);
+            double d = ao_gltf_value(normals, i, 2);
+            if (!isfinite(a) || !isfinite(b) || !isfinite(d))
+                return ao_gltf_error(g, "%s: normal %zu is not finite", where, i);
+            double t[3];
+            for (int r = 0; r < 3; r++)
+                t[r] = sign * (cof[r][0] * a + cof[r][1] * b + cof[r][2] * d);
+            n[i] = ao_load_unit(t[0], t[1], t[2]);
+        }
+    }
+    g->lacking_count += normals ? 0 : positions->count;
+    g->vertices += positions->count;
+    return true;
+}
+
 /* Appends one primitive of triangles (mode 4), a strip (5) or a fan (6) under the world matrix m:
- * positions and normals transformed, triangles offset (and turned round where m mirrors). With
- * count_only, adds its size to the totals. */
+ * positions and normals transformed (or shared with an earlier primitive of the same placed mesh),
+ * triangles offset (and turned round where m mirrors). With count_only, adds its size to the
+ * totals. */
 static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mode, const double m[16],
                           const char *where, bool count_only)
 {
     json_object *attributes = ao_gltf_member(primitive, "attributes");
-    size_t count = ao_gltf_length(g->accessors), position_index, normal_index = 0, index_index = 0;
+    size_t count = ao_gltf_length(g->accessors), position_index = 0, normal_index = 0, index_index = 0;
     struct ao_gltf_elements positions, normals = {0}, indices = {0};
     bool has_normals = ao_gltf_member(attributes, "NORMAL") != NULL;
     bool indexed = ao_gltf_member(primitive, "indices") != NULL;
@@ -215,46 +255,26 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
     if (mode == MODE_TRIANGLES && corners % 3)
         return ao_gltf_error(g, "%s: %zu %s, not a whole number of triangles", where, corners,
                           indexed ? "indices" : "vertices");
+
+    /* Primitives of one placed mesh that name the same POSITION and NORMAL accessors share their
+     * vertices, as the file means (normals computed across them are then smooth, and a mesh split
+     * into thousands of fans does not copy its vertices thousands of times): the first adds them,
+     * the others reuse them. */
+    struct shared *shared = &g->shared[position_index];
+    size_t normal_key = has_normals ? normal_index : SIZE_MAX;
+    bool reuse = shared->instance == g->instance && shared->normals == normal_key;
     if (count_only) {
         g->triangles += triangles;
-        g->vertices += positions.count;
+        g->vertices += reuse ? 0 : positions.count;
+        *shared = (struct shared){g->instance, normal_key, 0};
         return true;
     }
-    if (g->vertices + positions.count >= AO_LOAD_NO_INDEX)
-        return ao_gltf_error(g, "more than %u vertices in all", AO_LOAD_NO_INDEX - 1);
-    uint32_t base = (uint32_t)g->positions.count;
-
-    /* Vertices: p' = M (p, 1); n' along M's inverse transpose times n (normal_matrix). */
-    struct ao_vec3 *p = ao_load_append(&g->positions, positions.count);
-    struct ao_vec3 *n = ao_load_append(&g->normals, positions.count);
-    bool *lacking = ao_load_append(&g->lacking, positions.count);
-    if (!p || !n || !lacking)
-        return ao_load_out_of_memory(g->path);
     double cof[3][3];
     double det = normal_matrix(m, cof), sign = det < 0.0 ? -1.0 : 1.0;
-    for (size_t i = 0; i < positions.count; i++) {
-        double x = ao_gltf_value(&positions, i, 0), y = ao_gltf_value(&positions, i, 1);
-        double z = ao_gltf_value(&positions, i, 2);
-        p[i] = ao_vec3_make((float)(m[0] * x + m[4] * y + m[8] * z + m[12]),
-                            (float)(m[1] * x + m[5] * y + m[9] * z + m[13]),
-                            (float)(m[2] * x + m[6] * y + m[10] * z + m[14]));
-        if (!ao_vec3_is_finite(p[i]))
-            return ao_gltf_error(g, "%s: vertex %zu is not a finite float once transformed", where, i);
-        lacking[i] = !has_normals;
-        n[i] = ao_vec3_make(0.0f, 0.0f, 0.0f);
-        if (has_normals) {
-            double a = ao_gltf_value(&normals, i, 0), b = ao_gltf_value(&normals, i, 1);
-            double d = ao_gltf_value(&normals, i, 2);
-            if (!isfinite(a) || !isfinite(b) || !isfinite(d))
-                return ao_gltf_error(g, "%s: normal %zu is not finite", where, i);
-            double t[3];
-            for (int r = 0; r < 3; r++)
-                t[r] = sign * (cof[r][0] * a + cof[r][1] * b + cof[r][2] * d);
-            n[i] = ao_load_unit(t[0], t[1], t[2]);
-        }
-    }
-    g->lacking_count += has_normals ? 0 : positions.count;
-    g->vertices += positions.count;
+    uint32_t base = reuse ? shared->base : (uint32_t)g->positions.count;
+    if (!reuse && !add_vertices(g, &positions, has_normals ? &normals : NULL, m, cof, sign, where))
+        return false;
+    *shared = (struct shared){g->instance, normal_key, base};
 
     /* Triangles, every index checked once (a strip's and a fan's corners serve several). */
     for (size_t i = 0; indexed && i < corners; i++) {
@@ -302,6 +322,7 @@ static bool add_node_mesh(struct ao_gltf *g, size_t node, bool count_only)
         g->vertices += size->vertices;
         return true;
     }
+    g->instance++;   /* a new placement: vertices are shared among its primitives only */
     snprintf(where, sizeof where, "mesh %zu", mesh);
     if (!ao_gltf_array(g, json_object_array_get_idx(g->meshes, mesh), "primitives", where,
                       &primitives, &primitive_count))
@@ -554,7 +575,8 @@ static bool read_scene(struct ao_gltf *g)
     g->world = malloc((node_count ? node_count : 1) * sizeof *g->world);
     bool *flags = calloc(node_count ? 2 * node_count : 1, sizeof *flags);
     g->sizes = calloc(mesh_count ? mesh_count : 1, sizeof *g->sizes);
-    bool ok = ((g->parent && g->world && flags && g->sizes) || ao_load_out_of_memory(g->path)) &&
+    g->shared = calloc(ao_gltf_length(g->accessors) + 1, sizeof *g->shared);
+    bool ok = ((g->parent && g->world && flags && g->sizes && g->shared) || ao_load_out_of_memory(g->path)) &&
               ao_gltf_begin_data(g);
     bool *is_root = flags, *placed = flags + node_count;
     ok = ok && check_tree(g, node_count) && find_roots(g, node_count, is_root) &&
@@ -610,6 +632,7 @@ bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size
     free(g.parent);
     free(g.world);
     free(g.sizes);
+    free(g.shared);
     json_object_put(g.root);
     ao_load_free(&g.positions);
     ao_load_free(&g.normals);

@@ -62,6 +62,12 @@ struct ao_gltf {
         uint64_t triangles, vertices;
         bool known;
     } *sizes;                     /* per mesh, once counted: instances need not recount */
+    struct shared {
+        uint64_t instance;        /* the placement that last added this POSITION accessor */
+        size_t normals;           /* with this NORMAL accessor (SIZE_MAX: none) */
+        uint32_t base;            /* at this first vertex */
+    } *shared;                    /* per accessor */
+    uint64_t instance;            /* placements walked so far (both passes) */
     struct ao_load_array positions, normals, lacking, indices; /* ao_vec3, ao_vec3, bool, uint32 */
     size_t lacking_count;
     unsigned modes_found;         /* bit m: a primitive of mode m was found */
