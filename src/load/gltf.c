@@ -4,8 +4,9 @@
  * nodes (or scene 0's, or every root node when there is no scene), their transforms (matrix, or
  * translation/rotation/scale; nested), and their meshes' primitives of triangles, triangle strips
  * and fans (modes 4, 5, 6; indexed by any unsigned type or not indexed) with VEC3 POSITION and
- * NORMAL of float or (KHR_mesh_quantization) 8- and 16-bit integers, sparse or not; points and
- * lines are skipped and counted. Required extensions that change only how surfaces look are noted
+ * NORMAL of float or (KHR_mesh_quantization) 8- and 16-bit integers, sparse or not, from
+ * bufferViews that may be compressed (EXT_meshopt_compression: meshopt.c) or from Draco data
+ * (KHR_draco_mesh_compression: draco.cc); points and lines are skipped and counted. Required extensions that change only how surfaces look are noted
  * (materials, textures, lights are ignored); others are refused unless read here.
  *
  * Every range a file gives is checked before it is read: a GLB's chunk lengths against the file,
@@ -235,19 +236,29 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
                           const char *where, bool count_only)
 {
     json_object *attributes = ao_gltf_member(primitive, "attributes");
+    json_object *draco = ao_gltf_member(ao_gltf_member(primitive, "extensions"), "KHR_draco_mesh_compression");
     size_t count = ao_gltf_length(g->accessors), position_index = 0, normal_index = 0, index_index = 0;
-    struct ao_gltf_elements positions, normals = {0}, indices = {0};
+    struct ao_gltf_elements positions, normals = {0}, indices = {0}, decoded[3];
     bool has_normals = ao_gltf_member(attributes, "NORMAL") != NULL;
     bool indexed = ao_gltf_member(primitive, "indices") != NULL;
     if (!ao_gltf_member(attributes, "POSITION"))
         return ao_gltf_error(g, "%s: no POSITION attribute", where);
-    if (!ao_gltf_index(g, attributes, "POSITION", count, where, &position_index) ||
-        !ao_gltf_accessor(g, position_index, true, "POSITION", &positions) ||
-        (has_normals && (!ao_gltf_index(g, attributes, "NORMAL", count, where, &normal_index) ||
-                         !ao_gltf_accessor(g, normal_index, true, "NORMAL", &normals))) ||
-        (indexed && (!ao_gltf_index(g, primitive, "indices", count, where, &index_index) ||
-                     !ao_gltf_accessor(g, index_index, false, "indices", &indices))))
+    if (draco && mode != MODE_TRIANGLES)
+        return ao_gltf_error(g, "%s: mode %llu; with KHR_draco_mesh_compression aoview reads triangles (mode 4) only",
+                             where, (unsigned long long)mode);
+    if (draco) {
+        if (!ao_gltf_draco(g, primitive, draco, has_normals, where, decoded))
+            return false;
+        positions = decoded[0], normals = decoded[1], indices = decoded[2];
+        indexed = true;
+    } else if (!ao_gltf_index(g, attributes, "POSITION", count, where, &position_index) ||
+               !ao_gltf_accessor(g, position_index, true, "POSITION", &positions) ||
+               (has_normals && (!ao_gltf_index(g, attributes, "NORMAL", count, where, &normal_index) ||
+                                !ao_gltf_accessor(g, normal_index, true, "NORMAL", &normals))) ||
+               (indexed && (!ao_gltf_index(g, primitive, "indices", count, where, &index_index) ||
+                            !ao_gltf_accessor(g, index_index, false, "indices", &indices)))) {
         return false;
+    }
     if (has_normals && normals.count != positions.count)
         return ao_gltf_error(g, "%s: %zu normals for %zu positions", where, normals.count,
                           positions.count);
@@ -260,13 +271,14 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
      * vertices, as the file means (normals computed across them are then smooth, and a mesh split
      * into thousands of fans does not copy its vertices thousands of times): the first adds them,
      * the others reuse them. */
-    struct shared *shared = &g->shared[position_index];
+    struct shared *shared = draco ? NULL : &g->shared[position_index];
     size_t normal_key = has_normals ? normal_index : SIZE_MAX;
-    bool reuse = shared->instance == g->instance && shared->normals == normal_key;
+    bool reuse = shared && shared->instance == g->instance && shared->normals == normal_key;
     if (count_only) {
         g->triangles += triangles;
         g->vertices += reuse ? 0 : positions.count;
-        *shared = (struct shared){g->instance, normal_key, 0};
+        if (shared)
+            *shared = (struct shared){g->instance, normal_key, 0};
         return true;
     }
     double cof[3][3];
@@ -274,7 +286,8 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
     uint32_t base = reuse ? shared->base : (uint32_t)g->positions.count;
     if (!reuse && !add_vertices(g, &positions, has_normals ? &normals : NULL, m, cof, sign, where))
         return false;
-    *shared = (struct shared){g->instance, normal_key, base};
+    if (shared)
+        *shared = (struct shared){g->instance, normal_key, base};
 
     /* Triangles, every index checked once (a strip's and a fan's corners serve several). */
     for (size_t i = 0; indexed && i < corners; i++) {
@@ -485,12 +498,12 @@ static const char *const LOOKS_PREFIXES[] = {"KHR_materials_", "KHR_texture_", "
 static const char *const LOOKS[] = {"KHR_lights_punctual", "EXT_lights_image_based", "KHR_xmp_json_ld", "KHR_xmp",
                                     "KHR_animation_pointer", NULL};
 /* Required extensions that change the geometry and that aoview reads. */
-static const char *const GEOMETRY[] = {"KHR_mesh_quantization", "EXT_meshopt_compression", NULL};
+static const char *const GEOMETRY[] = {"KHR_mesh_quantization", "EXT_meshopt_compression",
+                                       "KHR_draco_mesh_compression", NULL};
 /* Required extensions known to change the geometry that aoview does not read, and how. */
 static const struct {
     const char *name, *what;
-} UNREAD[] = {{"KHR_draco_mesh_compression", "compresses the geometry"},
-              {"EXT_mesh_gpu_instancing", "places meshes many times"},
+} UNREAD[] = {{"EXT_mesh_gpu_instancing", "places meshes many times"},
               {"MSFT_lod", "chooses among meshes by distance"}};
 
 /* True when name is in the NULL-terminated list, or starts with one of prefixes (may be NULL). */

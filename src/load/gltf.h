@@ -9,6 +9,7 @@
 
 #include <json.h>
 
+#include "load/draco.h"
 #include "load/load.h"
 
 /* Largest integer read from the JSON: sums of three of them and products of one with a stride (at
@@ -41,6 +42,14 @@ struct ao_gltf_elements {
     bool normalized;
 };
 
+/* A bufferView's KHR_draco_mesh_compression data, once decoded, and the attribute ids it was
+ * decoded for. */
+struct ao_gltf_draco {
+    struct ao_draco_mesh mesh;
+    int64_t position_id, normal_id;
+    bool done;
+};
+
 /* The file being loaded and the mesh being built. */
 struct ao_gltf {
     const char *path;
@@ -51,6 +60,7 @@ struct ao_gltf {
     struct ao_gltf_view *view_cache;   /* per bufferView */
     unsigned char **gathered;     /* per accessor: its elements in memory of their own (sparse, or
                                      without a bufferView), or NULL */
+    struct ao_gltf_draco *draco;  /* per bufferView */
     const unsigned char *bin;     /* GLB BIN chunk, or NULL */
     size_t bin_size;
     size_t *parent;               /* per node: its parent, or SIZE_MAX */
@@ -121,6 +131,13 @@ void ao_gltf_note(struct ao_gltf *g, const char *format, ...);
  * buffer; an accessor without a bufferView is zeros; sparse entries are written over a copy (each
  * index checked against the count), made once and charged to the budget. */
 bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *use, struct ao_gltf_elements *out);
+
+/* The positions, normals (when asked for) and triangle indices, out[0] to out[2], of a primitive
+ * whose KHR_draco_mesh_compression extension is ext: its bufferView decoded once (draco.h) within
+ * what the scene budget has left, the result charged to it, and the primitive's accessors checked
+ * against what decoded (float VEC3 attributes, counts equal). */
+bool ao_gltf_draco(struct ao_gltf *g, json_object *primitive, json_object *ext, bool normals, const char *where,
+                   struct ao_gltf_elements out[3]);
 
 /* Element i's component k as a number (quantize.h: integers as glTF maps them when normalized). */
 double ao_gltf_value(const struct ao_gltf_elements *e, size_t i, int k);

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include "file.h"
+#include "load/draco.h"
 #include "load/gltf.h"
 #include "load/meshopt.h"
 #include "load/quantize.h"
@@ -568,6 +569,87 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *u
     return true;
 }
 
+/* The attribute or indices accessor of a Draco-compressed primitive (name in attributes, or
+ * "indices" of the primitive): of the type (VEC3 of floats, or SCALAR), and its count that of the
+ * decoded data. */
+static bool draco_accessor(struct ao_gltf *g, json_object *holder, const char *name, bool attribute, uint64_t want,
+                           const char *where)
+{
+    size_t i;
+    uint64_t count, component;
+    char what[128];
+    if (!ao_gltf_index(g, holder, name, ao_gltf_length(g->accessors), where, &i))
+        return false;
+    snprintf(what, sizeof what, "accessor %zu (%s)", i, name);
+    json_object *a = json_object_array_get_idx(g->accessors, i), *type = ao_gltf_member(a, "type");
+    if (!json_object_is_type(type, json_type_string) || strcmp(json_object_get_string(type), attribute ? "VEC3" : "SCALAR"))
+        return ao_gltf_error(g, "%s: type must be %s", what, attribute ? "VEC3" : "SCALAR");
+    if (!ao_gltf_integer(g, a, "count", true, 0, AO_GLTF_MAX_INTEGER, what, &count) ||
+        !ao_gltf_integer(g, a, "componentType", true, 0, AO_GLTF_MAX_INTEGER, what, &component))
+        return false;
+    if (attribute && component != AO_QUANTIZE_FLOAT)
+        return ao_gltf_error(g, "%s: componentType %llu; with KHR_draco_mesh_compression aoview reads float (5126) "
+                             "attributes only", what, (unsigned long long)component);
+    if (count != want)
+        return ao_gltf_error(g, "%s: count %llu, but its KHR_draco_mesh_compression data decodes to %llu", what,
+                             (unsigned long long)count, (unsigned long long)want);
+    return true;
+}
+
+bool ao_gltf_draco(struct ao_gltf *g, json_object *primitive, json_object *ext, bool normals, const char *where,
+                   struct ao_gltf_elements out[3])
+{
+    char at[128], why[256];
+    snprintf(at, sizeof at, "%s (KHR_draco_mesh_compression)", where);
+    json_object *attributes = ao_gltf_member(ext, "attributes");
+    size_t index;
+    uint64_t position_id, normal_id = 0;
+    if (!ao_gltf_index(g, ext, "bufferView", ao_gltf_length(g->views), at, &index) ||
+        !ao_gltf_integer(g, attributes, "POSITION", true, 0, UINT32_MAX, at, &position_id) ||
+        (normals && !ao_gltf_integer(g, attributes, "NORMAL", true, 0, UINT32_MAX, at, &normal_id)))
+        return false;
+
+    /* Decoded once per bufferView, within what the budget has left; then the arrays are charged. */
+    struct ao_gltf_draco *d = &g->draco[index];
+    int64_t want_normal = normals ? (int64_t)normal_id : -1;
+    if (d->done && (d->position_id != (int64_t)position_id || d->normal_id != want_normal))
+        return ao_gltf_error(g, "%s: bufferView %zu is decoded for other attribute ids by another primitive", at,
+                             index);
+    if (!d->done) {
+        const struct ao_gltf_view *v;
+        bool over = false;
+        if (!view(g, index, &v))
+            return false;
+        uint64_t left = g->budget->limit - g->budget->used;
+        if (!ao_draco_decode(v->data, v->length, (int64_t)position_id, want_normal, left, &d->mesh, &over, why,
+                             sizeof why))
+            return over ? ao_gltf_error(g, "%s: decoding it would take more than the %llu bytes left of the scene "
+                                        "budget (raise it with --scene-budget)", at, (unsigned long long)left)
+                        : ao_gltf_error(g, "%s: %s", at, why);
+        d->done = true;
+        d->position_id = (int64_t)position_id;
+        d->normal_id = want_normal;
+        snprintf(why, sizeof why, "%s: its %zu points and %zu triangles", at, d->mesh.point_count,
+                 d->mesh.face_count);
+        uint64_t bytes = (uint64_t)d->mesh.point_count * (normals ? 24 : 12) + (uint64_t)d->mesh.face_count * 12;
+        if (!ao_gltf_take(g, bytes, why))
+            return false;
+    }
+    if (!draco_accessor(g, ao_gltf_member(primitive, "attributes"), "POSITION", true, d->mesh.point_count, at) ||
+        (normals && !draco_accessor(g, ao_gltf_member(primitive, "attributes"), "NORMAL", true, d->mesh.point_count,
+                                    at)) ||
+        (ao_gltf_member(primitive, "indices") &&
+         !draco_accessor(g, primitive, "indices", false, 3 * (uint64_t)d->mesh.face_count, at)))
+        return false;
+    out[0] = (struct ao_gltf_elements){(const unsigned char *)d->mesh.positions, 12, d->mesh.point_count,
+                                       AO_QUANTIZE_FLOAT, 4, false};
+    out[1] = (struct ao_gltf_elements){(const unsigned char *)d->mesh.normals, 12, normals ? d->mesh.point_count : 0,
+                                       AO_QUANTIZE_FLOAT, 4, false};
+    out[2] = (struct ao_gltf_elements){(const unsigned char *)d->mesh.indices, 4, 3 * d->mesh.face_count,
+                                       AO_QUANTIZE_UNSIGNED_INT, 4, false};
+    return true;
+}
+
 double ao_gltf_value(const struct ao_gltf_elements *e, size_t i, int k)
 {
     return ao_quantize_value(e->first + i * e->stride + (size_t)k * e->component_size, e->component_type,
@@ -589,7 +671,8 @@ bool ao_gltf_begin_data(struct ao_gltf *g)
     g->buffers = calloc(g->buffer_count ? g->buffer_count : 1, sizeof *g->buffers);
     g->view_cache = calloc(views ? views : 1, sizeof *g->view_cache);
     g->gathered = calloc(ao_gltf_length(g->accessors) + 1, sizeof *g->gathered);
-    return (g->buffers && g->view_cache && g->gathered) || ao_load_out_of_memory(g->path);
+    g->draco = calloc(views ? views : 1, sizeof *g->draco);
+    return (g->buffers && g->view_cache && g->gathered && g->draco) || ao_load_out_of_memory(g->path);
 }
 
 void ao_gltf_note(struct ao_gltf *g, const char *format, ...)
@@ -617,4 +700,7 @@ void ao_gltf_free_data(struct ao_gltf *g)
     for (size_t i = 0; i < ao_gltf_length(g->accessors) && g->gathered; i++)
         free(g->gathered[i]);
     free(g->gathered);
+    for (size_t i = 0; i < ao_gltf_length(g->views) && g->draco; i++)
+        ao_draco_free(&g->draco[i].mesh);
+    free(g->draco);
 }
