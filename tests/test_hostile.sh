@@ -292,6 +292,52 @@ refuse 1 "sparse_index.gltf: accessor 0 (POSITION) sparse: index 4294967295 at 0
 refuse 1 "zeros.gltf: accessor 0 (POSITION): its 4000000000 values would need about 44.7 GiB, more than the" zeros.gltf
 rm -f quantized_count.gltf quantized_stride.gltf sparse_count.gltf sparse_index.gltf zeros.gltf
 
+# Compressed data that lies (tests/gltf_encode writes them with the libraries' own encoders): a
+# meshopt index past the vertices; a meshopt view claiming a billion 12-byte elements (decoded into
+# memory of its own: charged first) or a count its view's length does not hold; a Draco header
+# claiming 1431655765 triangles (libdraco's own checks refuse it before it allocates), a Draco
+# corner naming point 65535 of 1839, a POSITION accessor counting a point more than Draco decodes;
+# and a real 300 x 300 grid (180,000 triangles in 50 KB of Draco) under a 4 MB budget: every
+# allocation libdraco makes while decoding is counted against what the budget has left.
+encode=${AO_GLTF_ENCODE:?AO_GLTF_ENCODE not set (tests/gltf_encode; run through meson test)}
+for mode in meshopt meshopt-range draco-claims draco-range draco-count; do
+  "$encode" "$mode" "$root/assets/bunny.obj" "$mode.glb" || fail "gltf_encode $mode failed"
+done
+python3 - <<'PY'
+import json, struct
+def edit(src, dst, change):
+    data = open(src, 'rb').read()
+    length = struct.unpack('<I', data[12:16])[0]
+    doc = json.loads(data[20:20 + length])
+    change(doc)
+    text = json.dumps(doc).encode()
+    text += b' ' * ((4 - len(text) % 4) % 4)
+    rest = data[20 + length:]
+    open(dst, 'wb').write(struct.pack('<3I', 0x46546C67, 2, 20 + len(text) + len(rest)) +
+                          struct.pack('<2I', len(text), 0x4E4F534A) + text + rest)
+def billion(doc):
+    ext = doc['bufferViews'][0]['extensions']['EXT_meshopt_compression']
+    ext['count'] = 1000000000
+    doc['bufferViews'][0]['byteLength'] = 12000000000
+    doc['buffers'][1]['byteLength'] = 13000000000
+    doc['accessors'][0]['count'] = 1000000000
+def count(doc):
+    doc['bufferViews'][0]['extensions']['EXT_meshopt_compression']['count'] += 1
+edit('meshopt.glb', 'meshopt_billion.glb', billion)
+edit('meshopt.glb', 'meshopt_count.glb', count)
+PY
+refuse 1 "meshopt-range.glb: mesh 0 primitive 0: index 1839 at 11021 is out of range (1839 vertices)" meshopt-range.glb
+refuse 1 "meshopt_billion.glb: bufferView 0 (EXT_meshopt_compression): decoding 1000000000 elements of 12 bytes would need about 11.2 GiB, more than the" meshopt_billion.glb
+refuse 1 "meshopt_count.glb: bufferView 0 (EXT_meshopt_compression): the view's byteLength 22068 is not byteStride 12 times count 1840" meshopt_count.glb
+refuse 1 "draco-claims.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): libdraco cannot decode it" draco-claims.glb
+refuse 1 "draco-range.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): triangle 0 names point 65535 of 1839" draco-range.glb
+refuse 1 "draco-count.glb: accessor 0 (POSITION): count 1840, but its KHR_draco_mesh_compression data decodes to 1839" draco-count.glb
+python3 "$root/tests/mesh_convert.py" --grid 300 grid.obj && "$encode" draco grid.obj draco_grid.glb || fail "no Draco grid"
+refuse 1 "draco_grid.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): decoding it would take more than the" \
+  --scene-budget 4M draco_grid.glb
+rm -f meshopt.glb meshopt-range.glb meshopt_billion.glb meshopt_count.glb draco-claims.glb draco-range.glb \
+  draco-count.glb grid.obj draco_grid.glb
+
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000
 python3 - "$big" <<'PY'
