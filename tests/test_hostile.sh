@@ -284,13 +284,27 @@ gltf('sparse_index.gltf', {'componentType': 5126, 'count': 3, 'type': 'VEC3', 's
      {'buffer': 0, 'byteLength': 24}, floats)
 gltf('zeros.gltf', {'componentType': 5126, 'count': 4000000000, 'type': 'VEC3'}, {'buffer': 0, 'byteLength': 24},
      floats)
+# A fan whose corner index wraps to -1, and a strip claiming four billion corners in 12 bytes.
+def fan(name, mode, index_accessor, data):
+    doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0}],
+           'meshes': [{'primitives': [{'attributes': {'POSITION': 0}, 'indices': 1, 'mode': mode}]}],
+           'accessors': [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3'}, index_accessor],
+           'bufferViews': [{'buffer': 0, 'byteLength': 36}, {'buffer': 0, 'byteOffset': 36, 'byteLength': 12}],
+           'buffers': [{'byteLength': len(data),
+               'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
+    json.dump(doc, open(name, 'w'))
+corners = struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack('<3I', 0, 1, 4294967295)
+fan('fan_index.gltf', 6, {'bufferView': 1, 'componentType': 5125, 'count': 3, 'type': 'SCALAR'}, corners)
+fan('strip_count.gltf', 5, {'bufferView': 1, 'componentType': 5125, 'count': 4000000000, 'type': 'SCALAR'}, corners)
 PY
 refuse 1 "quantized_count.gltf: accessor 0 (POSITION): 1000000000 elements from byte 0 need 7999999998 bytes of bufferView 0, which has 24" quantized_count.gltf
 refuse 1 "quantized_stride.gltf: bufferView 0: byteStride 4 is smaller than an element (6 bytes)" quantized_stride.gltf
 refuse 1 "sparse_count.gltf: accessor 0 (POSITION) sparse indices: 1000000000 elements from byte 20 need 4000000020 bytes of bufferView 0, which has 24" sparse_count.gltf
 refuse 1 "sparse_index.gltf: accessor 0 (POSITION) sparse: index 4294967295 at 0 is out of range (3 elements)" sparse_index.gltf
 refuse 1 "zeros.gltf: accessor 0 (POSITION): its 4000000000 values would need about 44.7 GiB, more than the" zeros.gltf
-rm -f quantized_count.gltf quantized_stride.gltf sparse_count.gltf sparse_index.gltf zeros.gltf
+refuse 1 "fan_index.gltf: mesh 0 primitive 0: index 4294967295 at 2 is out of range (3 vertices)" fan_index.gltf
+refuse 1 "strip_count.gltf: accessor 1 (indices): 4000000000 elements from byte 0 need 16000000000 bytes of bufferView 1, which has 12" strip_count.gltf
+rm -f quantized_count.gltf quantized_stride.gltf sparse_count.gltf sparse_index.gltf zeros.gltf fan_index.gltf strip_count.gltf
 
 # Compressed data that lies (tests/gltf_encode writes them with the libraries' own encoders): a
 # meshopt index past the vertices; a meshopt view claiming a billion 12-byte elements (decoded into
