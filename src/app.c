@@ -245,6 +245,30 @@ void ao_app_watch(struct ao_app *app, struct ao_render *render)
     atomic_store(&app->interrupt.rendering, true);
 }
 
+/* The one line saying what the loaders skipped ("aoview: skipped 3 degenerate triangles and 2 line
+ * primitives"), when they skipped anything. */
+static void report_skipped(const struct ao_scene *scene)
+{
+    const struct {
+        size_t count;
+        const char *what;
+    } parts[] = {{scene->degenerate_count, "degenerate triangle"}, {scene->point_primitives, "point primitive"},
+                 {scene->line_primitives, "line primitive"}};
+    char line[256];
+    size_t used = 0, n = sizeof parts / sizeof parts[0], left = 0;
+    for (size_t k = 0; k < n; k++)
+        left += parts[k].count > 0;
+    for (size_t k = 0; k < n; k++) {
+        if (!parts[k].count)
+            continue;
+        left--;
+        used += (size_t)snprintf(line + used, sizeof line - used, "%s%zu %s%s", used ? (left ? ", " : " and ") : "",
+                                 parts[k].count, parts[k].what, parts[k].count == 1 ? "" : "s");
+    }
+    if (used)
+        fprintf(stderr, "aoview: skipped %s\n", line);
+}
+
 int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_render_config *config,
                 struct ao_settings *settings)
 {
@@ -263,7 +287,8 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
 
     /* Scene, size, tracer. */
     char name[AO_TEXT_SIZE];
-    if (!ao_scene_load_budget(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, opts->scene_budget))
+    struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground};
+    if (!ao_scene_load_with(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, &load))
         return AO_EXIT_RUNTIME;
     int width = opts->width ? opts->width : app->scene.width ? app->scene.width : 640;
     int height = opts->height ? opts->height : app->scene.height ? app->scene.height : 480;
@@ -273,8 +298,11 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     app->reference_height = height;
     if (!(app->tracer = ao_tracer_create(&app->scene)))
         return AO_EXIT_RUNTIME;
-    if (app->scene.degenerate_count && !opts->quiet)
-        fprintf(stderr, "aoview: skipped %zu degenerate triangles\n", app->scene.degenerate_count);
+    if (!opts->quiet)
+        report_skipped(&app->scene);
+    if (!opts->quiet && app->scene.notes[0])
+        fprintf(stderr, "aoview: %s\n", ao_text_escape(app->scene.notes, (char[sizeof app->scene.notes * 4]){0},
+                                                        sizeof app->scene.notes * 4));
     ao_text_escape(app->scene.name, name, sizeof name);
     if (!opts->quiet)
         fprintf(stderr, "aoview: %s: %zu triangles, %zu spheres, traced by %s\n", name,

@@ -23,7 +23,7 @@ enum option_id {
     OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
     OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
     OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR, OPT_SAVE_FORMAT, OPT_TIME,
-    OPT_VIEW, OPT_SHADING, OPT_COMPARE, OPT_PIXEL_SIZE, OPT_SCENE_BUDGET,
+    OPT_VIEW, OPT_SHADING, OPT_COMPARE, OPT_PIXEL_SIZE, OPT_SCENE_BUDGET, OPT_GROUND,
 };
 
 /* The longest --time: a year, far beyond any render, short of overflowing anything. */
@@ -82,6 +82,7 @@ static const struct option_spec specs[] = {
     {"--shading", 0, true, OPT_SHADING},
     {"--compare", 0, true, OPT_COMPARE},
     {"--scene-budget", 0, true, OPT_SCENE_BUDGET},
+    {"--ground", 0, true, OPT_GROUND},
 };
 
 static const char usage[] =
@@ -132,6 +133,8 @@ static const char usage[] =
     "  --scene-budget SIZE   memory a scene may take: bytes, or with K, M, G or T\n"
     "                        (powers of 1024); larger scenes are refused before\n"
     "                        they are loaded (default 1G)\n"
+    "  --ground on|off       the ground quad under a bare mesh (default on; a .scene\n"
+    "                        file has the quads it lists)\n"
     "  -q, --quiet           print nothing but errors\n"
     "  -h, --help            show this help\n"
     "  --version             show the version\n"
@@ -428,6 +431,11 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
         opts->pixel_size = choice ? 1 << (choice - 1) : 0;
         return true;
     case OPT_SCENE_BUDGET: return parse_budget(name, value, &opts->scene_budget, msg, msg_size);
+    case OPT_GROUND:
+        if (!parse_choice(name, value, switches, &choice, msg, msg_size))
+            return false;
+        opts->ground = choice;
+        return true;
     }
     return false;
 }
@@ -479,7 +487,7 @@ bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, siz
     *opts = (struct ao_options){
         .spp = 0, .spppp = 0, .adaptive = true, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
         .sequence = AO_SEQUENCE_SOBOL, .below = AO_BELOW_REFLECT,
-        .ao_distance = NAN, .scene_budget = AO_BUDGET_DEFAULT,
+        .ao_distance = NAN, .scene_budget = AO_BUDGET_DEFAULT, .ground = true,
     };
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];

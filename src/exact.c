@@ -441,7 +441,8 @@ static int run(struct app *app, const struct ao_options *opts)
         fprintf(stderr, "aoview-exact: no SCENE given (try --help)\n");
         return EXIT_USAGE;
     }
-    if (!ao_scene_load_budget(&app->scene, opts->scene_path, opts->scene_budget))
+    struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground};
+    if (!ao_scene_load_with(&app->scene, opts->scene_path, &load))
         return EXIT_RUNTIME;
 
     /* The closed form, or a refusal. */

@@ -10,6 +10,9 @@
 #include "budget.h"
 #include "vec3.h"
 
+/* The size of ao_mesh's note, terminating NUL included. */
+#define AO_MESH_NOTE_SIZE 200
+
 /* An indexed triangle mesh; the caller owns it (ao_mesh_load fills it, ao_mesh_finish frees it). */
 struct ao_mesh {
     struct ao_vec3 *positions;  /* vertex_count positions */
@@ -18,6 +21,11 @@ struct ao_mesh {
     uint32_t *indices;          /* 3 * triangle_count vertex indices */
     size_t triangle_count;
     size_t degenerate_count;    /* zero-area triangles skipped while loading */
+    size_t point_primitives;    /* glTF primitives of points skipped (one per node placing them) */
+    size_t line_primitives;     /* glTF primitives of lines, line loops and line strips skipped */
+    char note[AO_MESH_NOTE_SIZE];   /* what the loader ignored that a user should hear of, one line
+                                       without the file's name ("materials, textures and lights are
+                                       ignored (...)"); "" when nothing */
 };
 
 /* True when path's extension names a mesh format ao_mesh_load reads. */

@@ -45,9 +45,12 @@ struct ao_scene {
     struct ao_vec3 *albedos;
     size_t albedo_count;
     size_t degenerate_count;      /* zero-area triangles skipped by the mesh loaders */
+    size_t point_primitives;      /* glTF primitives of points skipped (mesh.h) */
+    size_t line_primitives;       /* glTF primitives of lines skipped */
+    char notes[512];              /* the meshes' notes (mesh.h), "name: note; name: note", or "" */
 };
 
-/* Loads a .scene file, or an .obj/.ply mesh placed on a ground quad with a framing camera.
+/* Loads a .scene file, or a mesh file placed on a ground quad with a framing camera.
  * On failure prints one "file:line: message" line to stderr, leaves scene empty, returns false. */
 bool ao_scene_load(struct ao_scene *scene, const char *path);
 
@@ -56,6 +59,22 @@ bool ao_scene_load(struct ao_scene *scene, const char *path);
  * scene that does not fit is refused, before its memory is allocated, in one line naming what
  * needs how much. */
 bool ao_scene_load_budget(struct ao_scene *scene, const char *path, uint64_t budget_bytes);
+
+/* How ao_scene_load_with loads: the scene budget in bytes (budget.h) and, for a bare mesh, whether
+ * the ground quad is added under it (a .scene file has only the quads it lists). */
+struct ao_scene_options {
+    uint64_t budget;
+    bool ground;
+};
+
+/* The gap between a bare mesh's lowest point and the ground quad added under it, as a fraction
+ * of the mesh's largest side: a flat model never coincides with the ground, and a resting model
+ * keeps its contact shadow (both measured in scene.c). */
+#define AO_SCENE_GROUND_GAP 1e-4
+
+/* ao_scene_load_budget with options: ao_scene_load_budget's budget is options->budget, and a bare
+ * mesh gets the ground quad only with options->ground. */
+bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct ao_scene_options *options);
 
 /* Parses scene text as if read from path (relative mesh paths resolve against its directory);
  * same reporting and budget as ao_scene_load. */

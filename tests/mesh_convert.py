@@ -7,10 +7,18 @@ mesh format, for tests and load-time measurements:
   mesh_convert.py IN.obj OUT.gltf           glTF, buffer in OUT.bin beside it
   mesh_convert.py IN.obj OUT.gltf --embed   glTF, buffer as a base64 data URI
   mesh_convert.py IN.obj OUT.glb            GLB
+  mesh_convert.py IN.obj OUT.gltf --FORM    glTF as exporters also write it, under one node:
+      --strip      one triangle strip (mode 5), the triangles joined by zero-area ones
+      --fan        triangle fans (mode 6), one primitive per run of triangles around a corner
+      --sparse     positions as a sparse accessor without a bufferView (every vertex an entry)
+      --quantized  positions as normalized shorts under a node that scales them back
+                   (KHR_mesh_quantization)
   mesh_convert.py --grid N OUT.obj          an N x N height field of 2 N^2 triangles as OBJ
 
 glTF and GLB files place the mesh under two nested nodes whose transforms (a matrix, then
-translation/rotation/scale) cancel out, so the loaded mesh equals the OBJ's up to rounding.
+translation/rotation/scale) cancel out, so the loaded mesh equals the OBJ's up to rounding. The
+strip, fan and sparse forms decode to exactly the OBJ's positions and triangles, corners in the
+same order; the quantized form to positions within 1/65534 of the mesh's size.
 """
 import base64
 import json
@@ -112,6 +120,82 @@ def write_gltf(path, positions, triangles, embed):
         json.dump(doc, f, indent=1)
 
 
+def strip_of(triangles):
+    """One strip whose triangles at even positions are the list's, in order and winding, joined
+    by zero-area triangles: ... z, then a repeated until a stands at an even position, then b c."""
+    strip = list(triangles[0])
+    for a, b, c in triangles[1:]:
+        strip += [strip[-1], a, a]
+        if (len(strip) - 1) % 2:
+            strip.append(a)
+        strip += [b, c]
+    return strip
+
+
+def fans_of(triangles):
+    """Fans whose triangles (v[k+1], v[k+2], v[0]) are the list's in order: (a, b, c) starts the
+    fan c a b, and a following (b, e, c) extends it by e."""
+    fans = []
+    for a, b, c in triangles:
+        if fans and fans[-1][0] == c and fans[-1][-1] == a:
+            fans[-1].append(b)
+        else:
+            fans.append([c, a, b])
+    return fans
+
+
+def write_form(path, positions, triangles, form):
+    """glTF with an embedded buffer in one of the forms exporters write (see the module's help)."""
+    n = len(positions)
+    flat = [c for p in positions for c in p]
+    accessors, views, blob, primitives = [], [], b'', []
+    node = {'mesh': 0}
+
+    def add(data, **accessor):
+        nonlocal blob
+        views.append({'buffer': 0, 'byteOffset': len(blob), 'byteLength': len(data)})
+        blob += data + b'\0' * ((4 - len(data) % 4) % 4)
+        accessors.append(dict(accessor, bufferView=len(views) - 1))
+        return len(accessors) - 1
+
+    if form == 'quantized':
+        lo = [min(p[k] for p in positions) for k in range(3)]
+        size = max(max(p[k] for p in positions) - lo[k] for k in range(3))
+        q = []
+        for p in positions:
+            q += [round((p[k] - lo[k]) / size * 32767) for k in range(3)] + [0]
+        position = add(struct.pack('<%dh' % len(q), *q), componentType=5122, normalized=True, count=n, type='VEC3')
+        views[-1]['byteStride'] = 8
+        node = {'mesh': 0, 'translation': lo, 'scale': [size] * 3}
+    elif form == 'sparse':
+        at = struct.pack('<%dI' % n, *range(n))
+        values = struct.pack('<%df' % len(flat), *flat)
+        add(at, componentType=5125, count=n, type='SCALAR')
+        add(values, componentType=5126, count=n, type='VEC3')
+        accessors[:] = [{'componentType': 5126, 'count': n, 'type': 'VEC3', 'sparse': {
+            'count': n, 'indices': {'bufferView': 0, 'componentType': 5125}, 'values': {'bufferView': 1}}}]
+        position = 0
+    else:
+        position = add(struct.pack('<%df' % len(flat), *flat), componentType=5126, count=n, type='VEC3')
+    if form == 'strip':
+        runs, mode = [strip_of(triangles)], 5
+    elif form == 'fan':
+        runs, mode = fans_of(triangles), 6
+    else:
+        runs, mode = [[v for t in triangles for v in t]], 4
+    for run in runs:
+        index = add(struct.pack('<%dI' % len(run), *run), componentType=5125, count=len(run), type='SCALAR')
+        primitives.append({'attributes': {'POSITION': position}, 'indices': index, 'mode': mode})
+    doc = {'asset': {'version': '2.0', 'generator': 'aoview tests/mesh_convert.py'},
+           'nodes': [node], 'meshes': [{'primitives': primitives}], 'accessors': accessors, 'bufferViews': views,
+           'buffers': [{'byteLength': len(blob),
+                        'uri': 'data:application/octet-stream;base64,' + base64.b64encode(blob).decode()}]}
+    if form == 'quantized':
+        doc['extensionsUsed'] = doc['extensionsRequired'] = ['KHR_mesh_quantization']
+    with open(path, 'w') as f:
+        json.dump(doc, f, separators=(',', ':'))
+
+
 def write_glb(path, positions, triangles):
     doc, blob = gltf_document(positions, triangles, None)
     text = json.dumps(doc).encode()
@@ -142,6 +226,8 @@ def main(argv):
     out = argv[2]
     if out.endswith('.stl'):
         write_stl(out, positions, triangles, '--ascii' in argv)
+    elif out.endswith('.gltf') and len(argv) > 3 and argv[3] in ('--strip', '--fan', '--sparse', '--quantized'):
+        write_form(out, positions, triangles, argv[3][2:])
     elif out.endswith('.gltf'):
         write_gltf(out, positions, triangles, '--embed' in argv)
     elif out.endswith('.glb'):

@@ -60,6 +60,7 @@ static void test_defaults(void **state)
     assert_null(o.reference_path);
     assert_false(o.quiet || o.help || o.version);
     assert_true(o.scene_budget == AO_BUDGET_DEFAULT);
+    assert_true(o.ground);
 }
 
 static void test_every_option(void **state)
@@ -335,6 +336,20 @@ static void test_scene_budget(void **state)
     REJECT("--scene-budget", "missing value", "--scene-budget");
 }
 
+/* --ground on|off: the ground quad under a bare mesh. */
+static void test_ground(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE(&o, "--ground", "off", "model.obj"));
+    assert_false(o.ground);
+    assert_true(PARSE(&o, "--ground=off", "--ground=on"));
+    assert_true(o.ground);
+    REJECT("--ground: expected off or on", "'no'", "--ground", "no");
+    REJECT("--ground: expected off or on", "''", "--ground=");
+    REJECT("--ground", "missing value", "--ground");
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -342,7 +357,7 @@ static void test_usage_lists_every_option(void **state)
     const char *names[] = {"--headless", "-o, --output", "--spp", "--spppp", "--sampling",
                            "--aa", "--no-aa", "--size", "--threads", "--seed", "--ao-distance",
                            "--stats", "--reference", "-q, --quiet", "-h, --help", "--version",
-                           "--time", "--view", "--shading", "--compare A,B", "--scene-budget SIZE", "default 1G", "N normals", "F flat/Phong", "D difference",
+                           "--time", "--view", "--shading", "--compare A,B", "--scene-budget SIZE", "default 1G", "--ground on|off", "N normals", "F flat/Phong", "D difference",
                            "default 256", "default cosine", "640x480", "Esc"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         assert_non_null(strstr(u, names[i]));
@@ -365,6 +380,7 @@ int main(void)
         cmocka_unit_test(test_view_options),
         cmocka_unit_test(test_compare_options),
         cmocka_unit_test(test_scene_budget),
+        cmocka_unit_test(test_ground),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

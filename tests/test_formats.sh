@@ -3,7 +3,9 @@
 # an embedded buffer, and GLB (tests/mesh_convert.py; the glTF files nest two transforms that
 # cancel) renders as the bunny OBJ does, bare and through a scene's mesh line: same seed and
 # settings, so the images differ only where float rounding of the transformed positions moves a
-# hit, and the mean absolute difference must stay within 0.2 % of the mean. EXR output carries the
+# hit, and the mean absolute difference must stay within 0.2 % of the mean. Then glTF as exporters
+# write it (strips, fans, sparse, quantized, meshopt and Draco; tests/gltf_encode for the last two),
+# exactly or within Monte Carlo noise (below), and what aoview says of such files. EXR output carries the
 # settings in its header (checked with exrheader when installed) and reads back as a --reference
 # with RMSE exactly 0; a failed EXR write leaves no file.
 set -u
@@ -62,6 +64,76 @@ for mesh in binary.stl ascii.stl external.gltf embedded.gltf bunny.glb; do
     fail "$mesh in a scene differs from the OBJ by $got"
   fi
 done
+
+# glTF as exporters write it. Exactly the OBJ's image where the decoded positions and triangles are
+# exactly the OBJ's (corners in the same order: one strip joined by zero-area triangles, fans, a
+# sparse accessor, meshopt attributes and index sequence, Draco's sequential coding without
+# quantization): same seed, same samples, same pixels, compared byte for byte.
+encode=${AO_GLTF_ENCODE:-}
+if [ -z "$encode" ] || [ ! -x "$encode" ]; then
+  fail "AO_GLTF_ENCODE (tests/gltf_encode) is not set: run through meson test"
+  encode=false
+fi
+for form in strip fan sparse quantized; do
+  python3 "$convert" "$obj" "$form.gltf" "--$form" || fail "mesh_convert.py --$form failed"
+done
+for form in meshopt meshopt-quantized draco draco-sequential; do
+  "$encode" "$form" "$obj" "$form.glb" || fail "gltf_encode $form failed"
+done
+for mesh in strip.gltf fan.gltf sparse.gltf meshopt.glb draco-sequential.glb; do
+  if ! render "$mesh" -o "$mesh.pfm"; then fail "$mesh did not render"
+  elif ! cmp -s obj.pfm "$mesh.pfm"; then fail "$mesh does not render exactly as the OBJ: $(compare obj.pfm "$mesh.pfm")"
+  else echo "$mesh renders exactly as the OBJ"; fi
+done
+# Elsewhere within Monte Carlo noise at the same seed: positions quantized to 16 bits under a node
+# (KHR_mesh_quantization, alone and with meshopt's triangle codec, which may rotate corners) and
+# Draco's Edgebreaker (14-bit positions, its own vertex and triangle order). With cosine sampling a
+# pixel is rho times the share of its N samples that escape, so its noise is binomial; two renders
+# with different seeds differ by the noise of both, sqrt(2) times that of one (in mean absolute
+# difference too, for errors alike in distribution). Bound: the same-seed difference from the OBJ
+# at most the noise of one render, mean |OBJ(seed 3) - OBJ(seed 4)| / sqrt(2). Measured at 96x72,
+# 64 spp: noise 0.0114; Draco 0.00001 (a few pixels), the quantized forms 0 so far (a 16-bit step
+# moves no hit enough to change a sample).
+noisy() { "$bin" --headless -q --size 96x72 --spp 64 --adaptive off --sampler random "$@"; }
+noisy --seed 3 "$obj" -o noise3.pfm && noisy --seed 4 "$obj" -o noise4.pfm || fail "the OBJ did not render"
+for mesh in quantized.gltf meshopt-quantized.glb draco.glb; do
+  if ! noisy --seed 3 "$mesh" -o "$mesh-noisy.pfm"; then fail "$mesh did not render"; continue; fi
+  python3 - noise3.pfm noise4.pfm "$mesh-noisy.pfm" "$mesh" <<'PY' || fail "$mesh differs from the OBJ by more than Monte Carlo noise"
+import math, struct, sys
+def read(path):
+    data = open(path, 'rb').read()
+    head = data.split(b'\n', 3)
+    w, h = map(int, head[1].split())
+    return struct.unpack('<%df' % (3 * w * h), head[3])
+a, b, c = (read(p) for p in sys.argv[1:4])
+mad = lambda x, y: sum(abs(p - q) for p, q in zip(x, y)) / len(x)
+noise, got = mad(a, b) / math.sqrt(2), mad(a, c)
+print('%s: mean difference from the OBJ %.5f, noise of one render %.5f' % (sys.argv[4], got, noise))
+sys.exit(0 if got <= noise else 1)
+PY
+done
+
+# What aoview says of them: the joining triangles of the strip skipped as zero-area (one line with
+# the points and lines it also skipped), a required material extension in one line, and without
+# --ground the mesh alone (the OBJ's 3674 triangles, not 3676).
+python3 - <<'PY'
+import json
+doc = json.load(open('strip.gltf'))
+doc['meshes'][0]['primitives'].append({'attributes': {'POSITION': 0}, 'mode': 1})
+doc['meshes'][0]['primitives'].append({'attributes': {'POSITION': 0}, 'mode': 0})
+doc['extensionsUsed'] = doc['extensionsRequired'] = ['KHR_materials_emissive_strength', 'KHR_texture_transform']
+json.dump(doc, open('said.gltf', 'w'))
+strip = doc['accessors'][doc['meshes'][0]['primitives'][0]['indices']]['count']
+open('joins.txt', 'w').write('%d' % (strip - 2 - 3674))   # the strip's triangles less the OBJ's
+PY
+"$bin" --headless --size 32x24 --spp 1 -o said.pfm said.gltf 2>said.txt || fail "said.gltf did not render"
+for line in "aoview: skipped $(cat joins.txt) degenerate triangles, 1 point primitive and 1 line primitive" \
+            "aoview: said.gltf: materials, textures and lights are ignored (it requires KHR_materials_emissive_strength, KHR_texture_transform)" \
+            "aoview: said.gltf: 3676 triangles, 0 spheres"; do
+  grep -q "^$line" said.txt || fail "said.gltf: no line '$line' in: $(cat said.txt)"
+done
+"$bin" --headless --size 32x24 --spp 1 --ground off -o bare.pfm "$obj" 2>bare.txt || fail "--ground off did not render"
+grep -q "bunny.obj: 3674 triangles" bare.txt || fail "--ground off: $(cat bare.txt)"
 
 # More than 65536 vertices: 32-bit indices in the glTF buffer.
 python3 "$convert" --grid 260 grid.obj && python3 "$convert" grid.obj grid.glb || fail "no grid"

@@ -121,15 +121,16 @@ doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0} for _ in range(65536)]
 json.dump(doc, open('instances.gltf', 'w'))
 PY
 refuse 1 "instances.gltf: 39321600 triangles and 196608 vertices need about 4.4 GiB, more than the" instances.gltf
-# One triangle as 10000 primitives of one mesh under 65536 nodes: counted once per mesh, so the
-# refusal takes a fraction of a second, not the hours of validating 655 million primitives.
+# One triangle as 10000 primitives of one mesh (sharing its 3 vertices) under 65536 nodes: counted
+# once per mesh, so the refusal takes a fraction of a second, not the hours of validating 655
+# million primitives.
 python3 - <<'PY'
 import json
 doc = json.load(open('instances.gltf'))
 doc['meshes'] = [{'primitives': [{'attributes': {'POSITION': 0}}] * 10000}]
 json.dump(doc, open('primitives.gltf', 'w'))
 PY
-refuse 1 "primitives.gltf: 655360000 triangles and 1966080000 vertices need about 183.1 GiB" primitives.gltf
+refuse 1 "primitives.gltf: 655360000 triangles and 196608 vertices need about 73.3 GiB" primitives.gltf
 # Two million empty objects in 6 MB of JSON: json-c would take 1.6 GB for them (each may be a node,
 # so each is charged a node's arrays too).
 python3 -c "open('objects.gltf', 'w').write('{\"asset\": {\"version\": \"2.0\"}, \"x\": [' + '{},' * 2000000 + '{}]}')"
@@ -255,6 +256,101 @@ got=$? kb=$(tail -n 1 mem.txt)
 if [ "$got" != 0 ] || [ -s err.txt ]; then fail "grid.gltf under --scene-budget 32M exited $got: $(head -c 300 err.txt)"
 else echo "loaded in $((kb / 1024)) MB: grid.gltf under --scene-budget 32M"; fi
 rm -f instanced.gltf grid.gltf three.scene million.gltf string.gltf sparse.gltf grid.pfm
+
+# ---- glTF as exporters write it, with counts and strides that lie: quantized positions (6-byte
+# elements) claiming a billion elements or a stride shorter than one element
+python3 - <<'PY'
+import base64, json, struct
+def gltf(name, accessor, view, data):
+    doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0}],
+           'meshes': [{'primitives': [{'attributes': {'POSITION': 0}}]}], 'accessors': [accessor],
+           'bufferViews': [view], 'buffers': [{'byteLength': len(data),
+               'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
+    json.dump(doc, open(name, 'w'))
+shorts = struct.pack('<12h', 0, 0, 0, 0, 32767, 0, 0, 0, 0, 32767, 0, 0)
+gltf('quantized_count.gltf', {'bufferView': 0, 'componentType': 5122, 'normalized': True, 'count': 1000000000,
+     'type': 'VEC3'}, {'buffer': 0, 'byteLength': 24, 'byteStride': 8}, shorts)
+gltf('quantized_stride.gltf', {'bufferView': 0, 'componentType': 5122, 'normalized': True, 'count': 3,
+     'type': 'VEC3'}, {'buffer': 0, 'byteLength': 24, 'byteStride': 4}, shorts)
+# Sparse accessors: a billion entries in 24 bytes, an index that wraps to -1, and four billion
+# zeros without a bufferView (gathered into memory of their own, so charged first).
+def sparse(entries, at=0):
+    return {'count': entries, 'indices': {'bufferView': 0, 'componentType': 5125, 'byteOffset': 20},
+            'values': {'bufferView': 0, 'byteOffset': 8}}
+floats = struct.pack('<5f', 0, 0, 0, 1, 0) + struct.pack('<I', 4294967295)
+gltf('sparse_count.gltf', {'componentType': 5126, 'count': 3, 'type': 'VEC3', 'sparse': sparse(1000000000)},
+     {'buffer': 0, 'byteLength': 24}, floats)
+gltf('sparse_index.gltf', {'componentType': 5126, 'count': 3, 'type': 'VEC3', 'sparse': sparse(1)},
+     {'buffer': 0, 'byteLength': 24}, floats)
+gltf('zeros.gltf', {'componentType': 5126, 'count': 4000000000, 'type': 'VEC3'}, {'buffer': 0, 'byteLength': 24},
+     floats)
+# A fan whose corner index wraps to -1, and a strip claiming four billion corners in 12 bytes.
+def fan(name, mode, index_accessor, data):
+    doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0}],
+           'meshes': [{'primitives': [{'attributes': {'POSITION': 0}, 'indices': 1, 'mode': mode}]}],
+           'accessors': [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3'}, index_accessor],
+           'bufferViews': [{'buffer': 0, 'byteLength': 36}, {'buffer': 0, 'byteOffset': 36, 'byteLength': 12}],
+           'buffers': [{'byteLength': len(data),
+               'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
+    json.dump(doc, open(name, 'w'))
+corners = struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack('<3I', 0, 1, 4294967295)
+fan('fan_index.gltf', 6, {'bufferView': 1, 'componentType': 5125, 'count': 3, 'type': 'SCALAR'}, corners)
+fan('strip_count.gltf', 5, {'bufferView': 1, 'componentType': 5125, 'count': 4000000000, 'type': 'SCALAR'}, corners)
+PY
+refuse 1 "quantized_count.gltf: accessor 0 (POSITION): 1000000000 elements from byte 0 need 7999999998 bytes of bufferView 0, which has 24" quantized_count.gltf
+refuse 1 "quantized_stride.gltf: bufferView 0: byteStride 4 is smaller than an element (6 bytes)" quantized_stride.gltf
+refuse 1 "sparse_count.gltf: accessor 0 (POSITION) sparse indices: 1000000000 elements from byte 20 need 4000000020 bytes of bufferView 0, which has 24" sparse_count.gltf
+refuse 1 "sparse_index.gltf: accessor 0 (POSITION) sparse: index 4294967295 at 0 is out of range (3 elements)" sparse_index.gltf
+refuse 1 "zeros.gltf: accessor 0 (POSITION): its 4000000000 values would need about 44.7 GiB, more than the" zeros.gltf
+refuse 1 "fan_index.gltf: mesh 0 primitive 0: index 4294967295 at 2 is out of range (3 vertices)" fan_index.gltf
+refuse 1 "strip_count.gltf: accessor 1 (indices): 4000000000 elements from byte 0 need 16000000000 bytes of bufferView 1, which has 12" strip_count.gltf
+rm -f quantized_count.gltf quantized_stride.gltf sparse_count.gltf sparse_index.gltf zeros.gltf fan_index.gltf strip_count.gltf
+
+# Compressed data that lies (tests/gltf_encode writes them with the libraries' own encoders): a
+# meshopt index past the vertices; a meshopt view claiming a billion 12-byte elements (decoded into
+# memory of its own: charged first) or a count its view's length does not hold; a Draco header
+# claiming 1431655765 triangles (libdraco's own checks refuse it before it allocates), a Draco
+# corner naming point 65535 of 1839, a POSITION accessor counting a point more than Draco decodes;
+# and a real 300 x 300 grid (180,000 triangles in 50 KB of Draco) under a 4 MB budget: every
+# allocation libdraco makes while decoding is counted against what the budget has left.
+encode=${AO_GLTF_ENCODE:?AO_GLTF_ENCODE not set (tests/gltf_encode; run through meson test)}
+for mode in meshopt meshopt-range draco-claims draco-range draco-count; do
+  "$encode" "$mode" "$root/assets/bunny.obj" "$mode.glb" || fail "gltf_encode $mode failed"
+done
+python3 - <<'PY'
+import json, struct
+def edit(src, dst, change):
+    data = open(src, 'rb').read()
+    length = struct.unpack('<I', data[12:16])[0]
+    doc = json.loads(data[20:20 + length])
+    change(doc)
+    text = json.dumps(doc).encode()
+    text += b' ' * ((4 - len(text) % 4) % 4)
+    rest = data[20 + length:]
+    open(dst, 'wb').write(struct.pack('<3I', 0x46546C67, 2, 20 + len(text) + len(rest)) +
+                          struct.pack('<2I', len(text), 0x4E4F534A) + text + rest)
+def billion(doc):
+    ext = doc['bufferViews'][0]['extensions']['EXT_meshopt_compression']
+    ext['count'] = 1000000000
+    doc['bufferViews'][0]['byteLength'] = 12000000000
+    doc['buffers'][1]['byteLength'] = 13000000000
+    doc['accessors'][0]['count'] = 1000000000
+def count(doc):
+    doc['bufferViews'][0]['extensions']['EXT_meshopt_compression']['count'] += 1
+edit('meshopt.glb', 'meshopt_billion.glb', billion)
+edit('meshopt.glb', 'meshopt_count.glb', count)
+PY
+refuse 1 "meshopt-range.glb: mesh 0 primitive 0: index 1839 at 11021 is out of range (1839 vertices)" meshopt-range.glb
+refuse 1 "meshopt_billion.glb: bufferView 0 (EXT_meshopt_compression): decoding 1000000000 elements of 12 bytes would need about 11.2 GiB, more than the" meshopt_billion.glb
+refuse 1 "meshopt_count.glb: bufferView 0 (EXT_meshopt_compression): the view's byteLength 22068 is not byteStride 12 times count 1840" meshopt_count.glb
+refuse 1 "draco-claims.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): libdraco cannot decode it" draco-claims.glb
+refuse 1 "draco-range.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): triangle 0 names point 65535 of 1839" draco-range.glb
+refuse 1 "draco-count.glb: accessor 0 (POSITION): count 1840, but its KHR_draco_mesh_compression data decodes to 1839" draco-count.glb
+python3 "$root/tests/mesh_convert.py" --grid 300 grid.obj && "$encode" draco grid.obj draco_grid.glb || fail "no Draco grid"
+refuse 1 "draco_grid.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): decoding it would take more than the" \
+  --scene-budget 4M draco_grid.glb
+rm -f meshopt.glb meshopt-range.glb meshopt_billion.glb meshopt_count.glb draco-claims.glb draco-range.glb \
+  draco-count.glb grid.obj draco_grid.glb
 
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000

@@ -1,0 +1,706 @@
+/* The glTF loader's data layer (see gltf.h): JSON access, the GLB container, buffers (the BIN
+ * chunk, base64 data URIs, files in the model's folder) and accessors, every range checked before
+ * anything is read through it. */
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <unistd.h>
+
+#include "file.h"
+#include "load/draco.h"
+#include "load/gltf.h"
+#include "load/meshopt.h"
+#include "load/quantize.h"
+
+/* GLB container constants: magic "glTF", chunk types "JSON" and "BIN\0". */
+enum { GLB_MAGIC = 0x46546C67, GLB_JSON = 0x4E4F534A, GLB_BIN = 0x004E4942, GLB_HEADER = 12 };
+
+/* Reports "path: message" and returns false. */
+bool ao_gltf_error(const struct ao_gltf *g, const char *format, ...)
+{
+    char message[400];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(message, sizeof message, format, args);
+    va_end(args);
+    ao_load_report(g->path, 0, "%s", message);
+    return false;
+}
+
+/* Takes bytes from the scene budget for what the load holds until its end; else reports that
+ * `what` would need more than is left. */
+bool ao_gltf_take(struct ao_gltf *g, uint64_t bytes, const char *what)
+{
+    if (ao_budget_take(g->budget, bytes)) {
+        g->taken += bytes;
+        return true;
+    }
+    char why[200];
+    ao_budget_explain(g->budget, bytes, why, sizeof why);
+    return ao_gltf_error(g, "%s would %s", what, why);
+}
+
+/* ------------------------------------------------------------------ JSON access */
+
+/* The member key of obj, or NULL when absent (or obj is not an object). */
+json_object *ao_gltf_member(json_object *obj, const char *key)
+{
+    json_object *value = NULL;
+    return json_object_is_type(obj, json_type_object) && json_object_object_get_ex(obj, key, &value)
+               ? value : NULL;
+}
+
+/* The length of array, 0 when it is NULL (absent) or not an array. */
+size_t ao_gltf_length(json_object *array)
+{
+    return json_object_is_type(array, json_type_array) ? json_object_array_length(array) : 0;
+}
+
+/* The length of an array member (0 when absent); false when present but not an array. */
+bool ao_gltf_array(const struct ao_gltf *g, json_object *obj, const char *key, const char *where,
+                         json_object **out, size_t *length)
+{
+    *out = ao_gltf_member(obj, key);
+    *length = 0;
+    if (!*out)
+        return true;
+    if (!json_object_is_type(*out, json_type_array))
+        return ao_gltf_error(g, "%s: '%s' is not an array", where, key);
+    *length = json_object_array_length(*out);
+    return true;
+}
+
+/* Reads a whole number in [0, limit] from value (a JSON integer, or a double with no fraction). */
+bool ao_gltf_whole(json_object *value, double limit, uint64_t *out)
+{
+    if (!value || !(json_object_is_type(value, json_type_int) ||
+                    json_object_is_type(value, json_type_double)))
+        return false;
+    double d = json_object_get_double(value);
+    if (!(d >= 0.0 && d <= limit && d == floor(d)))
+        return false;
+    *out = (uint64_t)d;
+    return true;
+}
+
+/* A whole-number member: *out gets its value, or fallback when absent and not required. */
+bool ao_gltf_integer(const struct ao_gltf *g, json_object *obj, const char *key, bool required,
+                    uint64_t fallback, double limit, const char *where, uint64_t *out)
+{
+    json_object *value = ao_gltf_member(obj, key);
+    *out = fallback;
+    if (!value && !required)
+        return true;
+    if (!value)
+        return ao_gltf_error(g, "%s: no '%s'", where, key);
+    return ao_gltf_whole(value, limit, out) ||
+           ao_gltf_error(g, "%s: '%s' is not a whole number from 0 to %.0f", where, key, limit);
+}
+
+/* An index into an array of count entries. */
+bool ao_gltf_index(const struct ao_gltf *g, json_object *obj, const char *key, size_t count,
+                         const char *where, size_t *out)
+{
+    uint64_t value;
+    *out = 0;
+    if (!ao_gltf_integer(g, obj, key, true, 0, AO_GLTF_MAX_INTEGER, where, &value))
+        return false;
+    if (value >= count)
+        return ao_gltf_error(g, "%s: '%s' %llu is out of range (%zu defined)", where, key,
+                          (unsigned long long)value, count);
+    *out = (size_t)value;
+    return true;
+}
+
+/* ------------------------------------------------------------------ containers and buffers */
+
+/* A little-endian 32-bit word. */
+static uint32_t le32(const unsigned char *b)
+{
+    return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+
+/* A GLB: header, then chunks; the first must be JSON, a BIN chunk may follow. Sets *json. */
+bool ao_gltf_parse_glb(struct ao_gltf *g, const unsigned char *data, size_t size,
+                      const unsigned char **json, size_t *json_size)
+{
+    if (size < GLB_HEADER || le32(data) != GLB_MAGIC)
+        return ao_gltf_error(g, "not a GLB file (no 'glTF' magic)");
+    if (le32(data + 4) != 2)
+        return ao_gltf_error(g, "GLB version %u; only version 2 is supported", le32(data + 4));
+    /* Bytes after the stated length are ignored (the validator only warns), and said so. */
+    size_t stated = le32(data + 8);
+    if (stated > size || stated < GLB_HEADER)
+        return ao_gltf_error(g, "GLB header says %zu bytes, the file has %zu", stated, size);
+    if (stated < size)
+        ao_gltf_note(g, "%zu bytes after the GLB's stated length of %zu are ignored", size - stated, stated);
+    size = stated;
+    *json = NULL;
+    for (size_t offset = GLB_HEADER; offset < size;) {
+        if (size - offset < 8)
+            return ao_gltf_error(g, "GLB chunk header at byte %zu runs past the end", offset);
+        size_t length = le32(data + offset), type = le32(data + offset + 4);
+        if (length > size - offset - 8)
+            return ao_gltf_error(g, "GLB chunk at byte %zu claims %zu bytes, only %zu remain", offset,
+                              length, size - offset - 8);
+        const unsigned char *body = data + offset + 8;
+        if (!*json && type != GLB_JSON)
+            return ao_gltf_error(g, "GLB's first chunk is not JSON");
+        if (!*json) {
+            *json = body;
+            *json_size = length;
+        } else if (type == GLB_BIN && !g->bin) {
+            g->bin = body;
+            g->bin_size = length;
+        }
+        offset += 8 + length;
+    }
+    return *json || ao_gltf_error(g, "GLB without a JSON chunk");
+}
+
+/* The value of one base64 digit, or -1. */
+static int base64_digit(unsigned char c)
+{
+    if (c >= 'A' && c <= 'Z')
+        return c - 'A';
+    if (c >= 'a' && c <= 'z')
+        return c - 'a' + 26;
+    if (c >= '0' && c <= '9')
+        return c - '0' + 52;
+    return c == '+' ? 62 : c == '/' ? 63 : -1;
+}
+
+/* Decodes base64 text (padding optional) into a new buffer; false on a bad digit. */
+static bool decode_base64(const char *text, size_t n, unsigned char **out, size_t *size)
+{
+    while (n > 0 && text[n - 1] == '=')
+        n--;
+    unsigned char *bytes = malloc(n / 4 * 3 + 3);
+    if (!bytes)
+        return false;
+    size_t count = 0;
+    uint32_t bits = 0;
+    for (size_t i = 0; i < n; i++) {
+        int digit = base64_digit((unsigned char)text[i]);
+        if (digit < 0) {
+            free(bytes);
+            return false;
+        }
+        bits = bits << 6 | (uint32_t)digit;
+        if (i % 4 == 3) {
+            bytes[count++] = (unsigned char)(bits >> 16);
+            bytes[count++] = (unsigned char)(bits >> 8);
+            bytes[count++] = (unsigned char)bits;
+        }
+    }
+    if (n % 4 == 1) {
+        free(bytes);
+        return false;
+    }
+    if (n % 4 >= 2)
+        bytes[count++] = (unsigned char)(bits >> (n % 4 == 2 ? 4 : 10));
+    if (n % 4 == 3)
+        bytes[count++] = (unsigned char)(bits >> 2);
+    *out = bytes;
+    *size = count;
+    return true;
+}
+
+/* The value of a hexadecimal digit, or -1. */
+static int hex_digit(unsigned char c)
+{
+    return c >= '0' && c <= '9' ? c - '0' : c >= 'a' && c <= 'f' ? c - 'a' + 10 : c >= 'A' && c <= 'F' ? c - 'A' + 10 : -1;
+}
+
+/* Decodes the percent-encoded text of a data URI that is not base64 (RFC 2397: bytes as they are,
+ * or %XX) into a new buffer; false at a bad escape, with its offset in *bad. */
+static bool decode_percent(const char *text, size_t n, unsigned char **out, size_t *size, size_t *bad)
+{
+    unsigned char *bytes = malloc(n ? n : 1);
+    size_t count = 0;
+    *bad = SIZE_MAX;
+    for (size_t i = 0; bytes && i < n; i++) {
+        int high = 0, low = 0;
+        if (text[i] == '%' && (i + 2 >= n || (high = hex_digit((unsigned char)text[i + 1])) < 0 ||
+                               (low = hex_digit((unsigned char)text[i + 2])) < 0)) {
+            *bad = i;
+            break;
+        }
+        bytes[count++] = text[i] == '%' ? (unsigned char)(high << 4 | low) : (unsigned char)text[i];
+        i += text[i] == '%' ? 2 : 0;
+    }
+    if (!bytes || *bad != SIZE_MAX) {
+        free(bytes);
+        return false;
+    }
+    *out = bytes;
+    *size = count;
+    return true;
+}
+
+/* Reads byteLength bytes of the file a buffer's URI names inside the model's folder (uri.c). */
+static bool read_buffer_file(struct ao_gltf *g, const char *where, const char *uri, uint64_t length,
+                             struct ao_gltf_buffer *b)
+{
+    char path[4096], why[160];
+    int fd;
+    if (!ao_load_uri_decode(uri, path, sizeof path, why, sizeof why) ||
+        !ao_load_uri_open(g->path, path, &fd, why, sizeof why))
+        return ao_gltf_error(g, "%s ('%.60s'): %s", where, uri, why);
+    char *data = NULL, what[100];
+    snprintf(what, sizeof what, "%s ('%.40s'), byteLength %llu,", where, uri, (unsigned long long)length);
+    if (length >= SIZE_MAX || !ao_gltf_take(g, length + 1, what)) {
+        close(fd);
+        return length >= SIZE_MAX && ao_gltf_error(g, "%s too large", what);   /* else take reported */
+    }
+    const char *reason = NULL;
+    bool ok = ao_file_read_prefix(fd, (size_t)length, &data, &reason);
+    close(fd);
+    if (!ok)
+        return ao_gltf_error(g, "%s ('%.60s'), byteLength %llu: %s", where, uri,
+                          (unsigned long long)length, reason);
+    b->data = b->owned = (unsigned char *)data;
+    return true;
+}
+
+/* Loads buffer i's bytes: the GLB's BIN chunk (no uri), a data URI or a file in the glTF's
+ * folder. Buffers load when a bufferView is first read from them: one that is never read (an
+ * unused buffer, a fallback without data) may have none. */
+static bool load_buffer(struct ao_gltf *g, size_t i)
+{
+    char where[64];
+    snprintf(where, sizeof where, "buffer %zu", i);
+    struct ao_gltf_buffer *b = &g->buffers[i];
+    json_object *json = json_object_array_get_idx(g->buffer_json, i);
+    uint64_t length = b->size;
+    b->loaded = true;
+    json_object *uri_json = ao_gltf_member(json, "uri");
+    const char *uri = json_object_is_type(uri_json, json_type_string)
+                          ? json_object_get_string(uri_json) : NULL;
+    size_t size = 0;
+    if (uri_json && !uri)
+        return ao_gltf_error(g, "%s: 'uri' is not a string", where);
+    if (!uri) {
+        if (i != 0 || !g->bin)
+            return ao_gltf_error(g, "%s has no 'uri' and is not a GLB's BIN chunk: it has no data", where);
+        b->data = g->bin;
+        size = g->bin_size;
+    } else if (strncmp(uri, "data:", 5) == 0) {
+        /* data:[<media type>][;base64],<data>; without ;base64 the data is percent-encoded. */
+        const char *comma = strchr(uri, ',');
+        if (!comma)
+            return ao_gltf_error(g, "%s: a data URI without a comma", where);
+        bool base64 = comma - uri >= 12 && strncasecmp(comma - 7, ";base64", 7) == 0;
+        size_t digits = strlen(comma + 1), bad;
+        char what[96];
+        snprintf(what, sizeof what, "%.64s's data URI", where);
+        if (!ao_gltf_take(g, base64 ? digits / 4 * 3 + 3 : digits + 1, what))
+            return false;
+        if (base64 && !decode_base64(comma + 1, digits, &b->owned, &size))
+            return ao_gltf_error(g, "%s: bad base64 data (or out of memory)", where);
+        if (!base64 && !decode_percent(comma + 1, digits, &b->owned, &size, &bad))
+            return bad == SIZE_MAX ? ao_load_out_of_memory(g->path)
+                                   : ao_gltf_error(g, "%s: bad percent-encoding at byte %zu of its data URI's data",
+                                                   where, bad);
+        b->data = b->owned;
+    } else {
+        if (!read_buffer_file(g, where, uri, length, b))
+            return false;
+        size = (size_t)length;
+    }
+    if (size < length)
+        return ao_gltf_error(g, "%s: byteLength %llu but only %zu bytes of data", where,
+                          (unsigned long long)length, size);
+    return true;
+}
+
+/* Buffer i, its byteLength read (and with need_data its bytes loaded) on first use. */
+static bool buffer(struct ao_gltf *g, size_t i, bool need_data, const struct ao_gltf_buffer **out)
+{
+    struct ao_gltf_buffer *b = &g->buffers[i];
+    *out = b;
+    if (!b->known) {
+        char where[64];
+        uint64_t length;
+        snprintf(where, sizeof where, "buffer %zu", i);
+        if (!ao_gltf_integer(g, json_object_array_get_idx(g->buffer_json, i), "byteLength", true, 0,
+                             AO_GLTF_MAX_INTEGER, where, &length))
+            return false;
+        if (length > SIZE_MAX / 2)
+            return ao_gltf_error(g, "%s: byteLength %llu is too large", where, (unsigned long long)length);
+        b->size = (size_t)length;
+        b->known = true;
+    }
+    return !need_data || b->loaded || load_buffer(g, i);
+}
+
+/* The bufferView json (index) whose EXT_meshopt_compression extension ext holds its data
+ * compressed: the compressed bytes checked against their buffer, the mode, filter, count and
+ * stride against what the library accepts and the view's byteLength against count * stride; the
+ * decoded data, charged to the budget first, becomes the view's own. The view's own buffer (a
+ * fallback, often without data) is not read. */
+static bool meshopt_view(struct ao_gltf *g, size_t index, json_object *json, json_object *ext,
+                         struct ao_gltf_view *v)
+{
+    char where[96], why[200];
+    snprintf(where, sizeof where, "bufferView %zu (EXT_meshopt_compression)", index);
+    uint64_t offset, length, stride, count, view_length, view_stride;
+    size_t source, fallback;
+    json_object *mode_json = ao_gltf_member(ext, "mode"), *filter_json = ao_gltf_member(ext, "filter");
+    enum ao_meshopt_mode mode;
+    enum ao_meshopt_filter filter;
+    const struct ao_gltf_buffer *b;
+    if (!ao_gltf_index(g, json, "buffer", g->buffer_count, where, &fallback) ||
+        !ao_gltf_integer(g, json, "byteLength", true, 0, AO_GLTF_MAX_INTEGER, where, &view_length) ||
+        !ao_gltf_integer(g, json, "byteStride", false, 0, 252, where, &view_stride) ||
+        !ao_gltf_index(g, ext, "buffer", g->buffer_count, where, &source) ||
+        !ao_gltf_integer(g, ext, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, where, &offset) ||
+        !ao_gltf_integer(g, ext, "byteLength", true, 0, AO_GLTF_MAX_INTEGER, where, &length) ||
+        !ao_gltf_integer(g, ext, "byteStride", true, 0, 256, where, &stride) ||
+        !ao_gltf_integer(g, ext, "count", true, 0, (double)UINT32_MAX, where, &count))
+        return false;
+    if (!json_object_is_type(mode_json, json_type_string) ||
+        (filter_json && !json_object_is_type(filter_json, json_type_string)) ||
+        !ao_meshopt_parse(json_object_get_string(mode_json), filter_json ? json_object_get_string(filter_json) : NULL,
+                          &mode, &filter))
+        return ao_gltf_error(g, "%s: 'mode' must be ATTRIBUTES, TRIANGLES or INDICES and 'filter' NONE, OCTAHEDRAL, "
+                             "QUATERNION or EXPONENTIAL", where);
+    if (!ao_meshopt_check(mode, filter, (size_t)count, (size_t)stride, why, sizeof why))
+        return ao_gltf_error(g, "%s: %s", where, why);
+    if (view_length != stride * count)
+        return ao_gltf_error(g, "%s: the view's byteLength %llu is not byteStride %llu times count %llu", where,
+                             (unsigned long long)view_length, (unsigned long long)stride, (unsigned long long)count);
+    if (view_stride && view_stride != stride)
+        return ao_gltf_error(g, "%s: the view's byteStride %llu differs from the extension's %llu", where,
+                             (unsigned long long)view_stride, (unsigned long long)stride);
+    if (!buffer(g, source, false, &b))
+        return false;
+    if (offset + length > b->size)
+        return ao_gltf_error(g, "%s: bytes [%llu, %llu) run past buffer %zu (%zu bytes)", where,
+                             (unsigned long long)offset, (unsigned long long)(offset + length), source, b->size);
+    char what[160];
+    snprintf(what, sizeof what, "%s: decoding %llu elements of %llu bytes", where, (unsigned long long)count,
+             (unsigned long long)stride);
+    if (!buffer(g, source, true, &b) || !ao_gltf_take(g, view_length, what))
+        return false;
+    if (!(v->owned = malloc(view_length ? (size_t)view_length : 1)))
+        return ao_load_out_of_memory(g->path);
+    if (!ao_meshopt_decode(mode, filter, (size_t)count, (size_t)stride, b->data + offset, (size_t)length, v->owned,
+                           why, sizeof why))
+        return ao_gltf_error(g, "%s: %s", where, why);
+    v->data = v->owned;
+    v->length = (size_t)view_length;
+    v->stride = (size_t)view_stride;
+    v->ready = true;
+    return true;
+}
+
+/* bufferView index, read and checked against its buffer on first use: its bytes and stride. */
+static bool view(struct ao_gltf *g, size_t index, const struct ao_gltf_view **out)
+{
+    struct ao_gltf_view *v = &g->view_cache[index];
+    *out = v;
+    if (v->ready)
+        return true;
+    char where[64];
+    snprintf(where, sizeof where, "bufferView %zu", index);
+    json_object *json = json_object_array_get_idx(g->views, index);
+    json_object *ext = ao_gltf_member(ao_gltf_member(json, "extensions"), "EXT_meshopt_compression");
+    if (ext)
+        return meshopt_view(g, index, json, ext, v);
+    uint64_t offset, length, stride;
+    size_t buffer_index;
+    const struct ao_gltf_buffer *b;
+    if (!ao_gltf_index(g, json, "buffer", g->buffer_count, where, &buffer_index) ||
+        !ao_gltf_integer(g, json, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, where, &offset) ||
+        !ao_gltf_integer(g, json, "byteLength", true, 0, AO_GLTF_MAX_INTEGER, where, &length) ||
+        !ao_gltf_integer(g, json, "byteStride", false, 0, 252, where, &stride) ||
+        !buffer(g, buffer_index, false, &b))
+        return false;
+    if (offset + length > b->size)
+        return ao_gltf_error(g, "%s: bytes [%llu, %llu) run past buffer %zu (%zu bytes)", where,
+                          (unsigned long long)offset, (unsigned long long)(offset + length), buffer_index,
+                          b->size);
+    if (!buffer(g, buffer_index, true, &b))
+        return false;
+    v->data = b->data + offset;
+    v->length = (size_t)length;
+    v->stride = (size_t)stride;
+    v->ready = true;
+    return true;
+}
+
+/* ------------------------------------------------------------------ accessors */
+
+/* count elements of element bytes from byte offset of bufferView index, stride bytes apart (0:
+ * packed), checked to lie inside the view; where and what name them in messages. */
+static bool view_elements(struct ao_gltf *g, size_t index, uint64_t offset, uint64_t count, size_t element,
+                          bool strided, const char *where, const unsigned char **first, size_t *stride)
+{
+    const struct ao_gltf_view *v;
+    if (!view(g, index, &v))
+        return false;
+    uint64_t step = strided && v->stride ? v->stride : element;
+    if (step < element)
+        return ao_gltf_error(g, "bufferView %zu: byteStride %llu is smaller than an element (%zu bytes)", index,
+                             (unsigned long long)step, element);
+    /* The last element ends inside the view: offset + step * (count - 1) + element. */
+    uint64_t end = offset + step * (count - 1) + element;
+    if (end > v->length)
+        return ao_gltf_error(g, "%s: %llu elements from byte %llu need %llu bytes of bufferView %zu, which has %zu",
+                             where, (unsigned long long)count, (unsigned long long)offset, (unsigned long long)end,
+                             index, v->length);
+    *first = v->data + offset;
+    *stride = (size_t)step;
+    return true;
+}
+
+/* The accessor's elements gathered into memory of their own (packed, element bytes each), charged
+ * to the budget: a copy of those of its bufferView, or zeros without one, with the sparse entries,
+ * if any, written over them. Each sparse index is checked against the count. */
+static bool gather(struct ao_gltf *g, size_t i, json_object *a, const char *where, uint64_t count, size_t element,
+                   const struct ao_gltf_elements *base)
+{
+    char what[128];
+    snprintf(what, sizeof what, "%s: its %llu values", where, (unsigned long long)count);
+    if (!ao_gltf_take(g, count * element, what))
+        return false;
+    unsigned char *dense = calloc((size_t)count, element);
+    if (!dense)
+        return ao_load_out_of_memory(g->path);
+    g->gathered[i] = dense;
+    for (size_t k = 0; base && k < count; k++)
+        memcpy(dense + k * element, base->first + k * base->stride, element);
+    json_object *sparse = ao_gltf_member(a, "sparse");
+    if (!sparse)
+        return true;
+
+    /* sparse: count entries; indices (unsigned integers) and values, each in a bufferView. */
+    char sparse_where[128];
+    snprintf(sparse_where, sizeof sparse_where, "%s sparse", where);
+    json_object *indices = ao_gltf_member(sparse, "indices"), *values = ao_gltf_member(sparse, "values");
+    uint64_t entries, index_type, index_offset, value_offset;
+    if (!json_object_is_type(indices, json_type_object) || !json_object_is_type(values, json_type_object))
+        return ao_gltf_error(g, "%s: no 'indices' and 'values' objects", sparse_where);
+    size_t index_view, value_view, index_stride, value_stride;
+    const unsigned char *index_first, *value_first;
+    if (!ao_gltf_integer(g, sparse, "count", true, 0, (double)UINT32_MAX, sparse_where, &entries) ||
+        !ao_gltf_integer(g, indices, "componentType", true, 0, AO_GLTF_MAX_INTEGER, sparse_where, &index_type) ||
+        !ao_gltf_integer(g, indices, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, sparse_where, &index_offset) ||
+        !ao_gltf_index(g, indices, "bufferView", ao_gltf_length(g->views), sparse_where, &index_view) ||
+        !ao_gltf_integer(g, values, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, sparse_where, &value_offset) ||
+        !ao_gltf_index(g, values, "bufferView", ao_gltf_length(g->views), sparse_where, &value_view))
+        return false;
+    if (entries == 0)
+        return ao_gltf_error(g, "%s: count is 0", sparse_where);
+    if (index_type != AO_QUANTIZE_UNSIGNED_BYTE && index_type != AO_QUANTIZE_UNSIGNED_SHORT &&
+        index_type != AO_QUANTIZE_UNSIGNED_INT)
+        return ao_gltf_error(g, "%s: indices' componentType %llu; they must be unsigned byte, short or int",
+                             sparse_where, (unsigned long long)index_type);
+    struct ao_gltf_elements at_list = {.component_type = (int)index_type};
+    snprintf(what, sizeof what, "%s sparse indices", where);
+    if (!view_elements(g, index_view, index_offset, entries, ao_quantize_size((int)index_type), false, what,
+                       &index_first, &index_stride))
+        return false;
+    snprintf(what, sizeof what, "%s sparse values", where);
+    if (!view_elements(g, value_view, value_offset, entries, element, false, what, &value_first, &value_stride))
+        return false;
+    at_list.first = index_first;
+    at_list.stride = index_stride;
+    for (size_t k = 0; k < entries; k++) {
+        uint32_t at = ao_gltf_index_at(&at_list, k);
+        if (at >= count)
+            return ao_gltf_error(g, "%s: index %u at %zu is out of range (%llu elements)", sparse_where, at, k,
+                                 (unsigned long long)count);
+        memcpy(dense + (size_t)at * element, value_first + k * value_stride, element);
+    }
+    return true;
+}
+
+bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *use, struct ao_gltf_elements *out)
+{
+    const char *type = attribute ? "VEC3" : "SCALAR";
+    char where[96];
+    snprintf(where, sizeof where, "accessor %zu (%s)", i, use);
+    json_object *a = json_object_array_get_idx(g->accessors, i);
+    json_object *type_json = ao_gltf_member(a, "type");
+    json_object *normalized = ao_gltf_member(a, "normalized");
+    bool has_view = ao_gltf_member(a, "bufferView") != NULL, sparse = ao_gltf_member(a, "sparse") != NULL;
+    uint64_t component, count, offset;
+    size_t view_index = 0;
+    if (!json_object_is_type(type_json, json_type_string) ||
+        strcmp(json_object_get_string(type_json), type) != 0)
+        return ao_gltf_error(g, "%s: type must be %s", where, type);
+    if (!ao_gltf_integer(g, a, "componentType", true, 0, AO_GLTF_MAX_INTEGER, where, &component) ||
+        !ao_gltf_integer(g, a, "count", true, 0, (double)UINT32_MAX, where, &count) ||
+        !ao_gltf_integer(g, a, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, where, &offset) ||
+        (has_view && !ao_gltf_index(g, a, "bufferView", ao_gltf_length(g->views), where, &view_index)))
+        return false;
+    /* Positions and normals: float, or (KHR_mesh_quantization) 8- or 16-bit integers, normalized
+     * or not; indices: unsigned integers. */
+    bool is_index = component == AO_QUANTIZE_UNSIGNED_BYTE || component == AO_QUANTIZE_UNSIGNED_SHORT ||
+                    component == AO_QUANTIZE_UNSIGNED_INT;
+    bool is_attribute = component != AO_QUANTIZE_UNSIGNED_INT && ao_quantize_size((int)component) > 0;
+    if (attribute ? !is_attribute : !is_index)
+        return ao_gltf_error(g, "%s: componentType %llu; %s", where, (unsigned long long)component,
+                          attribute ? "positions and normals must be float (5126), or byte, unsigned byte, short "
+                                      "or unsigned short (5120 to 5123, KHR_mesh_quantization)"
+                                    : "indices must be unsigned byte, short or int");
+    if (normalized && !json_object_is_type(normalized, json_type_boolean))
+        return ao_gltf_error(g, "%s: 'normalized' is not true or false", where);
+    if (count == 0)
+        return ao_gltf_error(g, "%s: count is 0", where);
+    size_t size = ao_quantize_size((int)component), element = (attribute ? 3 : 1) * size;
+    *out = (struct ao_gltf_elements){NULL, element, (size_t)count, (int)component, size,
+                                     normalized && json_object_get_boolean(normalized)};
+    if (has_view && !view_elements(g, view_index, offset, count, element, true, where, &out->first, &out->stride))
+        return false;
+
+    /* Without a bufferView (zeros) or with sparse entries: gathered once into memory of its own. */
+    if (has_view && !sparse)
+        return true;
+    if (!g->gathered[i] && !gather(g, i, a, where, count, element, has_view ? out : NULL))
+        return false;
+    out->first = g->gathered[i];
+    out->stride = element;
+    return true;
+}
+
+/* The attribute or indices accessor of a Draco-compressed primitive (name in attributes, or
+ * "indices" of the primitive): of the type (VEC3 of floats, or SCALAR), and its count that of the
+ * decoded data. */
+static bool draco_accessor(struct ao_gltf *g, json_object *holder, const char *name, bool attribute, uint64_t want,
+                           const char *where)
+{
+    size_t i;
+    uint64_t count, component;
+    char what[128];
+    if (!ao_gltf_index(g, holder, name, ao_gltf_length(g->accessors), where, &i))
+        return false;
+    snprintf(what, sizeof what, "accessor %zu (%s)", i, name);
+    json_object *a = json_object_array_get_idx(g->accessors, i), *type = ao_gltf_member(a, "type");
+    if (!json_object_is_type(type, json_type_string) || strcmp(json_object_get_string(type), attribute ? "VEC3" : "SCALAR"))
+        return ao_gltf_error(g, "%s: type must be %s", what, attribute ? "VEC3" : "SCALAR");
+    if (!ao_gltf_integer(g, a, "count", true, 0, AO_GLTF_MAX_INTEGER, what, &count) ||
+        !ao_gltf_integer(g, a, "componentType", true, 0, AO_GLTF_MAX_INTEGER, what, &component))
+        return false;
+    if (attribute && component != AO_QUANTIZE_FLOAT)
+        return ao_gltf_error(g, "%s: componentType %llu; with KHR_draco_mesh_compression aoview reads float (5126) "
+                             "attributes only", what, (unsigned long long)component);
+    if (count != want)
+        return ao_gltf_error(g, "%s: count %llu, but its KHR_draco_mesh_compression data decodes to %llu", what,
+                             (unsigned long long)count, (unsigned long long)want);
+    return true;
+}
+
+bool ao_gltf_draco(struct ao_gltf *g, json_object *primitive, json_object *ext, bool normals, const char *where,
+                   struct ao_gltf_elements out[3])
+{
+    char at[128], why[256];
+    snprintf(at, sizeof at, "%s (KHR_draco_mesh_compression)", where);
+    json_object *attributes = ao_gltf_member(ext, "attributes");
+    size_t index;
+    uint64_t position_id, normal_id = 0;
+    if (!ao_gltf_index(g, ext, "bufferView", ao_gltf_length(g->views), at, &index) ||
+        !ao_gltf_integer(g, attributes, "POSITION", true, 0, UINT32_MAX, at, &position_id) ||
+        (normals && !ao_gltf_integer(g, attributes, "NORMAL", true, 0, UINT32_MAX, at, &normal_id)))
+        return false;
+
+    /* Decoded once per bufferView, within what the budget has left; then the arrays are charged. */
+    struct ao_gltf_draco *d = &g->draco[index];
+    int64_t want_normal = normals ? (int64_t)normal_id : -1;
+    if (d->done && (d->position_id != (int64_t)position_id || d->normal_id != want_normal))
+        return ao_gltf_error(g, "%s: bufferView %zu is decoded for other attribute ids by another primitive", at,
+                             index);
+    if (!d->done) {
+        const struct ao_gltf_view *v;
+        bool over = false;
+        if (!view(g, index, &v))
+            return false;
+        uint64_t left = g->budget->limit - g->budget->used;
+        if (!ao_draco_decode(v->data, v->length, (int64_t)position_id, want_normal, left, &d->mesh, &over, why,
+                             sizeof why))
+            return over ? ao_gltf_error(g, "%s: decoding it would take more than the %llu bytes left of the scene "
+                                        "budget (raise it with --scene-budget)", at, (unsigned long long)left)
+                        : ao_gltf_error(g, "%s: %s", at, why);
+        d->done = true;
+        d->position_id = (int64_t)position_id;
+        d->normal_id = want_normal;
+        snprintf(why, sizeof why, "%s: its %zu points and %zu triangles", at, d->mesh.point_count,
+                 d->mesh.face_count);
+        uint64_t bytes = (uint64_t)d->mesh.point_count * (normals ? 24 : 12) + (uint64_t)d->mesh.face_count * 12;
+        if (!ao_gltf_take(g, bytes, why))
+            return false;
+    }
+    if (!draco_accessor(g, ao_gltf_member(primitive, "attributes"), "POSITION", true, d->mesh.point_count, at) ||
+        (normals && !draco_accessor(g, ao_gltf_member(primitive, "attributes"), "NORMAL", true, d->mesh.point_count,
+                                    at)) ||
+        (ao_gltf_member(primitive, "indices") &&
+         !draco_accessor(g, primitive, "indices", false, 3 * (uint64_t)d->mesh.face_count, at)))
+        return false;
+    out[0] = (struct ao_gltf_elements){(const unsigned char *)d->mesh.positions, 12, d->mesh.point_count,
+                                       AO_QUANTIZE_FLOAT, 4, false};
+    out[1] = (struct ao_gltf_elements){(const unsigned char *)d->mesh.normals, 12, normals ? d->mesh.point_count : 0,
+                                       AO_QUANTIZE_FLOAT, 4, false};
+    out[2] = (struct ao_gltf_elements){(const unsigned char *)d->mesh.indices, 4, 3 * d->mesh.face_count,
+                                       AO_QUANTIZE_UNSIGNED_INT, 4, false};
+    return true;
+}
+
+double ao_gltf_value(const struct ao_gltf_elements *e, size_t i, int k)
+{
+    return ao_quantize_value(e->first + i * e->stride + (size_t)k * e->component_size, e->component_type,
+                             e->normalized);
+}
+
+uint32_t ao_gltf_index_at(const struct ao_gltf_elements *e, size_t i)
+{
+    const unsigned char *p = e->first + i * e->stride;
+    return e->component_type == AO_QUANTIZE_UNSIGNED_INT ? le32(p)
+           : e->component_type == AO_QUANTIZE_UNSIGNED_SHORT ? (uint32_t)(p[0] | p[1] << 8) : p[0];
+}
+
+/* ------------------------------------------------------------------ loading and freeing */
+
+bool ao_gltf_begin_data(struct ao_gltf *g)
+{
+    size_t views = ao_gltf_length(g->views);
+    g->buffers = calloc(g->buffer_count ? g->buffer_count : 1, sizeof *g->buffers);
+    g->view_cache = calloc(views ? views : 1, sizeof *g->view_cache);
+    g->gathered = calloc(ao_gltf_length(g->accessors) + 1, sizeof *g->gathered);
+    g->draco = calloc(views ? views : 1, sizeof *g->draco);
+    return (g->buffers && g->view_cache && g->gathered && g->draco) || ao_load_out_of_memory(g->path);
+}
+
+void ao_gltf_note(struct ao_gltf *g, const char *format, ...)
+{
+    size_t used = strlen(g->note);
+    if (used + 4 >= sizeof g->note)
+        return;
+    if (used)
+        used += (size_t)snprintf(g->note + used, sizeof g->note - used, "; ");
+    va_list args;
+    va_start(args, format);
+    if (vsnprintf(g->note + used, sizeof g->note - used, format, args) < 0)
+        g->note[used] = '\0';
+    va_end(args);
+}
+
+void ao_gltf_free_data(struct ao_gltf *g)
+{
+    for (size_t i = 0; i < g->buffer_count && g->buffers; i++)
+        free(g->buffers[i].owned);
+    free(g->buffers);
+    for (size_t i = 0; i < ao_gltf_length(g->views) && g->view_cache; i++)
+        free(g->view_cache[i].owned);
+    free(g->view_cache);
+    for (size_t i = 0; i < ao_gltf_length(g->accessors) && g->gathered; i++)
+        free(g->gathered[i]);
+    free(g->gathered);
+    for (size_t i = 0; i < ao_gltf_length(g->views) && g->draco; i++)
+        ao_draco_free(&g->draco[i].mesh);
+    free(g->draco);
+}
