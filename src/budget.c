@@ -33,6 +33,14 @@ uint64_t ao_budget_mesh(uint64_t triangles, uint64_t vertices)
     return triangles * AO_BUDGET_TRIANGLE + vertices * AO_BUDGET_VERTEX;
 }
 
+uint64_t ao_budget_model(uint64_t triangles, uint64_t vertices, uint64_t placements)
+{
+    uint64_t mesh = ao_budget_mesh(triangles, vertices);
+    if (mesh == UINT64_MAX || placements > UINT64_MAX / 4 / AO_BUDGET_INSTANCE)
+        return UINT64_MAX;
+    return mesh + placements * AO_BUDGET_INSTANCE;
+}
+
 /* bytes in binary units with one decimal, "512.0 MiB", "4.9 GiB"; below 1 KiB, exact. */
 static void format_size(uint64_t bytes, char *out, size_t size)
 {

@@ -13,9 +13,11 @@
 #define AO_BUDGET_DEFAULT ((uint64_t)1 << 30)
 
 /* What each element is charged, in bytes: peak memory per triangle and per vertex through loading,
- * the scene's arrays and Embree's BVH (measured: 114 and 55, docs/reliability.md), and per glTF
- * node (its world matrix, parent, flags and stack slot: 146; charged with its JSON object). */
-enum { AO_BUDGET_TRIANGLE = 120, AO_BUDGET_VERTEX = 60, AO_BUDGET_NODE = 160 };
+ * the scene's arrays and Embree's BVH (measured: 114 and 55, docs/reliability.md); per glTF node
+ * (its world matrix, parent, depth, flags and stack slot: 150; charged with its JSON object); per
+ * placement of a mesh that the scene instances (the placement, the scene's instance and Embree's
+ * instance geometry and its share of the top-level BVH: measured in docs/reliability.md). */
+enum { AO_BUDGET_TRIANGLE = 120, AO_BUDGET_VERTEX = 60, AO_BUDGET_NODE = 160, AO_BUDGET_INSTANCE = 512 };
 
 /* A budget: its limit and what is charged now (never more than the limit). The caller owns it. */
 struct ao_budget {
@@ -33,6 +35,10 @@ void ao_budget_give(struct ao_budget *budget, uint64_t bytes);
 
 /* The charge for a mesh of so many triangles and vertices; UINT64_MAX where it overflows. */
 uint64_t ao_budget_mesh(uint64_t triangles, uint64_t vertices);
+
+/* The charge for unique meshes of so many triangles and vertices placed so many times in all;
+ * UINT64_MAX where it overflows. */
+uint64_t ao_budget_model(uint64_t triangles, uint64_t vertices, uint64_t placements);
 
 /* Writes why bytes do not fit, for a one-line message: "need about 4.9 GiB, more than the 1.0 GiB
  * left of the scene budget (raise it with --scene-budget)"; exact byte counts where the two would

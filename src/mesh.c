@@ -128,9 +128,19 @@ static bool fill_lacking_normals(struct ao_mesh *mesh, const bool *lacking, cons
     return true;
 }
 
-/* Common end of both loaders: drops degenerate triangles, refuses a mesh without triangles and
- * computes the normals the file did not give (all when mesh->normals is NULL, else those
- * flagged in lacking, which may be NULL). */
+bool ao_load_finish_mesh(struct ao_mesh *mesh, const char *path, const bool *lacking)
+{
+    drop_degenerate(mesh);
+    if (mesh->triangle_count == 0)
+        return true;
+    if (!mesh->normals)
+        return compute_all_normals(mesh) || ao_load_out_of_memory(path);
+    return lacking ? fill_lacking_normals(mesh, lacking, path) : true;
+}
+
+/* Common end of the single-mesh loaders: drops degenerate triangles, refuses a mesh without
+ * triangles and computes the normals the file did not give (all when mesh->normals is NULL, else
+ * those flagged in lacking, which may be NULL). */
 bool ao_load_finish(struct ao_mesh *mesh, const char *path, const bool *lacking)
 {
     drop_degenerate(mesh);
@@ -139,40 +149,39 @@ bool ao_load_finish(struct ao_mesh *mesh, const char *path, const bool *lacking)
                        mesh->degenerate_count);
         return false;
     }
-    if (!mesh->normals)
-        return compute_all_normals(mesh) || ao_load_out_of_memory(path);
-    return lacking ? fill_lacking_normals(mesh, lacking, path) : true;
+    return ao_load_finish_mesh(mesh, path, lacking);
 }
 
 /* ------------------------------------------------------------------ entry points */
 
-/* The formats by extension (any case). */
+/* The formats by extension (any case): a loader of one mesh, or of a model (several meshes placed). */
 static const struct {
     const char *extension;
     ao_load_format *load;
+    ao_load_model_format *load_model;
 } formats[] = {
-    {".obj", ao_load_obj},
-    {".ply", ao_load_ply},
-    {".stl", ao_load_stl},
-    {".gltf", ao_load_gltf},
-    {".glb", ao_load_gltf},
+    {".obj", ao_load_obj, NULL},
+    {".ply", ao_load_ply, NULL},
+    {".stl", ao_load_stl, NULL},
+    {".gltf", NULL, ao_load_gltf},
+    {".glb", NULL, ao_load_gltf},
 };
 
-/* The loader for path's extension, or NULL. */
-static ao_load_format *loader_for(const char *path)
+/* The format of path's extension, or -1. */
+static int format_of(const char *path)
 {
     const char *dot = strrchr(path, '.');
     if (!dot || strchr(dot, '/'))
-        return NULL;
+        return -1;
     for (size_t i = 0; i < sizeof formats / sizeof formats[0]; i++)
         if (strcasecmp(dot, formats[i].extension) == 0)
-            return formats[i].load;
-    return NULL;
+            return (int)i;
+    return -1;
 }
 
 bool ao_mesh_is_mesh_path(const char *path)
 {
-    return loader_for(path) != NULL;
+    return format_of(path) >= 0;
 }
 
 bool ao_mesh_load(struct ao_mesh *mesh, const char *path)
@@ -181,21 +190,125 @@ bool ao_mesh_load(struct ao_mesh *mesh, const char *path)
     return ao_mesh_load_budget(mesh, path, &budget);
 }
 
-bool ao_mesh_load_budget(struct ao_mesh *mesh, const char *path, struct ao_budget *budget)
+/* One mesh placed once by the identity: what OBJ, PLY and STL files hold, as a model. */
+static bool load_single(ao_load_format *load, struct ao_model *model, const char *path, const char *text,
+                        size_t size, struct ao_budget *budget)
 {
-    memset(mesh, 0, sizeof *mesh);
-    ao_load_format *load = loader_for(path);
+    model->meshes = calloc(1, sizeof *model->meshes);
+    model->placements = calloc(1, sizeof *model->placements);
+    if (!model->meshes || !model->placements)
+        return ao_load_out_of_memory(path);
+    model->mesh_count = model->placement_count = 1;
+    model->placements[0].to_model = ao_affine_identity();
+    if (!load(&model->meshes[0], path, text, size, budget))
+        return false;
+    model->degenerate_count = model->meshes[0].degenerate_count;
+    snprintf(model->note, sizeof model->note, "%s", model->meshes[0].note);
+    return true;
+}
+
+bool ao_model_load_budget(struct ao_model *model, const char *path, struct ao_budget *budget)
+{
+    memset(model, 0, sizeof *model);
+    int format = format_of(path);
     char *text;
     size_t size;
-    if (!load) {
+    if (format < 0) {
         ao_load_report(path, 0, "unknown mesh format; expected .obj, .ply, .stl, .gltf or .glb");
         return false;
     }
     if (!ao_file_read_budget(path, budget, &text, &size))
         return false;
-    bool ok = load(mesh, path, text, size, budget);
+    bool ok = formats[format].load_model ? formats[format].load_model(model, path, text, size, budget)
+                                         : load_single(formats[format].load, model, path, text, size, budget);
     free(text);
     ao_budget_give(budget, (uint64_t)size + 1);
+    if (!ok)
+        ao_model_finish(model);
+    return ok;
+}
+
+void ao_model_finish(struct ao_model *model)
+{
+    for (size_t i = 0; model->meshes && i < model->mesh_count; i++)
+        ao_mesh_finish(&model->meshes[i]);
+    free(model->meshes);
+    free(model->placements);
+    memset(model, 0, sizeof *model);
+}
+
+/* Every placement of the model applied, into one mesh: positions in double, narrowed once; normals
+ * through ao_affine_normals; triangles of a mirroring placement turned round. False (reported) when
+ * memory or 2^32 vertices run out, or a position leaves float's range. */
+static bool flatten(const struct ao_model *model, struct ao_mesh *out, const char *path,
+                    const struct ao_budget *budget)
+{
+    size_t vertices = 0, triangles = 0;
+    for (size_t i = 0; i < model->placement_count; i++) {
+        const struct ao_mesh *m = &model->meshes[model->placements[i].mesh];
+        vertices += m->vertex_count;
+        triangles += m->triangle_count;
+        if (vertices >= AO_LOAD_NO_INDEX || triangles > SIZE_MAX / 12) {
+            ao_load_report(path, 0, "more than %u vertices once its placements are applied", AO_LOAD_NO_INDEX - 1);
+            return false;
+        }
+    }
+    if (!ao_load_fits(budget, triangles, vertices, path, 0))
+        return false;
+    out->positions = malloc((vertices ? vertices : 1) * sizeof *out->positions);
+    out->normals = malloc((vertices ? vertices : 1) * sizeof *out->normals);
+    out->indices = malloc((triangles ? 3 * triangles : 1) * sizeof *out->indices);
+    if (!out->positions || !out->normals || !out->indices)
+        return ao_load_out_of_memory(path);
+    for (size_t i = 0; i < model->placement_count; i++) {
+        const struct ao_placement *p = &model->placements[i];
+        const struct ao_mesh *m = &model->meshes[p->mesh];
+        double n[9], q[3];
+        bool mirror = ao_affine_normals(&p->to_model, n) < 0.0;
+        uint32_t base = (uint32_t)out->vertex_count;
+        for (size_t v = 0; v < m->vertex_count; v++) {
+            struct ao_vec3 a = m->positions[v], b = m->normals[v];
+            ao_affine_point(&p->to_model, a.x, a.y, a.z, q);
+            struct ao_vec3 *o = &out->positions[base + v];
+            *o = ao_vec3_make((float)q[0], (float)q[1], (float)q[2]);
+            if (!ao_vec3_is_finite(*o)) {
+                ao_load_report(path, 0, "mesh %zu: vertex %zu is not a finite float once placed", p->mesh, v);
+                return false;
+            }
+            out->normals[base + v] = ao_load_unit(n[0] * b.x + n[3] * b.y + n[6] * b.z, n[1] * b.x + n[4] * b.y + n[7] * b.z,
+                                                  n[2] * b.x + n[5] * b.y + n[8] * b.z);
+        }
+        uint32_t *t = out->indices + 3 * out->triangle_count;
+        for (size_t k = 0; k < m->triangle_count; k++) {
+            t[3 * k] = base + m->indices[3 * k];
+            t[3 * k + 1] = base + m->indices[3 * k + (mirror ? 2 : 1)];
+            t[3 * k + 2] = base + m->indices[3 * k + (mirror ? 1 : 2)];
+        }
+        out->vertex_count += m->vertex_count;
+        out->triangle_count += m->triangle_count;
+    }
+    return true;
+}
+
+bool ao_mesh_load_budget(struct ao_mesh *mesh, const char *path, struct ao_budget *budget)
+{
+    memset(mesh, 0, sizeof *mesh);
+    struct ao_model model;
+    if (!ao_model_load_budget(&model, path, budget))
+        return false;
+    bool ok;
+    if (model.mesh_count == 1 && model.placement_count == 1 && ao_affine_is_identity(&model.placements[0].to_model)) {
+        *mesh = model.meshes[0];   /* taken whole */
+        model.meshes[0] = (struct ao_mesh){0};
+        ok = true;
+    } else {
+        ok = flatten(&model, mesh, path, budget);
+    }
+    mesh->degenerate_count = model.degenerate_count;
+    mesh->point_primitives = model.point_primitives;
+    mesh->line_primitives = model.line_primitives;
+    snprintf(mesh->note, sizeof mesh->note, "%s", model.note);
+    ao_model_finish(&model);
     if (!ok)
         ao_mesh_finish(mesh);
     return ok;

@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "affine.h"
 #include "budget.h"
 #include "vec3.h"
 
@@ -28,11 +29,35 @@ struct ao_mesh {
                                        ignored (...)"); "" when nothing */
 };
 
+/* Where a model places one of its meshes: model point = to_model (mesh point). */
+struct ao_placement {
+    size_t mesh;                /* index into the model's meshes */
+    struct ao_affine to_model;
+};
+
+/* What a mesh file holds: its meshes, each in its own frame, and where it places them. OBJ, PLY and
+ * STL hold one mesh placed once by the identity; a glTF file one mesh per glTF mesh that its scene's
+ * nodes name (that mesh's triangle primitives together), placed by every node naming it under the
+ * node's world matrix. Nothing is flattened: a mesh under a thousand nodes is held once. The caller
+ * owns it (ao_model_load_budget fills it, ao_model_finish frees it). */
+struct ao_model {
+    struct ao_mesh *meshes;
+    size_t mesh_count;
+    struct ao_placement *placements;
+    size_t placement_count;
+    size_t degenerate_count;    /* zero-area triangles skipped, all meshes */
+    size_t point_primitives;    /* glTF primitives of points skipped, once per placement */
+    size_t line_primitives;     /* glTF primitives of lines skipped, once per placement */
+    char note[AO_MESH_NOTE_SIZE];   /* as ao_mesh's */
+};
+
 /* True when path's extension names a mesh format ao_mesh_load reads. */
 bool ao_mesh_is_mesh_path(const char *path);
 
-/* Loads an .obj, .ply, .stl, .gltf or .glb file (chosen by extension, any case) into mesh;
- * computes vertex normals where the file has none. On failure prints one "path:line: message"
+/* Loads an .obj, .ply, .stl, .gltf or .glb file (chosen by extension, any case) into mesh, with
+ * every placement of a glTF file's meshes applied (positions in float, normals through the inverse
+ * transpose, mirrored triangles turned round: the model flattened, for tools and tests; scenes keep
+ * models as they are, scene.h); computes vertex normals where the file has none. On failure prints one "path:line: message"
  * (or "path: message") line to stderr, leaves mesh empty and returns false. Any thread. */
 bool ao_mesh_load(struct ao_mesh *mesh, const char *path);
 
@@ -40,6 +65,15 @@ bool ao_mesh_load(struct ao_mesh *mesh, const char *path);
  * read and parsed, and a mesh whose ao_budget_mesh charge does not fit what is left is refused
  * before its arrays are allocated. Nothing stays charged: the caller charges the mesh it keeps. */
 bool ao_mesh_load_budget(struct ao_mesh *mesh, const char *path, struct ao_budget *budget);
+
+/* Loads a mesh file as ao_mesh_load_budget does, into model: its unique meshes and their placements
+ * (the unique triangles and vertices and every placement charged against what budget has left
+ * before they are allocated; nothing stays charged). On failure prints one line, leaves model
+ * empty and returns false. Any thread. */
+bool ao_model_load_budget(struct ao_model *model, const char *path, struct ao_budget *budget);
+
+/* Frees what ao_model_load_budget allocated and zeroes model; accepts an empty model. */
+void ao_model_finish(struct ao_model *model);
 
 /* Recomputes mesh->normals from the triangles (angle-weighted face normals). */
 bool ao_mesh_compute_normals(struct ao_mesh *mesh);

@@ -886,6 +886,103 @@ static void test_gltf_strips_and_fans(void **state)
     }
 }
 
+/* A glTF whose mesh 0 (a strip of 202 vertices (i / 2, i % 2, 0) making 200 triangles) is named
+ * by `copies` nodes, node k translated by (2k, 0, 0), and whose mesh 1 (the same accessor) by one
+ * more node, scaled by -1 in x; returns its path. */
+static const char *placed_gltf(const char *name, int copies)
+{
+    static float p[202][3];
+    for (int i = 0; i < 202; i++)
+        p[i][0] = (float)(i / 2), p[i][1] = (float)(i % 2), p[i][2] = 0.0f;
+    size_t size = (size_t)copies * 64 + 1024;
+    char *json = malloc(size), *at = json;
+    assert_non_null(json);
+    at += sprintf(at, "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [");
+    for (int k = 0; k < copies; k++)
+        at += sprintf(at, "{\"mesh\": 0, \"translation\": [%d, 0, 0]}, ", 2 * k);
+    sprintf(at, "{\"mesh\": 1, \"scale\": [-1, 1, 1]}],\n"
+                " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"mode\": 5}]},"
+                " {\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"mode\": 5}]}],\n"
+                " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 202, \"type\": \"VEC3\"}],\n"
+                " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 2424}], \"buffers\": [{\"byteLength\": %%zu, \"uri\": \"%%s\"}]}\n");
+    const char *path = gltf_file(name, json, p, sizeof p);
+    free(json);
+    return path;
+}
+
+/* A mesh that several nodes name loads once, in its own frame, with one placement per node: the
+ * model holds 2 meshes (each glTF mesh once) and 1001 placements, and loads within a budget that
+ * holds those (what a scene keeps) where the flattened 200,200 triangles would not fit. */
+static void test_gltf_meshes_load_once(void **state)
+{
+    (void)state;
+    const char *path = placed_gltf("placed.gltf", 1000);
+    struct ao_model model;
+    struct ao_budget budget = {UINT64_MAX / 2, 0};
+    assert_true(ao_model_load_budget(&model, path, &budget));
+    assert_int_equal(budget.used, 0);
+    assert_int_equal(model.mesh_count, 2);
+    assert_int_equal(model.placement_count, 1001);
+    for (size_t m = 0; m < 2; m++) {
+        assert_int_equal(model.meshes[m].triangle_count, 200);
+        assert_int_equal(model.meshes[m].vertex_count, 202);
+        assert_vec3_near(model.meshes[m].positions[3], 1, 1, 0);   /* untransformed */
+        assert_vec3_near(model.meshes[m].normals[0], 0, 0, -1);
+    }
+    for (size_t k = 0; k < 1000; k++) {
+        struct ao_affine want = ao_affine_identity();
+        want.m[9] = 2.0 * (double)k;
+        assert_int_equal(model.placements[k].mesh, 0);
+        assert_memory_equal(&model.placements[k].to_model, &want, sizeof want);
+    }
+    assert_int_equal(model.placements[1000].mesh, 1);
+    assert_true(model.placements[1000].to_model.m[0] == -1.0);
+    ao_model_finish(&model);
+
+    /* The budget: the file, its JSON (4 MiB hold both), 400 triangles, 404 vertices and 1001 placements fit; the
+     * 200,200 triangles and 202,202 vertices flattened would need more. */
+    uint64_t unique = ao_budget_model(400, 404, 1001), flat = ao_budget_mesh(200200, 202202);
+    assert_true(flat > unique + (4 << 20));
+    budget = (struct ao_budget){unique + (4 << 20), 0};
+    assert_true(ao_model_load_budget(&model, path, &budget));
+    ao_model_finish(&model);
+    char err[1024];
+    struct ao_mesh mesh;
+    assert_false(load_within(&mesh, path, unique + (4 << 20), err, sizeof err));
+    assert_non_null(strstr(err, "placed.gltf: 200200 triangles and 202202 vertices need about"));
+}
+
+/* A node tree deeper than AO_GLTF_MAX_NODE_DEPTH (1024) is refused in one line naming the limit,
+ * without recursion (10^5 levels); one of 1024 levels loads. */
+static void test_gltf_deep_node_tree(void **state)
+{
+    (void)state;
+    float p[3][3] = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    static const int depths[2] = {1024, 100000};
+    for (int d = 0; d < 2; d++) {
+        int n = depths[d];
+        char *json = malloc((size_t)n * 40 + 1024), *at = json;
+        assert_non_null(json);
+        at += sprintf(at, "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [");
+        for (int k = 0; k + 1 < n; k++)
+            at += sprintf(at, "{\"children\": [%d]}, ", k + 1);
+        sprintf(at, "{\"mesh\": 0}],\n"
+                    " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}}]}],\n"
+                    " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}],\n"
+                    " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}], \"buffers\": [{\"byteLength\": %%zu, \"uri\": \"%%s\"}]}\n");
+        const char *path = gltf_file(d ? "deep.gltf" : "deep_enough.gltf", json, p, sizeof p);
+        free(json);
+        if (d) {
+            expect_failure(path, ": ", "node 1024 lies more than 1024 nodes deep, the deepest node tree aoview reads");
+        } else {
+            struct ao_mesh mesh;
+            load_ok(&mesh, path);
+            assert_int_equal(mesh.triangle_count, 1);
+            ao_mesh_finish(&mesh);
+        }
+    }
+}
+
 /* A one-triangle glTF whose top level also holds members (e.g. "\"extensionsRequired\": [...]"). */
 static const char *triangle_gltf(const char *name, const char *members)
 {
@@ -1613,6 +1710,8 @@ int main(void)
         cmocka_unit_test(test_stl_ascii),
         cmocka_unit_test(test_stl_binary),
         cmocka_unit_test(test_gltf_nodes),
+        cmocka_unit_test(test_gltf_meshes_load_once),
+        cmocka_unit_test(test_gltf_deep_node_tree),
         cmocka_unit_test(test_gltf_no_scene),
         cmocka_unit_test(test_gltf_rotation_of_any_length),
         cmocka_unit_test(test_gltf_huge_matrix_gives_finite_normals),

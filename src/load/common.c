@@ -72,6 +72,19 @@ bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t v
     return false;
 }
 
+bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements,
+                        const char *path)
+{
+    uint64_t charge = ao_budget_model(triangles, vertices, placements);
+    if (ao_budget_fits(budget, charge))
+        return true;
+    char why[200];
+    ao_budget_explain(budget, charge, why, sizeof why);
+    ao_load_report(path, 0, "%llu triangles and %llu vertices placed %llu times %s", (unsigned long long)triangles,
+                   (unsigned long long)vertices, (unsigned long long)placements, why);
+    return false;
+}
+
 /* Reports an allocation failure; returns false for the caller to pass on. */
 bool ao_load_out_of_memory(const char *path)
 {

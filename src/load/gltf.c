@@ -13,11 +13,13 @@
  * a bufferView against its buffer, an accessor's last element against its bufferView, indices
  * (sparse ones too) against their count. Integers are read only up to 2^53, so that sums of three
  * of them and products of one with a stride (at most 252) stay far below 2^64. Nodes must form
- * trees: a node with two parents, or a cycle, is refused before anything is traversed. Whatever
+ * trees: a node with two parents, or a cycle, is refused before anything is traversed, and so is a
+ * node deeper than AO_GLTF_MAX_NODE_DEPTH. Each glTF mesh that placed nodes name is read once, in
+ * its own frame, and placed by every such node (mesh.h's ao_model): nothing is flattened. Whatever
  * the load holds is charged to the scene budget before it is allocated: the JSON tree json-c will
  * build and the per-node arrays (both estimated from the text, json_cost), each buffer, each
- * accessor gathered into memory of its own, and the mesh its nodes instance, counted in a first
- * pass, so that a small file cannot demand gigabytes. */
+ * accessor gathered into memory of its own, and the meshes with their placements, counted in a
+ * first pass, so that a small file cannot demand gigabytes. */
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,6 +34,9 @@
 
 /* A node's place in the tree. */
 enum { NODE_UNSEEN, NODE_WALKING, NODE_CHECKED };
+
+/* A mesh_size's model index once the mesh is built and found to hold no triangle. */
+#define DROPPED (SIZE_MAX - 1)
 
 /* ------------------------------------------------------------------ nodes */
 
@@ -141,29 +146,7 @@ static bool check_tree(struct ao_gltf *g, size_t count)
     return ok;
 }
 
-/* ------------------------------------------------------------------ instances */
-
-/* The cofactor matrix C(r, c) of the 3x3 part of the column-major m (M(r, c) = m[4c + r]) into cof,
- * which maps normals as M's inverse transpose does up to the factor det M, and a number with the
- * sign of det M (negative where M mirrors). Computed from M divided by its largest entry: neither
- * direction nor sign depends on that scale, and no product of two entries can then overflow
- * (a finite but huge matrix would give inf - inf = NaN normals) or vanish together. */
-static double normal_matrix(const double m[16], double cof[3][3])
-{
-    double big = 0.0, a[9];
-    for (int c = 0; c < 3; c++)
-        for (int r = 0; r < 3; r++)
-            big = fmax(big, fabs(m[4 * c + r]));
-    for (int c = 0; c < 3; c++)
-        for (int r = 0; r < 3; r++)
-            a[3 * c + r] = big > 0.0 ? m[4 * c + r] / big : 0.0;
-    for (int r = 0; r < 3; r++)
-        for (int c = 0; c < 3; c++) {
-            int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
-            cof[r][c] = a[3 * c1 + r1] * a[3 * c2 + r2] - a[3 * c2 + r1] * a[3 * c1 + r2];
-        }
-    return a[0] * cof[0][0] + a[3] * cof[0][1] + a[6] * cof[0][2];
-}
+/* ------------------------------------------------------------------ meshes */
 
 /* The glTF primitive modes aoview draws as triangles. */
 enum { MODE_TRIANGLES = 4, MODE_TRIANGLE_STRIP = 5, MODE_TRIANGLE_FAN = 6 };
@@ -189,27 +172,23 @@ static void triangle_corners(uint64_t mode, size_t k, size_t out[3])
     }
 }
 
-/* Appends a primitive's vertices under the world matrix m: p' = M (p, 1); n' along M's inverse
- * transpose times n (cof, sign: normal_matrix), or flagged as lacking when normals is NULL. */
+/* Appends a primitive's vertices to the mesh being built, in the mesh's own frame: positions as
+ * the file gives them, normals made unit, or flagged as lacking when normals is NULL. */
 static bool add_vertices(struct ao_gltf *g, const struct ao_gltf_elements *positions,
-                         const struct ao_gltf_elements *normals, const double m[16], double cof[3][3],
-                         double sign, const char *where)
+                         const struct ao_gltf_elements *normals, const char *where)
 {
-    if (g->vertices + positions->count >= AO_LOAD_NO_INDEX)
-        return ao_gltf_error(g, "more than %u vertices in all", AO_LOAD_NO_INDEX - 1);
+    if (g->positions.count + positions->count >= AO_LOAD_NO_INDEX)
+        return ao_gltf_error(g, "%s: more than %u vertices in one mesh", where, AO_LOAD_NO_INDEX - 1);
     struct ao_vec3 *p = ao_load_append(&g->positions, positions->count);
     struct ao_vec3 *n = ao_load_append(&g->normals, positions->count);
     bool *lacking = ao_load_append(&g->lacking, positions->count);
     if (!p || !n || !lacking)
         return ao_load_out_of_memory(g->path);
     for (size_t i = 0; i < positions->count; i++) {
-        double x = ao_gltf_value(positions, i, 0), y = ao_gltf_value(positions, i, 1);
-        double z = ao_gltf_value(positions, i, 2);
-        p[i] = ao_vec3_make((float)(m[0] * x + m[4] * y + m[8] * z + m[12]),
-                            (float)(m[1] * x + m[5] * y + m[9] * z + m[13]),
-                            (float)(m[2] * x + m[6] * y + m[10] * z + m[14]));
+        p[i] = ao_vec3_make((float)ao_gltf_value(positions, i, 0), (float)ao_gltf_value(positions, i, 1),
+                            (float)ao_gltf_value(positions, i, 2));
         if (!ao_vec3_is_finite(p[i]))
-            return ao_gltf_error(g, "%s: vertex %zu is not a finite float once transformed", where, i);
+            return ao_gltf_error(g, "%s: vertex %zu is not a finite float", where, i);
         lacking[i] = !normals;
         n[i] = ao_vec3_make(0.0f, 0.0f, 0.0f);
         if (normals) {
@@ -217,23 +196,18 @@ static bool add_vertices(struct ao_gltf *g, const struct ao_gltf_elements *posit
             double d = ao_gltf_value(normals, i, 2);
             if (!isfinite(a) || !isfinite(b) || !isfinite(d))
                 return ao_gltf_error(g, "%s: normal %zu is not finite", where, i);
-            double t[3];
-            for (int r = 0; r < 3; r++)
-                t[r] = sign * (cof[r][0] * a + cof[r][1] * b + cof[r][2] * d);
-            n[i] = ao_load_unit(t[0], t[1], t[2]);
+            n[i] = ao_load_unit(a, b, d);
         }
     }
     g->lacking_count += normals ? 0 : positions->count;
-    g->vertices += positions->count;
     return true;
 }
 
-/* Appends one primitive of triangles (mode 4), a strip (5) or a fan (6) under the world matrix m:
- * positions and normals transformed (or shared with an earlier primitive of the same placed mesh),
- * triangles offset (and turned round where m mirrors). With count_only, adds its size to the
- * totals. */
-static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mode, const double m[16],
-                          const char *where, bool count_only)
+/* Appends one primitive of triangles (mode 4), a strip (5) or a fan (6) to the mesh being built:
+ * its vertices (or those of an earlier primitive of the same mesh), its triangles offset. With
+ * count_only, adds its size to the totals. */
+static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mode, const char *where,
+                          bool count_only)
 {
     json_object *attributes = ao_gltf_member(primitive, "attributes");
     json_object *draco = ao_gltf_member(ao_gltf_member(primitive, "extensions"), "KHR_draco_mesh_compression");
@@ -267,7 +241,7 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
         return ao_gltf_error(g, "%s: %zu %s, not a whole number of triangles", where, corners,
                           indexed ? "indices" : "vertices");
 
-    /* Primitives of one placed mesh that name the same POSITION and NORMAL accessors share their
+    /* Primitives of one mesh that name the same POSITION and NORMAL accessors share their
      * vertices, as the file means (normals computed across them are then smooth, and a mesh split
      * into thousands of fans does not copy its vertices thousands of times): the first adds them,
      * the others reuse them. */
@@ -281,10 +255,8 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
             *shared = (struct shared){g->instance, normal_key, 0};
         return true;
     }
-    double cof[3][3];
-    double det = normal_matrix(m, cof), sign = det < 0.0 ? -1.0 : 1.0;
     uint32_t base = reuse ? shared->base : (uint32_t)g->positions.count;
-    if (!reuse && !add_vertices(g, &positions, has_normals ? &normals : NULL, m, cof, sign, where))
+    if (!reuse && !add_vertices(g, &positions, has_normals ? &normals : NULL, where))
         return false;
     if (shared)
         *shared = (struct shared){g->instance, normal_key, base};
@@ -304,41 +276,24 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
         triangle_corners(mode, k, c);
         for (int j = 0; j < 3; j++)
             t[3 * k + j] = base + (indexed ? ao_gltf_index_at(&indices, c[j]) : (uint32_t)c[j]);
-        if (det < 0.0) {
-            uint32_t swap = t[3 * k + 1];
-            t[3 * k + 1] = t[3 * k + 2];
-            t[3 * k + 2] = swap;
-        }
     }
     g->triangles += triangles;
     return true;
 }
 
-/* The triangle primitives (lists, strips, fans) of node's mesh, if any, under the node's world
- * matrix; points and lines are skipped, and counted in the filling pass. With count_only, adds
- * their size to the totals and notes the modes found, walking each mesh's primitives once however
- * many nodes use it (so that a small file cannot make the count take hours). */
-static bool add_node_mesh(struct ao_gltf *g, size_t node, bool count_only)
+/* Walks the primitives of mesh: with count_only, adds the size of its triangle primitives (lists,
+ * strips, fans) to the totals and notes the modes found and its primitives of points and lines
+ * (sizes[mesh] then holds them); else appends its triangles to the mesh being built. */
+static bool walk_mesh(struct ao_gltf *g, size_t mesh, bool count_only)
 {
-    json_object *node_json = json_object_array_get_idx(g->nodes, node);
     char where[96];
-    size_t mesh, primitive_count;
     json_object *primitives;
-    snprintf(where, sizeof where, "node %zu", node);
-    if (!ao_gltf_member(node_json, "mesh"))
-        return true;
-    if (!ao_gltf_index(g, node_json, "mesh", ao_gltf_length(g->meshes), where, &mesh))
-        return false;
-    struct mesh_size *size = &g->sizes[mesh], before = {g->triangles, g->vertices, true};
-    if (count_only && size->known) {
-        g->triangles += size->triangles;
-        g->vertices += size->vertices;
-        return true;
-    }
-    g->instance++;   /* a new placement: vertices are shared among its primitives only */
+    size_t primitive_count;
+    struct mesh_size *size = &g->sizes[mesh];
+    g->instance++;   /* a new walk: vertices are shared among this mesh's primitives only */
     snprintf(where, sizeof where, "mesh %zu", mesh);
-    if (!ao_gltf_array(g, json_object_array_get_idx(g->meshes, mesh), "primitives", where,
-                      &primitives, &primitive_count))
+    if (!ao_gltf_array(g, json_object_array_get_idx(g->meshes, mesh), "primitives", where, &primitives,
+                       &primitive_count))
         return false;
     for (size_t k = 0; k < primitive_count; k++) {
         json_object *primitive = json_object_array_get_idx(primitives, k);
@@ -348,16 +303,46 @@ static bool add_node_mesh(struct ao_gltf *g, size_t node, bool count_only)
             return false;
         g->modes_found |= 1u << mode;
         if (mode < MODE_TRIANGLES) {
-            g->point_primitives += !count_only && mode == 0;
-            g->line_primitives += !count_only && mode != 0;
-        } else if (!add_primitive(g, primitive, mode, g->world[node], where, count_only)) {
+            size->points += count_only && mode == 0;
+            size->lines += count_only && mode != 0;
+        } else if (!add_primitive(g, primitive, mode, where, count_only)) {
             return false;
         }
     }
-    if (count_only)
-        *size = (struct mesh_size){g->triangles - before.triangles, g->vertices - before.vertices,
-                                   true};
     return true;
+}
+
+/* Builds glTF mesh `mesh` into the model's next mesh, in its own frame; a mesh left without
+ * triangles (all degenerate) is dropped, its placements with it. */
+static bool build_mesh(struct ao_gltf *g, size_t mesh, struct ao_load_array *meshes)
+{
+    g->lacking_count = 0;
+    if (!walk_mesh(g, mesh, false))
+        return false;
+    struct ao_mesh m = {0};
+    m.vertex_count = g->positions.count;
+    m.positions = ao_load_take(&g->positions);
+    m.triangle_count = g->indices.count / 3;
+    m.indices = ao_load_take(&g->indices);
+    bool all_lacking = g->lacking_count == m.vertex_count;
+    m.normals = ao_load_take(&g->normals);
+    if (all_lacking) {
+        free(m.normals);
+        m.normals = NULL;
+    }
+    bool *lacking = ao_load_take(&g->lacking);
+    bool ok = ao_load_finish_mesh(&m, g->path, all_lacking || !g->lacking_count ? NULL : lacking);
+    free(lacking);
+    g->degenerate_count += m.degenerate_count;
+    struct ao_mesh *slot = ok && m.triangle_count ? ao_load_append(meshes, 1) : NULL;
+    if (ok && m.triangle_count && !slot)
+        ok = ao_load_out_of_memory(g->path);
+    g->sizes[mesh].model = slot ? meshes->count - 1 : DROPPED;
+    if (slot)
+        *slot = m;
+    else
+        ao_mesh_finish(&m);
+    return ok;
 }
 
 /* The roots: the default scene's nodes, scene 0's, or every node without a parent. Each root is
@@ -393,7 +378,8 @@ static bool find_roots(struct ao_gltf *g, size_t node_count, bool *is_root)
 }
 
 /* World matrices of the roots and every node under them, parents first (the nodes form trees, so
- * each is pushed once and the stack never holds more than all of them); marks them placed. */
+ * each is pushed once and the stack never holds more than all of them); marks them placed. A node
+ * deeper than AO_GLTF_MAX_NODE_DEPTH is refused. */
 static bool place_nodes(struct ao_gltf *g, size_t node_count, const bool *is_root, bool *placed)
 {
     static const double identity[16] = {1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
@@ -410,6 +396,12 @@ static bool place_nodes(struct ao_gltf *g, size_t node_count, const bool *is_roo
         char where[64];
         double local[16];
         snprintf(where, sizeof where, "node %zu", n);
+        g->depth[n] = is_root[n] ? 1 : g->depth[g->parent[n]] + 1;
+        if (g->depth[n] > AO_GLTF_MAX_NODE_DEPTH) {
+            ok = ao_gltf_error(g, "%s lies more than %d nodes deep, the deepest node tree aoview reads", where,
+                               AO_GLTF_MAX_NODE_DEPTH);
+            break;
+        }
         ok = local_matrix(g, node, where, local);
         if (ok)
             multiply(is_root[n] ? identity : g->world[g->parent[n]], local, g->world[n]);
@@ -572,8 +564,62 @@ static bool only_points_and_lines(const struct ao_gltf *g)
                          "only triangles", list);
 }
 
-/* Everything after the JSON is parsed: arrays, buffers, the node tree, the instances. */
-static bool read_scene(struct ao_gltf *g)
+/* A placement of glTF mesh `mesh` by node `node`, found in the counting pass. */
+struct found {
+    size_t node, mesh;
+};
+
+/* The placed nodes that name a mesh, in node order, into *found (malloc'd, *count of them); each
+ * mesh counted once (validating its accessors), its primitives of points and lines once per
+ * placement. */
+static bool find_placements(struct ao_gltf *g, size_t node_count, const bool *placed, struct found **found,
+                            size_t *count)
+{
+    *count = 0;
+    for (size_t i = 0; i < node_count; i++)
+        *count += placed[i] && ao_gltf_member(json_object_array_get_idx(g->nodes, i), "mesh");
+    if (!(*found = malloc((*count ? *count : 1) * sizeof **found)))
+        return ao_load_out_of_memory(g->path);
+    size_t n = 0;
+    for (size_t i = 0; i < node_count; i++) {
+        json_object *node = json_object_array_get_idx(g->nodes, i);
+        char where[64];
+        size_t mesh;
+        if (!placed[i] || !ao_gltf_member(node, "mesh"))
+            continue;
+        snprintf(where, sizeof where, "node %zu", i);
+        if (!ao_gltf_index(g, node, "mesh", ao_gltf_length(g->meshes), where, &mesh))
+            return false;
+        struct mesh_size *size = &g->sizes[mesh];
+        if (!size->known) {
+            uint64_t triangles = g->triangles, vertices = g->vertices;
+            if (!walk_mesh(g, mesh, true))
+                return false;
+            size->triangles = g->triangles - triangles;
+            size->vertices = g->vertices - vertices;
+            size->model = SIZE_MAX;
+            size->known = true;
+        }
+        g->point_primitives += size->points;
+        g->line_primitives += size->lines;
+        (*found)[n++] = (struct found){i, mesh};
+    }
+    return true;
+}
+
+/* The placement of model mesh `mesh` by a node of world matrix w (column-major 4x4). */
+static struct ao_placement placement(size_t mesh, const double w[16])
+{
+    struct ao_placement p = {.mesh = mesh};
+    for (int c = 0; c < 4; c++)
+        for (int k = 0; k < 3; k++)
+            p.to_model.m[3 * c + k] = w[4 * c + k];
+    return p;
+}
+
+/* Everything after the JSON is parsed: arrays, buffers, the node tree, the meshes and their
+ * placements into model. */
+static bool read_scene(struct ao_gltf *g, struct ao_model *model)
 {
     size_t node_count, mesh_count, count;
     if (!check_asset(g) || !ao_gltf_array(g, g->root, "accessors", "file", &g->accessors, &count) ||
@@ -586,30 +632,49 @@ static bool read_scene(struct ao_gltf *g)
      * (json_cost) covers them. */
     g->parent = malloc((node_count ? node_count : 1) * sizeof *g->parent);
     g->world = malloc((node_count ? node_count : 1) * sizeof *g->world);
+    g->depth = malloc((node_count ? node_count : 1) * sizeof *g->depth);
     bool *flags = calloc(node_count ? 2 * node_count : 1, sizeof *flags);
     g->sizes = calloc(mesh_count ? mesh_count : 1, sizeof *g->sizes);
     g->shared = calloc(ao_gltf_length(g->accessors) + 1, sizeof *g->shared);
-    bool ok = ((g->parent && g->world && flags && g->sizes && g->shared) || ao_load_out_of_memory(g->path)) &&
+    bool ok = ((g->parent && g->world && g->depth && flags && g->sizes && g->shared) ||
+               ao_load_out_of_memory(g->path)) &&
               ao_gltf_begin_data(g);
     bool *is_root = flags, *placed = flags + node_count;
     ok = ok && check_tree(g, node_count) && find_roots(g, node_count, is_root) &&
          place_nodes(g, node_count, is_root, placed);
 
-    /* First count (validating every accessor), then refuse a mesh, as its nodes instance it,
-     * that does not fit in the budget beside what the load holds already. Then fill. */
-    for (size_t i = 0; ok && i < node_count; i++)
-        ok = !placed[i] || add_node_mesh(g, i, true);
+    /* First count the meshes the nodes place, each once (validating every accessor), and refuse
+     * them with their placements when they do not fit in the budget beside what the load holds
+     * already. Then build each mesh once, in its own frame, and place it. */
+    struct found *found = NULL;
+    size_t placements = 0;
+    ok = ok && find_placements(g, node_count, placed, &found, &placements);
     ok = ok && (g->triangles > 0 || !(g->modes_found & 0xf) || only_points_and_lines(g));
-    ok = ok && ao_load_fits(g->budget, g->triangles, g->vertices, g->path, 0);
-    g->triangles = g->vertices = 0;
-    for (size_t i = 0; ok && i < node_count; i++)
-        ok = !placed[i] || add_node_mesh(g, i, false);
+    ok = ok && ao_load_fits_model(g->budget, g->triangles, g->vertices, placements, g->path);
+    struct ao_load_array meshes = {.size = sizeof(struct ao_mesh)}, list = {.size = sizeof(struct ao_placement)};
+    struct ao_placement *slot = ok ? ao_load_append(&list, placements) : NULL;
+    ok = ok && (slot || placements == 0 || ao_load_out_of_memory(g->path));
+    size_t kept = 0;
+    for (size_t i = 0; ok && i < placements; i++) {
+        struct mesh_size *size = &g->sizes[found[i].mesh];
+        if (size->model == SIZE_MAX)
+            ok = build_mesh(g, found[i].mesh, &meshes);
+        if (ok && size->model != DROPPED)
+            slot[kept++] = placement(size->model, g->world[found[i].node]);
+    }
+    free(found);
     free(flags);
+    list.count = kept;
+    model->mesh_count = meshes.count;
+    model->meshes = ao_load_take(&meshes);
+    model->placement_count = list.count;
+    model->placements = ao_load_take(&list);
+    if (ok && model->mesh_count == 0)
+        ok = ao_gltf_error(g, "no triangles (%zu degenerate ones skipped)", g->degenerate_count);
     return ok;
 }
 
-bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size_t size,
-                  struct ao_budget *budget)
+bool ao_load_gltf(struct ao_model *model, const char *path, const char *text, size_t size, struct ao_budget *budget)
 {
     struct ao_gltf g = {
         .path = path,
@@ -623,27 +688,15 @@ bool ao_load_gltf(struct ao_mesh *mesh, const char *path, const char *text, size
     size_t json_size = size;
     bool glb = size >= 4 && memcmp(text, "glTF", 4) == 0;
     bool ok = (!glb || ao_gltf_parse_glb(&g, (const unsigned char *)text, size, &json, &json_size)) &&
-              parse_json(&g, (const char *)json, json_size) && read_scene(&g);
-    if (ok) {
-        mesh->vertex_count = g.positions.count;
-        mesh->positions = ao_load_take(&g.positions);
-        mesh->triangle_count = g.indices.count / 3;
-        mesh->point_primitives = g.point_primitives;
-        snprintf(mesh->note, sizeof mesh->note, "%s", g.note);
-        mesh->line_primitives = g.line_primitives;
-        mesh->indices = ao_load_take(&g.indices);
-        bool all_lacking = g.lacking_count == mesh->vertex_count;
-        mesh->normals = ao_load_take(&g.normals);
-        if (all_lacking) {
-            free(mesh->normals);
-            mesh->normals = NULL;
-        }
-        const bool *lacking = all_lacking || !g.lacking_count ? NULL : (const bool *)g.lacking.data;
-        ok = ao_load_finish(mesh, path, lacking);
-    }
+              parse_json(&g, (const char *)json, json_size) && read_scene(&g, model);
+    model->degenerate_count = g.degenerate_count;
+    model->point_primitives = g.point_primitives;
+    model->line_primitives = g.line_primitives;
+    snprintf(model->note, sizeof model->note, "%s", g.note);
     ao_gltf_free_data(&g);
     free(g.parent);
     free(g.world);
+    free(g.depth);
     free(g.sizes);
     free(g.shared);
     json_object_put(g.root);

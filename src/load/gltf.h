@@ -12,6 +12,10 @@
 #include "load/draco.h"
 #include "load/load.h"
 
+/* The deepest node tree aoview reads: a node under more ancestors than this is refused (real files
+ * nest a few dozen deep; the tree is walked without recursion, so this bounds nothing but trust). */
+#define AO_GLTF_MAX_NODE_DEPTH 1024
+
 /* Largest integer read from the JSON: sums of three of them and products of one with a stride (at
  * most 252) stay far below 2^64. */
 #define AO_GLTF_MAX_INTEGER 9007199254740992.0
@@ -65,21 +69,27 @@ struct ao_gltf {
     size_t bin_size;
     size_t *parent;               /* per node: its parent, or SIZE_MAX */
     double (*world)[16];          /* per node: its world matrix, column major */
-    uint64_t triangles, vertices; /* totals of the instances found so far */
+    uint64_t triangles, vertices; /* totals of the meshes counted so far */
     struct ao_budget *budget;     /* the scene budget */
     uint64_t taken;               /* what this load took from it, given back at its end */
     struct mesh_size {
         uint64_t triangles, vertices;
+        size_t points, lines;     /* primitives of points and of lines skipped */
+        size_t model;             /* its index in the model once built; SIZE_MAX before, DROPPED
+                                     when it had no triangle that is not degenerate */
         bool known;
-    } *sizes;                     /* per mesh, once counted: instances need not recount */
+    } *sizes;                     /* per mesh, once counted: its placements need not recount */
     struct shared {
-        uint64_t instance;        /* the placement that last added this POSITION accessor */
+        uint64_t instance;        /* the mesh walk that last added this POSITION accessor */
         size_t normals;           /* with this NORMAL accessor (SIZE_MAX: none) */
         uint32_t base;            /* at this first vertex */
     } *shared;                    /* per accessor */
-    uint64_t instance;            /* placements walked so far (both passes) */
-    struct ao_load_array positions, normals, lacking, indices; /* ao_vec3, ao_vec3, bool, uint32 */
+    uint64_t instance;            /* mesh walks so far (both passes) */
+    uint32_t *depth;              /* per node: how many nodes deep it lies (a root is 1) */
+    struct ao_load_array positions, normals, lacking, indices; /* the mesh being built: ao_vec3,
+                                                                   ao_vec3, bool, uint32 */
     size_t lacking_count;
+    size_t degenerate_count;      /* zero-area triangles dropped, all meshes */
     unsigned modes_found;         /* bit m: a primitive of mode m was found */
     size_t point_primitives, line_primitives;   /* skipped, each time a node placed them */
     char note[AO_MESH_NOTE_SIZE]; /* what was ignored that the user should hear of (mesh.h) */

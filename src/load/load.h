@@ -41,8 +41,15 @@ struct ao_load_tokens {
 typedef bool ao_load_format(struct ao_mesh *mesh, const char *path, const char *text, size_t size,
                             struct ao_budget *budget);
 
+/* A loader of files that hold several meshes and place them (glTF): parses a whole file into the
+ * empty model (mesh.h), each mesh ended by ao_load_finish_mesh; reports, checks the budget (with
+ * ao_load_fits_model: unique meshes and placements) and holds as ao_load_format does. */
+typedef bool ao_load_model_format(struct ao_model *model, const char *path, const char *text, size_t size,
+                                  struct ao_budget *budget);
+
 /* The loaders, one file each under src/load/. */
-ao_load_format ao_load_obj, ao_load_ply, ao_load_stl, ao_load_gltf;
+ao_load_format ao_load_obj, ao_load_ply, ao_load_stl;
+ao_load_model_format ao_load_gltf;
 
 /* Appends n elements to a and returns the first, or NULL when memory or size_t runs out. */
 void *ao_load_append(struct ao_load_array *a, size_t n);
@@ -60,6 +67,11 @@ void ao_load_report(const char *path, size_t line, const char *format, ...);
  * else reports "path:line: T triangles and V vertices need about ..." and returns false. */
 bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, const char *path,
                   size_t line);
+
+/* ao_load_fits for unique meshes of so many triangles and vertices placed so many times in all
+ * (ao_budget_model); the report names the placements too. */
+bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements,
+                        const char *path);
 
 /* Reports an allocation failure; returns false for the caller to pass on. */
 bool ao_load_out_of_memory(const char *path);
@@ -99,6 +111,11 @@ bool ao_load_uri_decode(const char *uri, char *out, size_t size, char *why, size
  * *fd (the caller closes it), following no symbolic link; false with the reason in why when the
  * path leaves that folder or cannot be opened there. */
 bool ao_load_uri_open(const char *model_path, const char *relative, int *fd, char *why, size_t why_size);
+
+/* The end of one mesh of a model: drops its degenerate triangles (counting them in
+ * mesh->degenerate_count; a mesh may be left with none, for the caller to drop) and computes the
+ * normals the file did not give, as ao_load_finish; false only when memory runs out (reported). */
+bool ao_load_finish_mesh(struct ao_mesh *mesh, const char *path, const bool *lacking);
 
 /* Common end of every loader: drops degenerate triangles, refuses a mesh without triangles and
  * computes the normals the file did not give (all when mesh->normals is NULL, else those
