@@ -26,6 +26,88 @@ static uint64_t stream_for_half(const struct ao_context *ctx, uint64_t stream, i
     return ctx->sequence == AO_SEQUENCE_SOBOL && half ? stream - 2 * (uint64_t)half : stream;
 }
 
+/* The unit vector along v, or zero when v is zero (or not finite). */
+static inline struct ao_vec3 unit_or_zero(struct ao_vec3 v)
+{
+    float length = ao_vec3_length(v);
+    return length > 0.0f && isfinite(length) ? ao_vec3_scale(v, 1.0f / length) : ao_vec3_make(0.0f, 0.0f, 0.0f);
+}
+
+/* The column-major 3x3 matrix n times v. */
+static inline struct ao_vec3 times(const float *n, struct ao_vec3 v)
+{
+    return ao_vec3_make(n[0] * v.x + n[3] * v.y + n[6] * v.z, n[1] * v.x + n[4] * v.y + n[7] * v.z,
+                        n[2] * v.x + n[5] * v.y + n[8] * v.z);
+}
+
+/* The affine map a (12 floats, affine.h's layout) of p, in double, narrowed once. */
+static inline struct ao_vec3 map_point(const float *a, struct ao_vec3 p)
+{
+    double x = (double)a[0] * p.x + (double)a[3] * p.y + (double)a[6] * p.z + (double)a[9];
+    double y = (double)a[1] * p.x + (double)a[4] * p.y + (double)a[7] * p.z + (double)a[10];
+    double z = (double)a[2] * p.x + (double)a[5] * p.y + (double)a[8] * p.z + (double)a[11];
+    return ao_vec3_make((float)x, (float)y, (float)z);
+}
+
+/* The hit on a triangle of an instanced mesh (the hit's u, v and ng in the mesh's own frame) shaded
+ * into *r in the local frame: the normals mapped by the instance's normal matrix (each vertex normal
+ * before it is interpolated, as flattening maps them), both turned to the eye; the point recomputed
+ * and lifted in the mesh's own frame, where Embree tests the triangle, then mapped. The lift there
+ * clears the point's error bound plus how far the origin moves when it is mapped into the local
+ * frame and Embree maps it back (the instance's slack, derived in scene.c): at most
+ * slack[0] max|o| + slack[1] per axis for an origin o. With max|o| <= max|p| + d for a lift d, the
+ * slack is taken at max|p| + 2 d0, d0 the lift with the slack at max|p|: the final lift exceeds d0
+ * by at most sqrt(3) (1 + gamma12) 2 slack[0] d0 <= d0 (slack[0] <= 2^-8), so max|o| stays within. */
+static void shade_instanced(const struct ao_scene *scene, const struct ao_instance *in, enum ao_shading shading,
+                            struct ao_vec3 dir, const struct ao_hit *hit, struct ao_surface *r)
+{
+    const struct ao_mesh *m = &scene->meshes[in->mesh];
+    const uint32_t *i = &m->indices[3 * hit->prim];
+    struct ao_vec3 error;
+    struct ao_vec3 p = ao_triangle_point(m->positions[i[0]], m->positions[i[1]], m->positions[i[2]], hit->u, hit->v,
+                                         &error);
+    struct ao_vec3 ng_own = ao_vec3_normalize(hit->ng);
+    r->ng = ao_vec3_normalize(times(in->normals, hit->ng));
+    float w0 = 1.0f - hit->u - hit->v;
+    struct ao_vec3 n = ao_vec3_scale(unit_or_zero(times(in->normals, m->normals[i[0]])), w0);
+    n = ao_vec3_add(n, ao_vec3_scale(unit_or_zero(times(in->normals, m->normals[i[1]])), hit->u));
+    n = ao_vec3_add(n, ao_vec3_scale(unit_or_zero(times(in->normals, m->normals[i[2]])), hit->v));
+    float len = ao_vec3_length(n);
+    r->ns = shading == AO_SHADING_PHONG && len > 1e-6f && isfinite(len) ? ao_vec3_scale(n, 1.0f / len) : r->ng;
+    r->albedo = scene->albedos[in->albedo];
+    r->position = map_point(in->to_local, p);
+    float most = ao_vec3_max_abs(p), gap = 0.0f;
+    if (!(ao_vec3_dot(r->ng, r->ng) > 0.25f) || !(ao_vec3_dot(ng_own, ng_own) > 0.25f)) {
+        /* Degenerate: lifted towards the eye in the local frame, past the point's error box mapped
+         * there (|L| times it and the slack, and the rounding of the map). */
+        const float *a = in->to_local;
+        float e = fmaxf(error.x, fmaxf(error.y, error.z)) + in->slack[0] * most + in->slack[1], big = 0.0f;
+        for (int k = 0; k < 3; k++)
+            big = fmaxf(big, fabsf(a[k]) + fabsf(a[3 + k]) + fabsf(a[6 + k]));
+        r->ng = r->ns = ao_vec3_scale(dir, -1.0f);
+        r->origin = ao_surface_lift(r->position, r->ng,
+                                    ao_vec3_add(ao_vec3_make(big * e, big * e, big * e),
+                                                ao_vec3_scale(ao_vec3_abs(r->position), ao_gamma(2))));
+        return;
+    }
+    /* Turned to the eye; the normal matrix keeps the side (it is |det| times the inverse transpose),
+     * so the mesh's own normal turns with it. */
+    if (ao_vec3_dot(r->ng, dir) > 0.0f) {
+        r->ng = ao_vec3_scale(r->ng, -1.0f);
+        r->ns = ao_vec3_scale(r->ns, -1.0f);
+        ng_own = ao_vec3_scale(ng_own, -1.0f);
+    }
+    for (int pass = 0; pass < 2; pass++) {
+        float slack = in->slack[0] * (most + 2.0f * gap) + in->slack[1];
+        struct ao_vec3 e = ao_vec3_add(error, ao_vec3_make(slack, slack, slack));
+        struct ao_vec3 o = ao_surface_lift(p, ng_own, e);
+        if (pass == 0)
+            gap = ao_vec3_max_abs(ao_vec3_sub(o, p));
+        else
+            r->origin = map_point(in->to_local, o);
+    }
+}
+
 void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, struct ao_vec3 org,
                          struct ao_vec3 dir, const struct ao_hit *hit, struct ao_surface *s)
 {
@@ -43,17 +125,28 @@ void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, 
         r.ns = r.ng;
         r.albedo = sp->albedo;
     } else {
-        const uint32_t *i = &scene->indices[3 * hit->prim];
-        r.position = ao_triangle_point(scene->positions[i[0]], scene->positions[i[1]], scene->positions[i[2]],
-                                       hit->u, hit->v, &error);
+        const struct ao_instance *in = &scene->instances[hit->instance];
+        if (!in->flat) {
+            shade_instanced(scene, in, shading, dir, hit, &r);
+            s->position = r.position;
+            s->ng = r.ng;
+            s->ns = r.ns;
+            s->albedo = r.albedo;
+            s->origin = r.origin;
+            return;
+        }
+        const struct ao_mesh *m = &scene->meshes[in->mesh];
+        const uint32_t *i = &m->indices[3 * hit->prim];
+        r.position = ao_triangle_point(m->positions[i[0]], m->positions[i[1]], m->positions[i[2]], hit->u, hit->v,
+                                       &error);
         r.ng = ao_vec3_normalize(hit->ng);
         float w0 = 1.0f - hit->u - hit->v;
-        struct ao_vec3 n = ao_vec3_scale(scene->normals[i[0]], w0);
-        n = ao_vec3_add(n, ao_vec3_scale(scene->normals[i[1]], hit->u));
-        n = ao_vec3_add(n, ao_vec3_scale(scene->normals[i[2]], hit->v));
+        struct ao_vec3 n = ao_vec3_scale(m->normals[i[0]], w0);
+        n = ao_vec3_add(n, ao_vec3_scale(m->normals[i[1]], hit->u));
+        n = ao_vec3_add(n, ao_vec3_scale(m->normals[i[2]], hit->v));
         float len = ao_vec3_length(n);
         r.ns = shading == AO_SHADING_PHONG && len > 1e-6f && isfinite(len) ? ao_vec3_scale(n, 1.0f / len) : r.ng;
-        r.albedo = scene->albedos[scene->triangle_albedo[hit->prim]];
+        r.albedo = scene->albedos[in->albedo];
     }
     if (!(ao_vec3_dot(r.ng, r.ng) > 0.25f)) /* not a unit normal: degenerate triangle, NaN */
         r.ng = r.ns = ao_vec3_scale(dir, -1.0f);

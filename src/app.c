@@ -304,7 +304,13 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
         fprintf(stderr, "aoview: %s\n", ao_text_escape(app->scene.notes, (char[sizeof app->scene.notes * 4]){0},
                                                         sizeof app->scene.notes * 4));
     ao_text_escape(app->scene.name, name, sizeof name);
-    if (!opts->quiet)
+    size_t instanced = 0;
+    for (size_t i = 0; i < app->scene.instance_count; i++)
+        instanced += !app->scene.instances[i].flat;
+    if (!opts->quiet && instanced)
+        fprintf(stderr, "aoview: %s: %zu triangles (%zu instances of meshes built once), %zu spheres, traced by %s\n",
+                name, app->scene.triangle_count, instanced, app->scene.sphere_count, ao_tracer_backend(app->tracer));
+    else if (!opts->quiet)
         fprintf(stderr, "aoview: %s: %zu triangles, %zu spheres, traced by %s\n", name,
                 app->scene.triangle_count, app->scene.sphere_count, ao_tracer_backend(app->tracer));
 

@@ -28,23 +28,34 @@ struct triangle {
     float px, py, pz, ax, ay, az, bx, by, bz, nx, ny, nz;
 };
 
+/* Which triangle of the scene a stored one is: its instance and its index in the instance's mesh. */
+struct source {
+    uint32_t instance, prim;
+};
+
 struct ao_direct {
     size_t sphere_count, triangle_count;
     struct sphere *spheres;
     struct triangle *triangles;
+    struct source *sources;      /* parallel to triangles */
 };
 
 bool ao_direct_suits(const struct ao_scene *scene)
 {
     size_t limit = scene->sphere_count > 0 ? DIRECT_MAX_WITH_SPHERES : DIRECT_MAX_TRIANGLES_ONLY;
+    for (size_t i = 0; i < scene->instance_count; i++)
+        if (!scene->instances[i].flat)   /* instanced meshes are large by AUTO's rule (scene.h) */
+            return false;
     return scene->sphere_count + scene->triangle_count <= limit;
 }
 
 struct ao_direct *ao_direct_create(const struct ao_scene *scene)
 {
     size_t ns = scene->sphere_count, nt = scene->triangle_count;
-    /* One block: the header, then the spheres, then the triangles (all float-aligned). */
-    struct ao_direct *d = calloc(1, sizeof *d + ns * sizeof(struct sphere) + nt * sizeof(struct triangle));
+    /* One block: the header, then the spheres, then the triangles (all float-aligned), then their
+     * sources. */
+    struct ao_direct *d = calloc(1, sizeof *d + ns * sizeof(struct sphere) + nt * sizeof(struct triangle) +
+                                        nt * sizeof(struct source));
     if (!d) {
         fprintf(stderr, "aoview: out of memory creating the direct tracer\n");
         return NULL;
@@ -53,17 +64,24 @@ struct ao_direct *ao_direct_create(const struct ao_scene *scene)
     d->triangle_count = nt;
     d->spheres = (struct sphere *)(d + 1);
     d->triangles = (struct triangle *)(d->spheres + ns);
+    d->sources = (struct source *)(d->triangles + nt);
     for (size_t i = 0; i < ns; i++) {
         const struct ao_sphere *s = &scene->spheres[i];
         d->spheres[i] = (struct sphere){s->center.x, s->center.y, s->center.z, s->radius * s->radius};
     }
-    for (size_t i = 0; i < nt; i++) {
-        const uint32_t *idx = &scene->indices[3 * i];
-        struct ao_vec3 p = scene->positions[idx[0]];
-        struct ao_vec3 a = ao_vec3_sub(p, scene->positions[idx[1]]);
-        struct ao_vec3 b = ao_vec3_sub(scene->positions[idx[2]], p);
-        struct ao_vec3 n = ao_vec3_cross(a, b);
-        d->triangles[i] = (struct triangle){p.x, p.y, p.z, a.x, a.y, a.z, b.x, b.y, b.z, n.x, n.y, n.z};
+    /* Every placed triangle in the local frame (an instanced mesh's mapped there: not bit for bit
+     * what Embree traces, but this back end is chosen for flat scenes only). */
+    size_t i = 0;
+    for (size_t k = 0; k < scene->instance_count; k++) {
+        size_t count = scene->meshes[scene->instances[k].mesh].triangle_count;
+        for (size_t prim = 0; prim < count && i < nt; prim++, i++) {
+            struct ao_vec3 c[3];
+            ao_scene_triangle(scene, k, prim, c);
+            struct ao_vec3 a = ao_vec3_sub(c[0], c[1]), b = ao_vec3_sub(c[2], c[0]);
+            struct ao_vec3 n = ao_vec3_cross(a, b);
+            d->triangles[i] = (struct triangle){c[0].x, c[0].y, c[0].z, a.x, a.y, a.z, b.x, b.y, b.z, n.x, n.y, n.z};
+            d->sources[i] = (struct source){(uint32_t)k, (uint32_t)prim};
+        }
     }
     return d;
 }
@@ -170,13 +188,15 @@ void ao_direct_intersect(const struct ao_direct *direct, const struct ao_packet 
     for (int k = 0; k < n; k++) {
         float t, u = 0.0f, v = 0.0f;
         struct ao_vec3 ng = {0.0f, 0.0f, 0.0f};
+        struct source source = {0, prim[k]};
         if (found[k] && !sphere[k]) {
             const struct triangle *tr = &direct->triangles[prim[k]];
             triangle_hit(tr, ox[k], oy[k], oz[k], dx[k], dy[k], dz[k], INFINITY, &t, &u, &v);
             ng = ao_vec3_make(-tr->nx, -tr->ny, -tr->nz); /* the stored N is -(e1 x e2) */
+            source = direct->sources[prim[k]];
         }
-        hits[k] = (struct ao_hit){.t = found[k] ? best[k] : INFINITY, .u = u, .v = v, .prim = prim[k],
-                                  .sphere = sphere[k], .ng = ng};
+        hits[k] = (struct ao_hit){.t = found[k] ? best[k] : INFINITY, .u = u, .v = v, .prim = source.prim,
+                                  .instance = source.instance, .sphere = sphere[k], .ng = ng};
     }
 }
 

@@ -109,14 +109,24 @@ static int compare_edges(const void *pa, const void *pb)
     return c ? c : compare_points(a->b, b->b);
 }
 
-static struct ao_vec3 vertex(const struct ao_scene *s, size_t triangle, int corner)
+/* The scene's triangles in the local frame, three corners each: the classifier's view of it (an
+ * instanced mesh's triangles mapped into the frame, ao_scene_triangle). */
+struct soup {
+    struct ao_vec3 *corners;
+    size_t triangle_count;
+};
+
+/* The most placed triangles the classifier looks at (its edges take 72 bytes a triangle). */
+enum { MAX_TRIANGLES = 1 << 24 };
+
+static struct ao_vec3 vertex(const struct soup *s, size_t triangle, int corner)
 {
-    return s->positions[s->indices[3 * triangle + (size_t)corner]];
+    return s->corners[3 * triangle + (size_t)corner];
 }
 
 /* Every triangle edge, sorted so that an edge shared by m triangles forms a run of m; NULL when
  * memory runs out. */
-static struct edge *sorted_edges(const struct ao_scene *s)
+static struct edge *sorted_edges(const struct soup *s)
 {
     struct edge *e = malloc(3 * s->triangle_count * sizeof *e);
     if (!e)
@@ -149,7 +159,7 @@ static float distance_to_segment(struct ao_vec3 p, struct ao_vec3 a, struct ao_v
 }
 
 /* True when p, a point of the plane with normal n, lies in some triangle. */
-static bool plane_contains(const struct ao_scene *s, struct ao_vec3 n, struct ao_vec3 p)
+static bool plane_contains(const struct soup *s, struct ao_vec3 n, struct ao_vec3 p)
 {
     for (size_t t = 0; t < s->triangle_count; t++) {
         struct ao_vec3 v[3] = {vertex(s, t, 0), vertex(s, t, 1), vertex(s, t, 2)};
@@ -174,7 +184,7 @@ static float distance_to_outline(const struct edge *e, size_t count, struct ao_v
 
 /* Sets *n to the unit normal of the largest triangle and returns true when every vertex lies
  * within 1e-6 of the largest coordinate of that plane (a few ulps of its far corners). */
-static bool coplanar(const struct ao_scene *s, struct ao_vec3 *n)
+static bool coplanar(const struct soup *s, struct ao_vec3 *n)
 {
     float best = 0.0f, extent = 0.0f;
     for (size_t t = 0; t < s->triangle_count; t++) {
@@ -185,21 +195,21 @@ static bool coplanar(const struct ao_scene *s, struct ao_vec3 *n)
             *n = ao_vec3_scale(c, 1.0f / best);
         }
     }
-    for (size_t v = 0; v < s->vertex_count; v++)
-        extent = fmaxf(extent, ao_vec3_max_abs(s->positions[v]));
-    struct ao_vec3 origin = s->positions[s->indices[0]];
-    for (size_t v = 0; v < s->vertex_count; v++)
-        if (fabsf(ao_vec3_dot(*n, ao_vec3_sub(s->positions[v], origin))) > 1e-6f * extent)
+    for (size_t v = 0; v < 3 * s->triangle_count; v++)
+        extent = fmaxf(extent, ao_vec3_max_abs(s->corners[v]));
+    struct ao_vec3 origin = s->corners[0];
+    for (size_t v = 0; v < 3 * s->triangle_count; v++)
+        if (fabsf(ao_vec3_dot(*n, ao_vec3_sub(s->corners[v], origin))) > 1e-6f * extent)
             return false;
     return true;
 }
 
 /* True when every triangle lies on a face of the triangles' bounding box and eye is inside it. */
-static bool on_box_faces(const struct ao_scene *s, struct ao_vec3 eye)
+static bool on_box_faces(const struct soup *s, struct ao_vec3 eye)
 {
     float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
-    for (size_t v = 0; v < s->vertex_count; v++) {
-        const float *p = &s->positions[v].x;
+    for (size_t v = 0; v < 3 * s->triangle_count; v++) {
+        const float *p = &s->corners[v].x;
         for (int a = 0; a < 3; a++) {
             lo[a] = fminf(lo[a], p[a]);
             hi[a] = fmaxf(hi[a], p[a]);
@@ -273,17 +283,19 @@ static bool tabulate_escape(struct closed_form *cf, const struct edge *e, size_t
     return true;
 }
 
-/* Finds the scene's closed form; false with the reason in why when it has none. */
-static bool classify(const struct ao_scene *s, float ao_distance, struct closed_form *cf, char *why, size_t why_size)
+/* Finds the closed form of scene, whose triangles are s; false with the reason in why when it has
+ * none. */
+static bool classify_soup(const struct ao_scene *scene, const struct soup *s, float ao_distance, struct closed_form *cf,
+                          char *why, size_t why_size)
 {
-    *cf = (struct closed_form){.kind = KIND_PLANE_SPHERE, .sphere = s->sphere_count ? s->spheres : NULL,
+    *cf = (struct closed_form){.kind = KIND_PLANE_SPHERE, .sphere = scene->sphere_count ? scene->spheres : NULL,
                                .plane = s->triangle_count > 0};
     if (ao_distance != INFINITY) {
         snprintf(why, why_size, "the closed forms need an infinite AO distance, not %g", (double)ao_distance);
         return false;
     }
-    if (s->sphere_count > 1) {
-        snprintf(why, why_size, "%zu spheres (at most one: several spheres occlude one another)", s->sphere_count);
+    if (scene->sphere_count > 1) {
+        snprintf(why, why_size, "%zu spheres (at most one: several spheres occlude one another)", scene->sphere_count);
         return false;
     }
     if (!cf->plane)
@@ -300,14 +312,14 @@ static bool classify(const struct ao_scene *s, float ao_distance, struct closed_
         cf->kind = KIND_CLOSED_BOX;
         for (size_t i = 0; i < count && ok; i += run_length(edges, count, i))
             ok = run_length(edges, count, i) == 2;
-        ok = ok && !cf->sphere && on_box_faces(s, s->camera.eye);
+        ok = ok && !cf->sphere && on_box_faces(s, scene->camera.eye);
         if (!ok)
             snprintf(why, why_size, "the triangles are neither one plane nor a closed box (watertight, "
                                     "on the faces of its bounding box, no sphere) around the camera");
     } else if (cf->sphere) {
         /* The sphere must not cross the plane, and the plane must reach far enough around it. */
         const struct ao_sphere *sp = cf->sphere;
-        float h = ao_vec3_dot(cf->up, ao_vec3_sub(sp->center, s->positions[s->indices[0]]));
+        float h = ao_vec3_dot(cf->up, ao_vec3_sub(sp->center, s->corners[0]));
         if (h < 0.0f) {
             cf->up = ao_vec3_scale(cf->up, -1.0f);
             h = -h;
@@ -316,7 +328,7 @@ static bool classify(const struct ao_scene *s, float ao_distance, struct closed_
         float reach = distance_to_outline(edges, count, foot) - sp->radius;
         float eps = reach > 0.0f ? atanf((h + sp->radius) / reach) : 0.5f * PI;
         cf->ground_error = fminf(1.0f, 2.0f * eps * eps);   /* AO lies in [0, rho] */
-        cf->plane_point = s->positions[s->indices[0]];
+        cf->plane_point = s->corners[0];
         cf->axes = ao_basis_from_normal(cf->up);
         if (h < sp->radius * (1.0f - 1e-6f)) {
             snprintf(why, why_size, "the sphere cuts the plane (centre height %g < radius %g)", (double)h,
@@ -337,6 +349,31 @@ static bool classify(const struct ao_scene *s, float ao_distance, struct closed_
         }
     }
     free(edges);
+    return ok;
+}
+
+/* Finds the scene's closed form from its placed triangles; false with the reason in why when it has
+ * none. */
+static bool classify(const struct ao_scene *scene, float ao_distance, struct closed_form *cf, char *why,
+                     size_t why_size)
+{
+    if (scene->triangle_count > MAX_TRIANGLES) {
+        snprintf(why, why_size, "%zu triangles placed (aoview-exact looks at %d at most)", scene->triangle_count,
+                 MAX_TRIANGLES);
+        return false;
+    }
+    struct soup soup = {malloc((3 * scene->triangle_count + 1) * sizeof *soup.corners), 0};
+    if (!soup.corners) {
+        snprintf(why, why_size, "out of memory");
+        return false;
+    }
+    for (size_t i = 0; i < scene->instance_count; i++) {
+        size_t count = scene->meshes[scene->instances[i].mesh].triangle_count;
+        for (size_t t = 0; t < count; t++)
+            ao_scene_triangle(scene, i, t, &soup.corners[3 * soup.triangle_count++]);
+    }
+    bool ok = classify_soup(scene, &soup, ao_distance, cf, why, why_size);
+    free(soup.corners);
     return ok;
 }
 

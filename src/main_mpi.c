@@ -105,14 +105,26 @@ static uint64_t fnv(uint64_t hash, const void *data, size_t size)
  * distance and the image size are the options' digest's, as the options may replace them). */
 static uint64_t scene_digest(const struct ao_scene *scene)
 {
-    size_t counts[] = {scene->sphere_count, scene->vertex_count, scene->triangle_count, scene->albedo_count};
+    size_t counts[] = {scene->sphere_count, scene->mesh_count, scene->instance_count, scene->albedo_count};
     uint64_t hash = fnv(0xcbf29ce484222325u, counts, sizeof counts);
     hash = fnv(hash, &scene->background, sizeof scene->background);
     hash = fnv(hash, scene->spheres, scene->sphere_count * sizeof *scene->spheres);
-    hash = fnv(hash, scene->positions, scene->vertex_count * sizeof *scene->positions);
-    hash = fnv(hash, scene->normals, scene->vertex_count * sizeof *scene->normals);
-    hash = fnv(hash, scene->indices, 3 * scene->triangle_count * sizeof *scene->indices);
-    hash = fnv(hash, scene->triangle_albedo, scene->triangle_count * sizeof *scene->triangle_albedo);
+    for (size_t i = 0; i < scene->mesh_count; i++) {   /* every unique mesh once */
+        const struct ao_mesh *m = &scene->meshes[i];
+        size_t sizes[] = {m->vertex_count, m->triangle_count};
+        hash = fnv(hash, sizes, sizeof sizes);
+        hash = fnv(hash, m->positions, m->vertex_count * sizeof *m->positions);
+        hash = fnv(hash, m->normals, m->vertex_count * sizeof *m->normals);
+        hash = fnv(hash, m->indices, 3 * m->triangle_count * sizeof *m->indices);
+    }
+    for (size_t i = 0; i < scene->instance_count; i++) {   /* field by field: no padding hashed */
+        const struct ao_instance *in = &scene->instances[i];
+        uint32_t ids[] = {in->mesh, in->albedo, in->flat};
+        hash = fnv(hash, ids, sizeof ids);
+        hash = fnv(hash, in->to_local, sizeof in->to_local);
+        hash = fnv(hash, in->normals, sizeof in->normals);
+        hash = fnv(hash, in->slack, sizeof in->slack);
+    }
     return fnv(hash, scene->albedos, scene->albedo_count * sizeof *scene->albedos);
 }
 

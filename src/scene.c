@@ -6,6 +6,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include <sys/stat.h>
+
+#include "affine.h"
 #include "file.h"
 #include "image.h"
 #include "mesh.h"
@@ -211,24 +214,63 @@ static bool resize(void *array, size_t count, size_t size)
     void **slot = array;
     if (count > SIZE_MAX / size)
         return false;
-    void *p = realloc(*slot, count * size);
+    void *p = realloc(*slot, count ? count * size : 1);
     if (!p)
         return false;
     *slot = p;
     return true;
 }
 
-/* The scene's coordinates while it is read, in double precision and world space; ao_scene's float
- * positions, sphere centres and camera are filled from them once the whole scene is known
+/* A mesh file that a mesh line loaded: its path and identity, its meshes (scene->meshes[first,
+ * first + count)) and its placements of them, kept for further lines naming the same file. */
+struct loaded {
+    char *path;
+    dev_t device;
+    ino_t inode;
+    bool identified;              /* device and inode known (stat worked) */
+    size_t first, count;
+    struct ao_placement *placements;
+    size_t placement_count;
+};
+
+/* A placement of scene->meshes[mesh] waiting for place(), in world space. */
+struct pending {
+    uint32_t mesh, albedo;
+    struct ao_affine to_world;
+};
+
+/* A quad waiting for place(): its corners in world space, unit normal and albedo. */
+struct quad {
+    struct dvec p[4];
+    struct ao_vec3 n, rho;
+};
+
+/* What place() needs to know of each mesh: how often it is placed, whether it is instanced, and
+ * the box around its vertices in its own frame (for the boxes of its instances). */
+struct mesh_info {
+    size_t placements, left;      /* placements in all, and those not yet built into instances */
+    bool instanced;
+    struct dvec lo, hi;
+};
+
+/* The scene while it is read, in double precision and world space; ao_scene's meshes and
+ * instances, sphere centres and camera are filled from it once the whole scene is known
  * (place()). */
 struct world {
-    struct dvec *positions;       /* parallel to scene->normals */
     struct dvec *sphere_centers;  /* parallel to scene->spheres */
+    struct pending *placements;
+    size_t placement_count;
+    struct quad *quads;
+    size_t quad_count;
+    struct loaded *files;
+    size_t file_count;
+    struct mesh_info *info;       /* per mesh, from survey() */
     struct dvec eye, target;      /* the camera's, when has_camera */
     bool has_camera;
     int camera_line;
     const char *extent_note;      /* what makes up the extent, for its message ("" in scene files) */
     struct ao_budget *budget;     /* charged for every element as it is added */
+    enum ao_instancing instancing;
 };
 
 /* Charges an element of so many triangles (a sphere counts as one) and vertices to the budget;
@@ -246,34 +288,10 @@ static bool charge(struct cursor *c, struct world *w, uint64_t triangles, uint64
 
 static bool add_albedo(struct ao_scene *s, struct ao_vec3 rho, uint32_t *index)
 {
-    if (!resize(&s->albedos, s->albedo_count + 1, sizeof *s->albedos))
+    if (s->albedo_count >= UINT32_MAX || !resize(&s->albedos, s->albedo_count + 1, sizeof *s->albedos))
         return false;
     s->albedos[s->albedo_count] = rho;
     *index = (uint32_t)s->albedo_count++;
-    return true;
-}
-
-/* Appends world-space vertices and triangles whose indices count from 0. */
-static bool add_triangles(struct ao_scene *s, struct world *w, const struct dvec *positions,
-                          const struct ao_vec3 *normals, size_t vertex_count,
-                          const uint32_t *indices, size_t triangle_count, uint32_t albedo)
-{
-    size_t base = s->vertex_count, first = s->triangle_count;
-    if (vertex_count > UINT32_MAX - base || triangle_count > UINT32_MAX - first ||
-        !resize(&w->positions, base + vertex_count, sizeof *w->positions) ||
-        !resize(&s->normals, base + vertex_count, sizeof *s->normals) ||
-        !resize(&s->indices, first + triangle_count, 3 * sizeof *s->indices) ||
-        !resize(&s->triangle_albedo, first + triangle_count, sizeof *s->triangle_albedo))
-        return false;
-    memcpy(w->positions + base, positions, vertex_count * sizeof *positions);
-    memcpy(s->normals + base, normals, vertex_count * sizeof *normals);
-    for (size_t t = 0; t < triangle_count; t++) {
-        for (int k = 0; k < 3; k++)
-            s->indices[3 * (first + t) + k] = (uint32_t)base + indices[3 * t + k];
-        s->triangle_albedo[first + t] = albedo;
-    }
-    s->vertex_count += vertex_count;
-    s->triangle_count += triangle_count;
     return true;
 }
 
@@ -308,27 +326,18 @@ static struct dvec rotate(const struct transform *t, struct dvec v)
     return dvec_add(r, dvec_scale(k, dvec_dot(k, v) * (1.0 - t->cos_angle)));
 }
 
-/* The mesh's world positions into *out (malloc'd; NULL when memory is short); its normals
- * transformed in place: the inverse transpose of the scale (1/s per axis), then the rotation. The
- * inverse is taken as (sy sz, sx sz, sx sy) times the sign of sx sy sz, the same direction: no
- * 1/s overflows for a tiny scale (which would make the normals NaN). */
-static bool transform_mesh(struct ao_mesh *m, const struct transform *t, struct dvec **out)
+/* The transform as an affine map: column j of L is the rotated axis j scaled by scale j. */
+static struct ao_affine affine_of(const struct transform *t)
 {
-    *out = m->vertex_count ? malloc(m->vertex_count * sizeof **out) : NULL;
-    if (m->vertex_count && !*out)
-        return false;
-    struct dvec s = t->scale;
-    double sign = s.x * s.y * s.z < 0.0 ? -1.0 : 1.0;
-    struct dvec inv = dvec_make(sign * s.y * s.z, sign * s.x * s.z, sign * s.x * s.y);
-    for (size_t i = 0; i < m->vertex_count; i++) {
-        struct dvec p = dvec_of(m->positions[i]), n = dvec_of(m->normals[i]);
-        p = dvec_make(p.x * s.x, p.y * s.y, p.z * s.z);
-        (*out)[i] = dvec_add(rotate(t, p), t->translate);
-        struct dvec u = {0};
-        unit(rotate(t, dvec_make(n.x * inv.x, n.y * inv.y, n.z * inv.z)), &u);   /* zero stays zero */
-        m->normals[i] = narrow(u);
+    struct ao_affine a;
+    double s[3] = {t->scale.x, t->scale.y, t->scale.z};
+    for (int j = 0; j < 3; j++) {
+        struct dvec e = dvec_make(j == 0 ? s[0] : 0.0, j == 1 ? s[1] : 0.0, j == 2 ? s[2] : 0.0);
+        struct dvec column = rotate(t, e);
+        a.m[3 * j] = column.x, a.m[3 * j + 1] = column.y, a.m[3 * j + 2] = column.z;
     }
-    return true;
+    a.m[9] = t->translate.x, a.m[10] = t->translate.y, a.m[11] = t->translate.z;
+    return a;
 }
 
 /* Joins a mesh path to the scene file's directory unless it is absolute. */
@@ -338,6 +347,90 @@ static bool resolve_path(const struct cursor *c, const char *name, char *out, si
     int dir = name[0] == '/' || !slash ? 0 : (int)(slash - c->path + 1);
     if (snprintf(out, size, "%.*s%s", dir, c->path, name) >= (int)size)
         return fail(c, "mesh path too long");
+    return true;
+}
+
+/* Appends the quad of corners p (triangles p0 p1 p2 and p0 p2 p3) and unit normal n. */
+static bool add_quad(struct world *w, const struct dvec p[4], struct ao_vec3 n, struct ao_vec3 rho)
+{
+    if (!resize(&w->quads, w->quad_count + 1, sizeof *w->quads))
+        return false;
+    struct quad *q = &w->quads[w->quad_count++];
+    memcpy(q->p, p, sizeof q->p);
+    q->n = n, q->rho = rho;
+    return true;
+}
+
+/* The file loaded earlier as path (by name, or by device and inode), or NULL. */
+static const struct loaded *find_loaded(const struct world *w, const char *path)
+{
+    struct stat st;
+    bool identified = stat(path, &st) == 0;
+    for (size_t i = 0; i < w->file_count; i++) {
+        const struct loaded *f = &w->files[i];
+        if (strcmp(f->path, path) == 0 ||
+            (identified && f->identified && f->device == st.st_dev && f->inode == st.st_ino))
+            return &w->files[i];
+    }
+    return NULL;
+}
+
+/* Loads the mesh file at path once for every mesh line that names it: its meshes join the scene's,
+ * charged to the budget once; returns its entry, or NULL after reporting. */
+static const struct loaded *load_file(struct cursor *c, struct ao_scene *s, struct world *w, const char *path)
+{
+    struct ao_model model;
+    if (!ao_model_load_budget(&model, path, w->budget))
+        return NULL;
+    uint64_t triangles = 0, vertices = 0;
+    for (size_t i = 0; i < model.mesh_count; i++)
+        triangles += model.meshes[i].triangle_count, vertices += model.meshes[i].vertex_count;
+    struct stat st;
+    char *copy = strdup(path);
+    bool ok = charge(c, w, triangles, vertices, path);
+    if (ok && (!copy || s->mesh_count + model.mesh_count >= UINT32_MAX ||
+               !resize(&s->meshes, s->mesh_count + model.mesh_count, sizeof *s->meshes) ||
+               !resize(&w->files, w->file_count + 1, sizeof *w->files))) {
+        ok = fail(c, "out of memory adding '%s'", path);
+    }
+    if (!ok) {
+        free(copy);
+        ao_model_finish(&model);
+        return NULL;
+    }
+    struct loaded *f = &w->files[w->file_count++];
+    *f = (struct loaded){.path = copy, .first = s->mesh_count, .count = model.mesh_count,
+                         .placements = model.placements, .placement_count = model.placement_count};
+    if (stat(path, &st) == 0)
+        f->identified = true, f->device = st.st_dev, f->inode = st.st_ino;
+    memcpy(s->meshes + s->mesh_count, model.meshes, model.mesh_count * sizeof *model.meshes);
+    s->mesh_count += model.mesh_count;
+    s->degenerate_count += model.degenerate_count;
+    s->point_primitives += model.point_primitives;
+    s->line_primitives += model.line_primitives;
+    add_note(s, path, model.note);
+    free(model.meshes);
+    return f;
+}
+
+/* Places every placement of the loaded file f under the map `line`, with albedo rho: one pending
+ * placement each, charged to the budget. */
+static bool place_model(struct cursor *c, struct ao_scene *s, struct world *w, const struct loaded *f,
+                        const struct ao_affine *line, struct ao_vec3 rho, const char *path)
+{
+    uint64_t bytes = (uint64_t)f->placement_count * AO_BUDGET_INSTANCE;
+    if (!ao_budget_take(w->budget, bytes)) {
+        char why[200];
+        ao_budget_explain(w->budget, bytes, why, sizeof why);
+        return fail(c, "%s: %zu placements %s", path, f->placement_count, why);
+    }
+    uint32_t a;
+    if (!add_albedo(s, rho, &a) ||
+        !resize(&w->placements, w->placement_count + f->placement_count, sizeof *w->placements))
+        return fail(c, "out of memory placing '%s'", path);
+    for (size_t i = 0; i < f->placement_count; i++)
+        w->placements[w->placement_count++] = (struct pending){
+            (uint32_t)(f->first + f->placements[i].mesh), a, ao_affine_compose(line, &f->placements[i].to_model)};
     return true;
 }
 
@@ -440,15 +533,11 @@ static bool parse_quad(struct cursor *c, struct ao_scene *s, struct world *w)
     if (!(ao_vec3_length(n) > 0.0f) || !ao_vec3_is_finite(n))
         return fail(c, "quad: edge1 and edge2 span no area");
     n = ao_vec3_normalize(n);
-    struct dvec p[4] = {corner, dvec_add(corner, e1), dvec_add(dvec_add(corner, e1), e2), dvec_add(corner, e2)};
-    struct ao_vec3 normals[4] = {n, n, n, n};
-    static const uint32_t tris[6] = {0, 1, 2, 0, 2, 3};
-    uint32_t a;
     if (!charge(c, w, 2, 4, "quad"))
         return false;
-    if (!add_albedo(s, rho, &a) || !add_triangles(s, w, p, normals, 4, tris, 2, a))
-        return fail(c, "out of memory");
-    return true;
+    (void)s;
+    struct dvec p[4] = {corner, dvec_add(corner, e1), dvec_add(dvec_add(corner, e1), e2), dvec_add(corner, e2)};
+    return add_quad(w, p, n, rho) || fail(c, "out of memory");
 }
 
 static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
@@ -485,24 +574,11 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
     }
     if (t.scale.x == 0.0 || t.scale.y == 0.0 || t.scale.z == 0.0)
         return fail(c, "'scale' must not be zero");
-    struct ao_mesh m = {0};
-    if (!ao_mesh_load_budget(&m, path, w->budget))
+    const struct loaded *f = find_loaded(w, path);
+    if (!f && !(f = load_file(c, s, w, path)))
         return false;
-    if (!charge(c, w, m.triangle_count, m.vertex_count, path)) {
-        ao_mesh_finish(&m);
-        return false;
-    }
-    struct dvec *positions = NULL;
-    uint32_t a;
-    bool ok = transform_mesh(&m, &t, &positions) && add_albedo(s, rho, &a) &&
-              add_triangles(s, w, positions, m.normals, m.vertex_count, m.indices, m.triangle_count, a);
-    s->degenerate_count += m.degenerate_count;
-    s->point_primitives += m.point_primitives;
-    s->line_primitives += m.line_primitives;
-    add_note(s, path, m.note);
-    free(positions);
-    ao_mesh_finish(&m);
-    return ok || fail(c, "out of memory (or more than 2^32 vertices) adding '%s'", path);
+    struct ao_affine line = affine_of(&t);
+    return place_model(c, s, w, f, &line, rho, path);
 }
 
 /* ---- whole files ---- */
@@ -554,19 +630,168 @@ static bool parse_statement(struct cursor *c, struct ao_scene *s, struct world *
     return fail(c, "unknown keyword '%s'", word);
 }
 
-/* World-space bounding box of all geometry; false for an empty scene. */
+/* ---- instances ---- */
+
+/* gamma(n) of ao.h in double, for the bounds computed here. */
+static double gamma_n(int n)
+{
+    return n * 0x1p-24 / (1.0 - n * 0x1p-24);
+}
+
+/* The bound ao.c adds to the error of a point in an instanced mesh's own frame before it lifts an
+ * occlusion ray's origin off the surface there: how far the origin o moves when ao.c maps it into
+ * the local frame and Embree maps it back, for the instance's float map a (L, t), per axis, as
+ * slack[0] max|o| + slack[1]. Those two maps:
+ * - ao.c: o_local = L o + t in double, rounded once to float: off by e1, |e1| <= gamma1 |o_local|,
+ *   and |o_local| <= (|L| |o| + |t|) (1 + gamma1).
+ * - Embree (3.13, instance_intersector): W = L's inverse in float, as the adjoint over the
+ *   determinant (each cofactor a b - c d off by gamma2 of |a b| + |c d|, the determinant a dot
+ *   product with those, off by gamma5 of the same in absolute values, its reciprocal from rcpss and
+ *   one Newton step, 5 ulps, and the product one more), c = -(W t) (off by gamma3 |W| |t|), and the
+ *   origin W o_local + c by three multiply-adds (gamma4 (|W| |o_local| + |c|)).
+ * With L* the exact inverse, o'' - o = (W - L*) L o + (W t + c) + W e1 + e3, so per axis
+ *   |o'' - o| <= (E |L| + gamma6 |W| |L|) |o| + gamma14 |W| |t|,
+ * where E = gamma16 (Cabs + |C| Dabs / |D|) / |D| bounds |W - L*| entry by entry (C the cofactors
+ * and D the determinant, Cabs and Dabs computed with absolute values) and |W| <= |L*| + E. With
+ * |o| <= max|o| on every axis, slack[0] is the largest row sum of the first matrix and slack[1]
+ * the largest entry of the second vector; both are raised by 2^-20 of themselves for the rounding
+ * of this arithmetic and of ao.c's float evaluation. False, when slack[0] exceeds 2^-8 or L is
+ * singular: too ill-conditioned to instance (ao.c's lift assumes slack[0] <= 1/4); the mesh is
+ * flattened instead. */
+static bool round_trip(const float a[12], float slack[2])
+{
+    double l[9], cof[9], cabs[9];
+    for (int k = 0; k < 9; k++)
+        l[k] = a[k];
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            int r1 = (r + 1) % 3, r2 = (r + 2) % 3, c1 = (c + 1) % 3, c2 = (c + 2) % 3;
+            double x = l[3 * c1 + r1] * l[3 * c2 + r2], y = l[3 * c2 + r1] * l[3 * c1 + r2];
+            cof[3 * c + r] = x - y;
+            cabs[3 * c + r] = fabs(x) + fabs(y);
+        }
+    double det = l[0] * cof[0] + l[3] * cof[3] + l[6] * cof[6];
+    double dabs = fabs(l[0]) * cabs[0] + fabs(l[3]) * cabs[3] + fabs(l[6]) * cabs[6];
+    if (!(fabs(det) > 0.0) || !isfinite(det) || !isfinite(dabs))
+        return false;
+    /* W(r, c) = C(c, r) / D; E and |W| entry by entry, row r, column c at [3 c + r]. */
+    double e[9], wabs[9];
+    for (int r = 0; r < 3; r++)
+        for (int c = 0; c < 3; c++) {
+            double cc = cof[3 * r + c], ca = cabs[3 * r + c];
+            e[3 * c + r] = gamma_n(16) * (ca + fabs(cc) * dabs / fabs(det)) / fabs(det);
+            wabs[3 * c + r] = fabs(cc) / fabs(det) + e[3 * c + r];
+        }
+    double alpha = 0.0, beta = 0.0;
+    for (int r = 0; r < 3; r++) {
+        double row = 0.0, wt = 0.0;
+        for (int j = 0; j < 3; j++) {
+            for (int k = 0; k < 3; k++)
+                row += (e[3 * k + r] + gamma_n(6) * wabs[3 * k + r]) * fabs(l[3 * j + k]);
+            wt += wabs[3 * j + r] * fabs((double)a[9 + j]);
+        }
+        alpha = fmax(alpha, row);
+        beta = fmax(beta, gamma_n(14) * wt);
+    }
+    alpha *= 1.0 + 0x1p-20, beta *= 1.0 + 0x1p-20;
+    if (!(alpha <= 0x1p-8) || !isfinite(beta))
+        return false;
+    slack[0] = nextafterf((float)alpha, INFINITY);
+    slack[1] = nextafterf((float)beta, INFINITY);
+    return true;
+}
+
+/* The map m narrowed to float, as an instance keeps it. */
+static void narrow_affine(const struct ao_affine *m, float out[12])
+{
+    for (int k = 0; k < 12; k++)
+        out[k] = (float)m->m[k];
+}
+
+/* Fills w->info: how often each mesh is placed, its box in its own frame, and whether it is
+ * instanced (w->instancing's rule; never where a placement's map is too ill-conditioned for
+ * round_trip). False when memory is short. */
+static bool survey(struct ao_scene *s, struct world *w)
+{
+    free(w->info);
+    if (!(w->info = calloc(s->mesh_count ? s->mesh_count : 1, sizeof *w->info)))
+        return false;
+    for (size_t i = 0; i < w->placement_count; i++)
+        w->info[w->placements[i].mesh].placements++;
+    for (size_t m = 0; m < s->mesh_count; m++) {
+        struct mesh_info *info = &w->info[m];
+        const struct ao_mesh *mesh = &s->meshes[m];
+        info->lo = dvec_make(INFINITY, INFINITY, INFINITY);
+        info->hi = dvec_make(-INFINITY, -INFINITY, -INFINITY);
+        for (size_t v = 0; v < mesh->vertex_count; v++) {
+            struct dvec p = dvec_of(mesh->positions[v]);
+            info->lo = dvec_make(fmin(info->lo.x, p.x), fmin(info->lo.y, p.y), fmin(info->lo.z, p.z));
+            info->hi = dvec_make(fmax(info->hi.x, p.x), fmax(info->hi.y, p.y), fmax(info->hi.z, p.z));
+        }
+        info->left = info->placements;
+        size_t placed = info->placements * mesh->triangle_count;
+        info->instanced = w->instancing == AO_INSTANCING_ALWAYS ? info->placements > 0
+                          : w->instancing == AO_INSTANCING_NEVER ? false
+                          : info->placements > 1 && placed / info->placements == mesh->triangle_count &&
+                                placed > AO_SCENE_FLATTEN_TRIANGLES;
+    }
+    for (size_t i = 0; i < w->placement_count; i++) {
+        struct mesh_info *info = &w->info[w->placements[i].mesh];
+        float a[12], slack[2];
+        narrow_affine(&w->placements[i].to_world, a);
+        a[9] = a[10] = a[11] = 0.0f;   /* the translation changes slack[1] only */
+        if (info->instanced && !round_trip(a, slack))
+            info->instanced = false;
+    }
+    return true;
+}
+
+/* The box lo..hi grown to hold p. */
+static void grow(struct dvec *lo, struct dvec *hi, struct dvec p)
+{
+    *lo = dvec_make(fmin(lo->x, p.x), fmin(lo->y, p.y), fmin(lo->z, p.z));
+    *hi = dvec_make(fmax(hi->x, p.x), fmax(hi->y, p.y), fmax(hi->z, p.z));
+}
+
+/* The box lo..hi grown to hold the world positions of placement p: of its mesh's every vertex when
+ * flattened (exact), of the corners of its mesh's box when instanced (a box holding the instance). */
+static void grow_by_placement(const struct ao_scene *s, const struct world *w, const struct pending *p,
+                              struct dvec *lo, struct dvec *hi)
+{
+    const struct mesh_info *info = &w->info[p->mesh];
+    double q[3];
+    if (info->instanced) {
+        for (int k = 0; k < 8; k++) {
+            ao_affine_point(&p->to_world, k & 1 ? info->hi.x : info->lo.x, k & 2 ? info->hi.y : info->lo.y,
+                            k & 4 ? info->hi.z : info->lo.z, q);
+            grow(lo, hi, dvec_make(q[0], q[1], q[2]));
+        }
+        return;
+    }
+    const struct ao_mesh *m = &s->meshes[p->mesh];
+    for (size_t v = 0; v < m->vertex_count; v++) {
+        ao_affine_point(&p->to_world, m->positions[v].x, m->positions[v].y, m->positions[v].z, q);
+        grow(lo, hi, dvec_make(q[0], q[1], q[2]));
+    }
+}
+
+/* World-space bounding box of all geometry (w->info must be current); false for an empty scene. */
 static bool bounds(const struct ao_scene *s, const struct world *w, struct dvec *lo, struct dvec *hi)
 {
     *lo = dvec_make(INFINITY, INFINITY, INFINITY);
     *hi = dvec_make(-INFINITY, -INFINITY, -INFINITY);
-    for (size_t i = 0; i < s->vertex_count + s->sphere_count; i++) {
-        bool vertex = i < s->vertex_count;
-        struct dvec p = vertex ? w->positions[i] : w->sphere_centers[i - s->vertex_count];
-        double r = vertex ? 0.0 : s->spheres[i - s->vertex_count].radius;
-        *lo = dvec_make(fmin(lo->x, p.x - r), fmin(lo->y, p.y - r), fmin(lo->z, p.z - r));
-        *hi = dvec_make(fmax(hi->x, p.x + r), fmax(hi->y, p.y + r), fmax(hi->z, p.z + r));
+    for (size_t i = 0; i < s->sphere_count; i++) {
+        struct dvec c = w->sphere_centers[i];
+        double r = s->spheres[i].radius;
+        grow(lo, hi, dvec_make(c.x - r, c.y - r, c.z - r));
+        grow(lo, hi, dvec_make(c.x + r, c.y + r, c.z + r));
     }
-    return s->vertex_count + s->sphere_count > 0;
+    for (size_t i = 0; i < w->quad_count; i++)
+        for (int k = 0; k < 4; k++)
+            grow(lo, hi, w->quads[i].p[k]);
+    for (size_t i = 0; i < w->placement_count; i++)
+        grow_by_placement(s, w, &w->placements[i], lo, hi);
+    return s->sphere_count + w->quad_count + w->placement_count > 0;
 }
 
 /* The sizes of scene that the renderer draws as it would the same scene at size 1 (scene.h's
@@ -601,13 +826,6 @@ static double largest_side(struct dvec lo, struct dvec hi)
     return fmax(hi.x - lo.x, fmax(hi.y - lo.y, hi.z - lo.z));
 }
 
-/* The box lo..hi grown to hold p. */
-static void grow(struct dvec *lo, struct dvec *hi, struct dvec p)
-{
-    *lo = dvec_make(fmin(lo->x, p.x), fmin(lo->y, p.y), fmin(lo->z, p.z));
-    *hi = dvec_make(fmax(hi->x, p.x), fmax(hi->y, p.y), fmax(hi->z, p.z));
-}
-
 /* Refuses a scene whose geometry (the box lo..hi, when any) or camera leaves the range derived
  * above, with one line naming the size; false after reporting. */
 static bool check_range(const struct world *w, struct cursor *c, bool any, struct dvec lo, struct dvec hi)
@@ -636,28 +854,154 @@ static bool check_range(const struct world *w, struct cursor *c, bool any, struc
     return true;
 }
 
-/* Moves the scene from world space into its local frame and narrows it to float: every position,
- * sphere centre and the camera become world - origin, with the origin at the bounding box's centre,
- * so that float precision follows the scene's size rather than its distance from (0, 0, 0). Where
- * the box holds (0, 0, 0) its coordinates are at most its size already (one bit worse than from
- * the centre) and the origin stays there, leaving such scenes exactly as written. A scene without
- * a camera line gets one framed on its box. False after reporting (the camera's line) or on
- * short memory. */
+/* Writes src (a mesh in its own frame) moved by to_local into dst (the same mesh, moved in place, or
+ * an empty one that receives a copy): positions in double, narrowed once; normals through
+ * ao_affine_normals; the triangles of a mirroring map turned round. False when memory is short. */
+static bool flatten(struct ao_mesh *dst, const struct ao_mesh *src, const struct ao_affine *to_local)
+{
+    if (dst != src) {
+        *dst = (struct ao_mesh){.vertex_count = src->vertex_count, .triangle_count = src->triangle_count};
+        dst->positions = malloc((src->vertex_count ? src->vertex_count : 1) * sizeof *dst->positions);
+        dst->normals = malloc((src->vertex_count ? src->vertex_count : 1) * sizeof *dst->normals);
+        dst->indices = malloc((src->triangle_count ? 3 * src->triangle_count : 1) * sizeof *dst->indices);
+        if (!dst->positions || !dst->normals || !dst->indices) {
+            ao_mesh_finish(dst);
+            return false;
+        }
+    }
+    double n[9], q[3];
+    bool mirror = ao_affine_normals(to_local, n) < 0.0;
+    for (size_t v = 0; v < src->vertex_count; v++) {
+        struct ao_vec3 p = src->positions[v], m = src->normals[v];
+        ao_affine_point(to_local, p.x, p.y, p.z, q);
+        dst->positions[v] = ao_vec3_make((float)q[0], (float)q[1], (float)q[2]);
+        struct dvec u = {0};
+        unit(dvec_make(n[0] * m.x + n[3] * m.y + n[6] * m.z, n[1] * m.x + n[4] * m.y + n[7] * m.z,
+                       n[2] * m.x + n[5] * m.y + n[8] * m.z), &u);   /* zero stays zero */
+        dst->normals[v] = narrow(u);
+    }
+    for (size_t t = 0; t < src->triangle_count; t++) {
+        uint32_t i0 = src->indices[3 * t], i1 = src->indices[3 * t + 1], i2 = src->indices[3 * t + 2];
+        dst->indices[3 * t] = i0;
+        dst->indices[3 * t + 1] = mirror ? i2 : i1;
+        dst->indices[3 * t + 2] = mirror ? i1 : i2;
+    }
+    return true;
+}
+
+/* Builds the instance of placement p, whose map into the local frame is to_local: an instanced
+ * mesh's map and slack, or the mesh flattened (moved in place at its last placement, copied before:
+ * each copy a mesh of its own, charged to the budget). False after reporting. */
+static bool build_instance(struct ao_scene *s, struct world *w, struct cursor *c, const struct pending *p,
+                           const struct ao_affine *to_local)
+{
+    struct mesh_info *info = &w->info[p->mesh];
+    struct ao_instance *in = &s->instances[s->instance_count];
+    *in = (struct ao_instance){.mesh = p->mesh, .albedo = p->albedo, .flat = !info->instanced};
+    if (info->instanced) {
+        struct ao_affine narrowed;
+        double n[9];
+        narrow_affine(to_local, in->to_local);
+        for (int k = 0; k < 12; k++)
+            narrowed.m[k] = in->to_local[k];
+        ao_affine_normals(&narrowed, n);
+        for (int k = 0; k < 9; k++)
+            in->normals[k] = (float)n[k];
+        if (!round_trip(in->to_local, in->slack))   /* survey() checked the same L */
+            return fail(c, "an instance's transform is too ill-conditioned to trace");
+        s->instance_count++;
+        return true;
+    }
+    narrow_affine(&(struct ao_affine){{1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0}}, in->to_local);
+    in->normals[0] = in->normals[4] = in->normals[8] = 1.0f;
+    size_t dst = p->mesh;
+    if (--info->left > 0) {   /* a copy: the mesh itself is still needed in its own frame */
+        const struct ao_mesh *m = &s->meshes[p->mesh];
+        if (!charge(c, w, m->triangle_count, m->vertex_count, "a flattened copy"))
+            return false;
+        if (s->mesh_count >= UINT32_MAX || !resize(&s->meshes, s->mesh_count + 1, sizeof *s->meshes))
+            return fail(c, "out of memory");
+        dst = s->mesh_count;
+        s->meshes[dst] = (struct ao_mesh){0};
+    }
+    if (!flatten(&s->meshes[dst], &s->meshes[p->mesh], to_local))
+        return fail(c, "out of memory");
+    s->mesh_count += dst != p->mesh;
+    s->instances[s->instance_count].mesh = (uint32_t)dst;
+    s->instance_count++;
+    return true;
+}
+
+/* The quads from w->quads[*next] on that share its albedo, as one flat mesh in the local frame. */
+static bool build_quads(struct ao_scene *s, struct world *w, size_t *next, struct dvec origin)
+{
+    size_t first = *next, n = 1;
+    while (first + n < w->quad_count && memcmp(&w->quads[first + n].rho, &w->quads[first].rho,
+                                               sizeof w->quads[first].rho) == 0)
+        n++;
+    *next = first + n;
+    uint32_t a;
+    if (!add_albedo(s, w->quads[first].rho, &a) || s->mesh_count >= UINT32_MAX ||
+        !resize(&s->meshes, s->mesh_count + 1, sizeof *s->meshes))
+        return false;
+    struct ao_mesh *m = &s->meshes[s->mesh_count];
+    *m = (struct ao_mesh){.vertex_count = 4 * n, .triangle_count = 2 * n};
+    m->positions = malloc(4 * n * sizeof *m->positions);
+    m->normals = malloc(4 * n * sizeof *m->normals);
+    m->indices = malloc(6 * n * sizeof *m->indices);
+    if (!m->positions || !m->normals || !m->indices) {
+        ao_mesh_finish(m);
+        return false;
+    }
+    static const uint32_t tris[6] = {0, 1, 2, 0, 2, 3};
+    for (size_t q = 0; q < n; q++) {
+        for (int k = 0; k < 4; k++) {
+            m->positions[4 * q + (size_t)k] = narrow(dvec_sub(w->quads[first + q].p[k], origin));
+            m->normals[4 * q + (size_t)k] = w->quads[first + q].n;
+        }
+        for (int k = 0; k < 6; k++)
+            m->indices[6 * q + (size_t)k] = (uint32_t)(4 * q) + tris[k];
+    }
+    s->instances[s->instance_count++] = (struct ao_instance){
+        .mesh = (uint32_t)s->mesh_count++, .albedo = a, .flat = true,
+        .to_local = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0}, .normals = {1, 0, 0, 0, 1, 0, 0, 0, 1}};
+    return true;
+}
+
+/* Moves the scene from world space into its local frame and narrows it to float: every mesh
+ * placement (moved into the frame, or instanced with its map into it), quad, sphere centre and the
+ * camera become world - origin, with the origin at the bounding box's centre, so that float
+ * precision follows the scene's size rather than its distance from (0, 0, 0). Where the box holds
+ * (0, 0, 0) its coordinates are at most its size already (one bit worse than from the centre) and
+ * the origin stays there, leaving such scenes exactly as written. A scene without a camera line
+ * gets one framed on its box. False after reporting (the camera's line) or on short memory. */
 static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
 {
     struct dvec lo, hi, origin = {0};
+    c->line = 0;
+    if (!survey(s, w))
+        return fail(c, "out of memory");
     bool any = bounds(s, w, &lo, &hi);
     if (!check_range(w, c, any, lo, hi))
         return false;
     if (any && !(lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0 && lo.z <= 0.0 && hi.z >= 0.0))
         origin = dvec_scale(dvec_add(lo, hi), 0.5);
     s->origin[0] = origin.x, s->origin[1] = origin.y, s->origin[2] = origin.z;
-    if (s->vertex_count && !(s->positions = malloc(s->vertex_count * sizeof *s->positions))) {
-        c->line = 0;
+    c->line = 0;
+    if (!resize(&s->instances, w->placement_count + w->quad_count, sizeof *s->instances))
         return fail(c, "out of memory");
+    struct ao_affine shift = ao_affine_identity();
+    shift.m[9] = -origin.x, shift.m[10] = -origin.y, shift.m[11] = -origin.z;
+    for (size_t i = 0; i < w->placement_count; i++) {
+        struct ao_affine to_local = ao_affine_compose(&shift, &w->placements[i].to_world);
+        if (!build_instance(s, w, c, &w->placements[i], &to_local))
+            return false;
     }
-    for (size_t i = 0; i < s->vertex_count; i++)
-        s->positions[i] = narrow(dvec_sub(w->positions[i], origin));
+    for (size_t next = 0; next < w->quad_count;)
+        if (!build_quads(s, w, &next, origin))
+            return fail(c, "out of memory");
+    for (size_t i = 0; i < s->instance_count; i++)
+        s->triangle_count += s->meshes[s->instances[i].mesh].triangle_count;
     for (size_t i = 0; i < s->sphere_count; i++)
         s->spheres[i].center = narrow(dvec_sub(w->sphere_centers[i], origin));
     if (w->has_camera) {
@@ -676,6 +1020,20 @@ static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
     return true;
 }
 
+/* Frees what the world holds while a scene is read. */
+static void world_finish(struct world *w)
+{
+    for (size_t i = 0; i < w->file_count; i++) {
+        free(w->files[i].path);
+        free(w->files[i].placements);
+    }
+    free(w->files);
+    free(w->placements);
+    free(w->quads);
+    free(w->info);
+    free(w->sphere_centers);
+}
+
 static void begin(struct ao_scene *s, const char *path)
 {
     memset(s, 0, sizeof *s);
@@ -685,11 +1043,12 @@ static void begin(struct ao_scene *s, const char *path)
 }
 
 /* ao_scene_parse charging budget. */
-static bool parse_text(struct ao_scene *scene, const char *text, const char *path, struct ao_budget *budget)
+static bool parse_text(struct ao_scene *scene, const char *text, const char *path, struct ao_budget *budget,
+                       enum ao_instancing instancing)
 {
     begin(scene, path);
     struct cursor c = {.path = path};
-    struct world w = {.extent_note = "", .budget = budget};
+    struct world w = {.extent_note = "", .budget = budget, .instancing = instancing};
     bool ok = true;
     char line[MAX_LINE + 2];
     for (const char *p = text; ok && *p;) {
@@ -705,8 +1064,7 @@ static bool parse_text(struct ao_scene *scene, const char *text, const char *pat
         ok = tokenize(&c, line) && (c.count == 0 || parse_statement(&c, scene, &w));
     }
     ok = ok && place(scene, &w, &c);
-    free(w.positions);
-    free(w.sphere_centers);
+    world_finish(&w);
     if (!ok)
         ao_scene_finish(scene);
     return ok;
@@ -715,7 +1073,14 @@ static bool parse_text(struct ao_scene *scene, const char *text, const char *pat
 bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
 {
     struct ao_budget budget = {AO_BUDGET_DEFAULT, 0};
-    return parse_text(scene, text, path, &budget);
+    return parse_text(scene, text, path, &budget, AO_INSTANCING_AUTO);
+}
+
+bool ao_scene_parse_with(struct ao_scene *scene, const char *text, const char *path,
+                         const struct ao_scene_options *options)
+{
+    struct ao_budget budget = {options->budget, 0};
+    return parse_text(scene, text, path, &budget, options->instancing);
 }
 
 /* The ground quad added under a bare mesh whose box is lo..hi: 50 times as wide as the mesh's
@@ -728,46 +1093,31 @@ bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
  * from 1e-6 E up, on both tracers; the bare bunny at 640x480, 256 spp, against the gap 0, darkened
  * its contact shadow (the ground pixels below 0.9 rho) by 0.03 % at 1e-4 E, within the noise of that
  * mean, and by 0.3 % at 1e-3 E, 3 % at 1e-2 E. 1e-4 E keeps a factor 100 on either side. */
-static bool add_ground(struct ao_scene *s, struct world *w, struct dvec lo, struct dvec hi)
+static bool add_ground(struct world *w, struct dvec lo, struct dvec hi)
 {
     struct dvec mid = dvec_scale(dvec_add(lo, hi), 0.5);
     double extent = largest_side(lo, hi), size = 25.0 * extent, y = lo.y - AO_SCENE_GROUND_GAP * extent;
     struct dvec p[4] = {dvec_make(mid.x - size, y, mid.z - size), dvec_make(mid.x - size, y, mid.z + size),
                         dvec_make(mid.x + size, y, mid.z + size), dvec_make(mid.x + size, y, mid.z - size)};
-    struct ao_vec3 up = ao_vec3_make(0, 1, 0), normals[4] = {up, up, up, up};
-    static const uint32_t tris[6] = {0, 1, 2, 0, 2, 3};
-    uint32_t a;
-    return add_albedo(s, ao_vec3_make(0.5f, 0.5f, 0.5f), &a) && add_triangles(s, w, p, normals, 4, tris, 2, a);
+    return add_quad(w, p, ao_vec3_make(0, 1, 0), ao_vec3_make(0.5f, 0.5f, 0.5f));
 }
 
-/* A bare mesh: the mesh itself, with ground a large ground quad under it, a camera framed on the
- * mesh. */
-static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budget *budget, bool ground)
+/* A bare mesh: the mesh file's model, with ground a large ground quad under it, a camera framed on
+ * it. */
+static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budget *budget, bool ground,
+                           enum ao_instancing instancing)
 {
     begin(s, path);
-    struct ao_mesh m = {0};
     struct world w = {.extent_note = ground ? " (the mesh with its ground quad, 50 times as wide as the mesh)" : "",
-                      .budget = budget};
+                      .budget = budget, .instancing = instancing};
     struct cursor c = {.path = path};
-    if (!ao_mesh_load_budget(&m, path, budget))
-        return false;
-    if (!charge(&c, &w, m.triangle_count + 2 * ground, m.vertex_count + 4 * ground,
-                ground ? "the mesh and its ground" : "the mesh")) {
-        ao_mesh_finish(&m);
-        return false;
-    }
-    struct transform identity = {.scale = dvec_make(1, 1, 1), .axis = dvec_make(0, 1, 0), .cos_angle = 1};
-    struct dvec *positions = NULL, lo, hi;
-    uint32_t a;
-    bool ok = transform_mesh(&m, &identity, &positions) &&
-              add_albedo(s, ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO), &a) &&
-              add_triangles(s, &w, positions, m.normals, m.vertex_count, m.indices, m.triangle_count, a);
-    s->degenerate_count = m.degenerate_count;
-    s->point_primitives = m.point_primitives;
-    s->line_primitives = m.line_primitives;
-    add_note(s, path, m.note);
-    free(positions);
-    ao_mesh_finish(&m);
+    struct ao_affine identity = ao_affine_identity();
+    const struct loaded *f = load_file(&c, s, &w, path);
+    bool ok = f && (!ground || charge(&c, &w, 2, 4, "the ground")) &&
+              place_model(&c, s, &w, f, &identity, ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO), path);
+    struct dvec lo, hi;
+    if (ok && !survey(s, &w))
+        ok = fail(&c, "out of memory");
     if (ok && bounds(s, &w, &lo, &hi)) {
         /* The camera framed on the mesh about its centre, then kept in world space. */
         struct dvec mid = dvec_scale(dvec_add(lo, hi), 0.5);
@@ -775,12 +1125,11 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budge
         w.eye = dvec_add(mid, dvec_of(s->camera.eye));
         w.target = dvec_add(mid, dvec_of(s->camera.target));
         w.has_camera = true;
-        ok = !ground || add_ground(s, &w, lo, hi);
+        if (ground && !add_ground(&w, lo, hi))
+            ok = fail(&c, "out of memory");
     }
-    if (!ok)
-        ao_file_report("%s: out of memory", path);
     ok = ok && place(s, &w, &c);
-    free(w.positions);
+    world_finish(&w);
     if (!ok)
         ao_scene_finish(s);
     return ok;
@@ -802,7 +1151,7 @@ bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct a
     struct ao_budget budget = {options->budget, 0};
     memset(scene, 0, sizeof *scene);
     if (ao_mesh_is_mesh_path(path))
-        return load_bare_mesh(scene, path, &budget, options->ground);
+        return load_bare_mesh(scene, path, &budget, options->ground, options->instancing);
     char *text;
     size_t got;
     if (!ao_file_read_budget(path, &budget, &text, &got))
@@ -810,18 +1159,56 @@ bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct a
     bool ok = strlen(text) == got;
     if (!ok)
         ao_file_report("%s: not a text file (it contains a NUL byte)", path);
-    ok = ok && parse_text(scene, text, path, &budget);
+    ok = ok && parse_text(scene, text, path, &budget, options->instancing);
     free(text);
     return ok;
 }
 
 void ao_scene_finish(struct ao_scene *scene)
 {
+    for (size_t i = 0; scene->meshes && i < scene->mesh_count; i++)
+        ao_mesh_finish(&scene->meshes[i]);
+    free(scene->meshes);
+    free(scene->instances);
     free(scene->spheres);
-    free(scene->positions);
-    free(scene->normals);
-    free(scene->indices);
-    free(scene->triangle_albedo);
     free(scene->albedos);
     memset(scene, 0, sizeof *scene);
+}
+
+bool ao_scene_add_flat_mesh(struct ao_scene *scene, struct ao_mesh *mesh, struct ao_vec3 albedo)
+{
+    uint32_t a;
+    bool ok = scene->mesh_count < UINT32_MAX && scene->instance_count < UINT32_MAX &&
+              resize(&scene->meshes, scene->mesh_count + 1, sizeof *scene->meshes) &&
+              resize(&scene->instances, scene->instance_count + 1, sizeof *scene->instances) &&
+              add_albedo(scene, albedo, &a);
+    if (!ok) {
+        ao_mesh_finish(mesh);
+        return false;
+    }
+    scene->instances[scene->instance_count++] = (struct ao_instance){
+        .mesh = (uint32_t)scene->mesh_count, .albedo = a, .flat = true,
+        .to_local = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0}, .normals = {1, 0, 0, 0, 1, 0, 0, 0, 1}};
+    scene->meshes[scene->mesh_count++] = *mesh;
+    scene->triangle_count += mesh->triangle_count;
+    *mesh = (struct ao_mesh){0};
+    return true;
+}
+
+void ao_scene_triangle(const struct ao_scene *scene, size_t instance, size_t prim, struct ao_vec3 corners[3])
+{
+    const struct ao_instance *in = &scene->instances[instance];
+    const struct ao_mesh *m = &scene->meshes[in->mesh];
+    for (int k = 0; k < 3; k++) {
+        struct ao_vec3 p = m->positions[m->indices[3 * prim + (size_t)k]];
+        if (in->flat) {
+            corners[k] = p;
+            continue;
+        }
+        const float *a = in->to_local;
+        double q[3];
+        for (int r = 0; r < 3; r++)
+            q[r] = (double)a[r] * p.x + (double)a[3 + r] * p.y + (double)a[6 + r] * p.z + (double)a[9 + r];
+        corners[k] = ao_vec3_make((float)q[0], (float)q[1], (float)q[2]);
+    }
 }

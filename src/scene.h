@@ -1,8 +1,11 @@
 /* Scenes: the .scene file format of SPEC.md (or a bare mesh on a ground quad) turned into a camera,
- * analytic spheres and one triangle soup for every mesh and quad, all in the scene's local frame:
- * read and transformed in double precision, then stored in float relative to an origin near the
- * scene (scene.c's place()), so that float precision follows the scene's size, not its distance
- * from (0, 0, 0). Everything downstream (camera moves, tracer, estimator) works in that frame. */
+ * analytic spheres, a table of unique triangle meshes and the instances that place them, all in the
+ * scene's local frame: read and transformed in double precision, then stored in float relative to
+ * an origin near the scene (scene.c's place()), so that float precision follows the scene's size,
+ * not its distance from (0, 0, 0). A mesh file that several mesh lines name is loaded once, a glTF
+ * mesh under several nodes once; a mesh placed once (or small and placed a few times) is
+ * flattened: moved into the local frame. Everything downstream (camera moves, tracer, estimator)
+ * works in that frame. */
 #ifndef AO_SCENE_H
 #define AO_SCENE_H
 
@@ -11,6 +14,7 @@
 #include <stdint.h>
 
 #include "camera.h"
+#include "mesh.h"
 #include "vec3.h"
 
 /* The smallest and largest scene, as the largest side of the box around its geometry (and its
@@ -26,6 +30,19 @@ struct ao_sphere {
     struct ao_vec3 albedo;
 };
 
+/* A mesh placed in the scene: scene->meshes[mesh] with an albedo. A flat instance's mesh lies in the
+ * local frame already (flattened; its transform is the identity); any other's lies in its own frame,
+ * which to_local maps into the local frame, and is traced through Embree's instancing. */
+struct ao_instance {
+    uint32_t mesh;            /* index into meshes */
+    uint32_t albedo;          /* index into albedos */
+    bool flat;
+    float to_local[12];       /* local = L p + t, column major (affine.h's layout) */
+    float normals[9];         /* maps the mesh's normals into the local frame (ao_affine_normals) */
+    float slack[2];           /* a ray origin o mapped into the local frame and back by the tracer
+                                 moves by at most slack[0] max|o| + slack[1] per axis (scene.c) */
+};
+
 /* A whole scene; the caller owns it (ao_scene_load fills it, ao_scene_finish frees it). */
 struct ao_scene {
     char name[64];                /* file name without directory, for titles */
@@ -36,12 +53,11 @@ struct ao_scene {
     float ao_distance;            /* occlusion range; INFINITY when not given */
     struct ao_sphere *spheres;    /* centres in the local frame */
     size_t sphere_count;
-    struct ao_vec3 *positions;    /* all triangles of all meshes and quads, local frame */
-    struct ao_vec3 *normals;      /* per vertex, unit or zero */
-    size_t vertex_count;
-    uint32_t *indices;            /* 3 per triangle */
-    uint32_t *triangle_albedo;    /* per triangle, index into albedos */
-    size_t triangle_count;
+    struct ao_mesh *meshes;       /* unique meshes (mesh.h); the quads are meshes too */
+    size_t mesh_count;
+    struct ao_instance *instances;
+    size_t instance_count;
+    size_t triangle_count;        /* triangles placed, all instances */
     struct ao_vec3 *albedos;
     size_t albedo_count;
     size_t degenerate_count;      /* zero-area triangles skipped by the mesh loaders */
@@ -60,11 +76,23 @@ bool ao_scene_load(struct ao_scene *scene, const char *path);
  * needs how much. */
 bool ao_scene_load_budget(struct ao_scene *scene, const char *path, uint64_t budget_bytes);
 
-/* How ao_scene_load_with loads: the scene budget in bytes (budget.h) and, for a bare mesh, whether
- * the ground quad is added under it (a .scene file has only the quads it lists). */
+/* Which meshes the scene instances: AUTO those placed more than once and with more than
+ * AO_SCENE_FLATTEN_TRIANGLES triangles placed (the rule measured in docs/performance.md); ALWAYS
+ * every mesh file's mesh (the quads stay flat), NEVER none (every placement flattened, as copies);
+ * for tests and benchmarks. A transform too ill-conditioned for the tracer's error bound is
+ * flattened whatever this says. */
+enum ao_instancing { AO_INSTANCING_AUTO, AO_INSTANCING_ALWAYS, AO_INSTANCING_NEVER };
+
+/* The most triangles that AUTO flattens of a mesh placed several times (all its copies together). */
+#define AO_SCENE_FLATTEN_TRIANGLES 4096
+
+/* How ao_scene_load_with loads: the scene budget in bytes (budget.h); for a bare mesh, whether the
+ * ground quad is added under it (a .scene file has only the quads it lists); which meshes it
+ * instances. */
 struct ao_scene_options {
     uint64_t budget;
     bool ground;
+    enum ao_instancing instancing;
 };
 
 /* The gap between a bare mesh's lowest point and the ground quad added under it, as a fraction
@@ -79,6 +107,19 @@ bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct a
 /* Parses scene text as if read from path (relative mesh paths resolve against its directory);
  * same reporting and budget as ao_scene_load. */
 bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path);
+
+/* ao_scene_parse with options (their ground is not used: scene text has only the quads it lists). */
+bool ao_scene_parse_with(struct ao_scene *scene, const char *text, const char *path,
+                         const struct ao_scene_options *options);
+
+/* Adds mesh (taken: the scene frees it; zeroed here), whose positions are in the scene's local frame
+ * already, as a flat instance of the given albedo: for scenes built in code (benchmarks, tests).
+ * False when memory is short (the mesh is then freed). */
+bool ao_scene_add_flat_mesh(struct ao_scene *scene, struct ao_mesh *mesh, struct ao_vec3 albedo);
+
+/* The corners of triangle prim of the given instance in the local frame: a flat instance's as
+ * stored, another's mapped by its to_local in double and narrowed. Any thread. */
+void ao_scene_triangle(const struct ao_scene *scene, size_t instance, size_t prim, struct ao_vec3 corners[3]);
 
 /* Frees everything the scene owns and zeroes it; accepts an empty scene. */
 void ao_scene_finish(struct ao_scene *scene);

@@ -2,6 +2,7 @@
 #include "tracer.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -18,8 +19,12 @@
 struct ao_tracer {
     struct ao_direct *direct;            /* set when the direct back end traces: no Embree at all */
     RTCDevice device;
-    RTCScene scene;
-    unsigned triangles_id, spheres_id;   /* RTC_INVALID_GEOMETRY_ID when absent */
+    RTCScene scene;                      /* the top level: flat meshes, instances, spheres */
+    RTCScene *meshes;                    /* per scene mesh: its own BVH when instances place it, else NULL */
+    size_t mesh_count;
+    unsigned spheres_id;                 /* RTC_INVALID_GEOMETRY_ID when absent */
+    struct ao_tracer_stats stats;
+    _Atomic int64_t embree_bytes, embree_peak;   /* Embree's memory monitor */
     struct ao_ray_recorder *occlusion_recorder, *eye_recorder;  /* benchmarks only */
 };
 
@@ -29,26 +34,81 @@ static void report(void *user, enum RTCError code, const char *message)
     fprintf(stderr, "aoview: Embree error %d: %s\n", (int)code, message ? message : "(no message)");
 }
 
-/* One triangle geometry holds every mesh and quad, so the scene has a single triangle BVH. */
-static bool add_triangles(struct ao_tracer *t, const struct ao_scene *s)
+/* Embree's memory monitor: what the device holds now and at most (Embree calls it from its build
+ * threads; it never refuses). */
+static bool monitor(void *user, ssize_t bytes, bool post)
+{
+    (void)post;
+    struct ao_tracer *t = user;
+    int64_t now = atomic_fetch_add(&t->embree_bytes, (int64_t)bytes) + (int64_t)bytes;
+    int64_t peak = atomic_load(&t->embree_peak);
+    while (now > peak && !atomic_compare_exchange_weak(&t->embree_peak, &peak, now))
+        ;
+    return true;
+}
+
+/* A triangle geometry of the mesh's vertices and triangles. */
+static RTCGeometry triangles_of(struct ao_tracer *t, const struct ao_mesh *m)
 {
     RTCGeometry g = rtcNewGeometry(t->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                       s->vertex_count);
+                                       m->vertex_count);
     unsigned *idx = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-                                            s->triangle_count);
+                                            m->triangle_count);
     if (!v || !idx) {
         rtcReleaseGeometry(g);
-        return false;
+        return NULL;
     }
-    for (size_t i = 0; i < s->vertex_count; i++) {
-        v[3 * i + 0] = s->positions[i].x;
-        v[3 * i + 1] = s->positions[i].y;
-        v[3 * i + 2] = s->positions[i].z;
+    for (size_t i = 0; i < m->vertex_count; i++) {
+        v[3 * i + 0] = m->positions[i].x;
+        v[3 * i + 1] = m->positions[i].y;
+        v[3 * i + 2] = m->positions[i].z;
     }
-    memcpy(idx, s->indices, 3 * s->triangle_count * sizeof *idx);
+    memcpy(idx, m->indices, 3 * m->triangle_count * sizeof *idx);
     rtcCommitGeometry(g);
-    t->triangles_id = rtcAttachGeometry(t->scene, g);
+    return g;
+}
+
+/* Instanced mesh m's own scene, built once: one triangle geometry, one BVH. */
+static RTCScene mesh_scene(struct ao_tracer *t, const struct ao_scene *s, uint32_t m)
+{
+    if (t->meshes[m])
+        return t->meshes[m];
+    RTCScene scene = rtcNewScene(t->device);
+    RTCGeometry g = scene ? triangles_of(t, &s->meshes[m]) : NULL;
+    if (!g) {
+        if (scene)
+            rtcReleaseScene(scene);
+        return NULL;
+    }
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+    rtcAttachGeometry(scene, g);
+    rtcReleaseGeometry(g);
+    rtcCommitScene(scene);
+    t->stats.bvhs++;
+    return t->meshes[m] = scene;
+}
+
+/* Instance i of the scene, under geometry id i of the top level: a flat mesh's triangles, or an
+ * Embree instance of its mesh's own scene under its map into the local frame. */
+static bool add_instance(struct ao_tracer *t, const struct ao_scene *s, size_t i)
+{
+    const struct ao_instance *in = &s->instances[i];
+    RTCGeometry g;
+    if (in->flat) {
+        if (!(g = triangles_of(t, &s->meshes[in->mesh])))
+            return false;
+        t->stats.triangle_geometries++;
+    } else {
+        RTCScene scene = mesh_scene(t, s, in->mesh);
+        if (!scene || !(g = rtcNewGeometry(t->device, RTC_GEOMETRY_TYPE_INSTANCE)))
+            return false;
+        rtcSetGeometryInstancedScene(g, scene);
+        rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, in->to_local);
+        rtcCommitGeometry(g);
+        t->stats.instances++;
+    }
+    rtcAttachGeometryByID(t->scene, g, (unsigned)i);
     rtcReleaseGeometry(g);
     return true;
 }
@@ -70,7 +130,8 @@ static bool add_spheres(struct ao_tracer *t, const struct ao_scene *s)
         v[4 * i + 3] = s->spheres[i].radius;
     }
     rtcCommitGeometry(g);
-    t->spheres_id = rtcAttachGeometry(t->scene, g);
+    t->spheres_id = (unsigned)s->instance_count;
+    rtcAttachGeometryByID(t->scene, g, t->spheres_id);
     rtcReleaseGeometry(g);
     return true;
 }
@@ -95,7 +156,7 @@ struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_ba
         }
         return t;
     }
-    t->triangles_id = t->spheres_id = RTC_INVALID_GEOMETRY_ID;
+    t->spheres_id = RTC_INVALID_GEOMETRY_ID;
     t->device = rtcNewDevice(NULL);
     if (!t->device) {
         fprintf(stderr, "aoview: Embree could not create a device (error %d)\n", (int)rtcGetDeviceError(NULL));
@@ -103,21 +164,36 @@ struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_ba
         return NULL;
     }
     rtcSetDeviceErrorFunction(t->device, report, NULL);
-    t->scene = rtcNewScene(t->device);
+    rtcSetDeviceMemoryMonitorFunction(t->device, monitor, t);
+    t->mesh_count = scene->mesh_count;
+    t->meshes = calloc(scene->mesh_count ? scene->mesh_count : 1, sizeof *t->meshes);
+    t->scene = t->meshes ? rtcNewScene(t->device) : NULL;
     /* Robust traversal keeps shared edges watertight, so closed meshes stay closed. */
-    if (t->scene)
+    if (t->scene) {
         rtcSetSceneFlags(t->scene, RTC_SCENE_FLAG_ROBUST);
-    bool ok = t->scene && (scene->triangle_count == 0 || add_triangles(t, scene)) &&
-              (scene->sphere_count == 0 || add_spheres(t, scene));
+        t->stats.bvhs = 1;
+    }
+    bool ok = t->scene != NULL;
+    for (size_t i = 0; ok && i < scene->instance_count; i++)
+        ok = add_instance(t, scene, i);
+    ok = ok && (scene->sphere_count == 0 || add_spheres(t, scene));
     if (ok) {
         rtcCommitScene(t->scene);
         ok = rtcGetDeviceError(t->device) == RTC_ERROR_NONE;
     }
     if (!ok) {
+        fprintf(stderr, "aoview: Embree could not build the scene (out of memory?)\n");
         ao_tracer_destroy(t);
         return NULL;
     }
+    t->stats.embree_bytes = atomic_load(&t->embree_bytes);
+    t->stats.embree_peak_bytes = atomic_load(&t->embree_peak);
     return t;
+}
+
+void ao_tracer_describe(const struct ao_tracer *tracer, struct ao_tracer_stats *out)
+{
+    *out = tracer->stats;
 }
 
 void ao_tracer_destroy(struct ao_tracer *tracer)
@@ -127,6 +203,10 @@ void ao_tracer_destroy(struct ao_tracer *tracer)
     ao_direct_destroy(tracer->direct);
     if (tracer->scene)
         rtcReleaseScene(tracer->scene);
+    for (size_t i = 0; tracer->meshes && i < tracer->mesh_count; i++)
+        if (tracer->meshes[i])
+            rtcReleaseScene(tracer->meshes[i]);
+    free(tracer->meshes);
     if (tracer->device)
         rtcReleaseDevice(tracer->device);
     free(tracer);
@@ -231,7 +311,9 @@ void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet 
         hits[k].u = rh.hit.u[k];
         hits[k].v = rh.hit.v[k];
         hits[k].prim = rh.hit.primID[k];
-        hits[k].sphere = rh.hit.geomID[k] == tracer->spheres_id;
+        bool instanced = rh.hit.instID[0][k] != RTC_INVALID_GEOMETRY_ID;
+        hits[k].instance = instanced ? rh.hit.instID[0][k] : rh.hit.geomID[k];
+        hits[k].sphere = !instanced && rh.hit.geomID[k] == tracer->spheres_id;
         hits[k].ng = ao_vec3_make(rh.hit.Ng_x[k], rh.hit.Ng_y[k], rh.hit.Ng_z[k]); /* Embree's: as ours */
     }
 }

@@ -26,9 +26,11 @@ struct ao_packet {
 struct ao_hit {
     float t;                /* distance along the unit ray; INFINITY on a miss */
     float u, v;             /* barycentrics of vertices 1 and 2 on triangles */
-    uint32_t prim;          /* triangle index, or sphere index */
+    uint32_t prim;          /* triangle index in its instance's mesh, or sphere index */
+    uint32_t instance;      /* on triangles, the scene's instance */
     bool sphere;            /* true for a sphere, false for a triangle */
-    struct ao_vec3 ng;      /* on triangles, the unnormalized geometric normal (p1 - p0) x (p2 - p0) */
+    struct ao_vec3 ng;      /* on triangles, the unnormalized geometric normal (p1 - p0) x (p2 - p0)
+                               of the mesh's own vertices (in its own frame when instanced) */
 };
 
 /* Builds the tracer for `scene` (which must outlive it), Embree or direct as measured faster; NULL
@@ -44,6 +46,17 @@ struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_ba
 
 /* The back end that traces, "embree" or "direct", for --stats and benchmarks. Any thread. */
 const char *ao_tracer_backend(const struct ao_tracer *tracer);
+
+/* What a tracer built (zero for the direct back end): Embree BVHs (the top level and one per
+ * instanced mesh), flat meshes' triangle geometries and instance geometries in the top level, and
+ * the bytes Embree held once built and at most while building (its memory monitor). */
+struct ao_tracer_stats {
+    size_t bvhs, triangle_geometries, instances;
+    int64_t embree_bytes, embree_peak_bytes;
+};
+
+/* Fills *out with what the tracer built. Any thread. */
+void ao_tracer_describe(const struct ao_tracer *tracer, struct ao_tracer_stats *out);
 
 /* Releases the Embree scene and device; accepts NULL. */
 void ao_tracer_destroy(struct ao_tracer *tracer);

@@ -160,17 +160,8 @@ static void make_big_mesh(struct ao_scene *s, int n)
     m.positions[q] = ao_vec3_make(-50, 0, -50), m.positions[q + 1] = ao_vec3_make(-50, 0, 50);
     m.positions[q + 2] = ao_vec3_make(50, 0, 50), m.positions[q + 3] = ao_vec3_make(50, 0, -50);
     *t++ = q, *t++ = q + 1, *t++ = q + 2, *t++ = q, *t++ = q + 2, *t++ = q + 3;
-    if (!ao_mesh_compute_normals(&m))
+    if (!ao_mesh_compute_normals(&m) || !ao_scene_add_flat_mesh(s, &m, ao_vec3_make(0.8f, 0.8f, 0.8f)))
         exit(1);
-    s->positions = m.positions;
-    s->normals = m.normals;
-    s->vertex_count = m.vertex_count;
-    s->indices = m.indices;
-    s->triangle_count = m.triangle_count;
-    s->triangle_albedo = calloc(m.triangle_count, sizeof *s->triangle_albedo);
-    s->albedos = malloc(sizeof *s->albedos);
-    s->albedos[0] = ao_vec3_make(0.8f, 0.8f, 0.8f);
-    s->albedo_count = 1;
     s->background = ao_vec3_make(1, 1, 1);
     s->ao_distance = INFINITY;
     s->camera = (struct ao_camera){.eye = {0.5f, 1.0f, 2.5f}, .target = {0, 0.5f, 0}, .up = {0, 1, 0}, .fov = 40};

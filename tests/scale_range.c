@@ -22,8 +22,9 @@ static float *render_scaled(const char *text, const char *path, int k, enum ao_b
     if (!ao_scene_parse(&scene, text, path))
         return NULL;
     float s = ldexpf(1.0f, k);
-    for (size_t i = 0; i < scene.vertex_count; i++)
-        scene.positions[i] = ao_vec3_scale(scene.positions[i], s);
+    for (size_t m = 0; m < scene.mesh_count; m++)   /* the scenes it scales are flat */
+        for (size_t i = 0; i < scene.meshes[m].vertex_count; i++)
+            scene.meshes[m].positions[i] = ao_vec3_scale(scene.meshes[m].positions[i], s);
     for (size_t i = 0; i < scene.sphere_count; i++) {
         scene.spheres[i].center = ao_vec3_scale(scene.spheres[i].center, s);
         scene.spheres[i].radius *= s;

@@ -63,6 +63,16 @@ static void from_vec3(struct ao_vec3 p, double out[3])
     out[2] = p.z;
 }
 
+/* The corners of the scene's triangle i, counting the triangles of its instances in order, in the
+ * local frame. */
+static void corners(const struct ao_scene *s, size_t i, struct ao_vec3 c[3])
+{
+    size_t k = 0;
+    while (i >= s->meshes[s->instances[k].mesh].triangle_count)
+        i -= s->meshes[s->instances[k++].mesh].triangle_count;
+    ao_scene_triangle(s, k, i, c);
+}
+
 /* Records a candidate hit at t; returns true when it is too close to 0 or to tfar to call. */
 static bool candidate(double t, double tfar, double scale, double *first, double *second)
 {
@@ -111,8 +121,10 @@ static bool too_close(const struct ao_scene *s, const double o[3], const double 
         if ((long)(s->sphere_count + i) == leaves)
             continue;
         double p[3][3], e1[3], e2[3], n[3], w[3];
+        struct ao_vec3 c[3];
+        corners(s, i, c);
         for (int v = 0; v < 3; v++)
-            from_vec3(s->positions[s->indices[3 * i + v]], p[v]);
+            from_vec3(c[v], p[v]);
         for (int k = 0; k < 3; k++) {
             e1[k] = p[1][k] - p[0][k];
             e2[k] = p[2][k] - p[0][k];
@@ -146,8 +158,10 @@ static bool too_close(const struct ao_scene *s, const double o[3], const double 
 static double triangle_point(const struct ao_scene *s, uint32_t prim, double u, double v, double x[3], double n[3])
 {
     double p[3][3], e1[3], e2[3];
+    struct ao_vec3 c[3];
+    corners(s, prim, c);
     for (int k = 0; k < 3; k++)
-        from_vec3(s->positions[s->indices[3 * prim + (uint32_t)k]], p[k]);
+        from_vec3(c[k], p[k]);
     for (int k = 0; k < 3; k++) {
         e1[k] = p[1][k] - p[0][k];
         e2[k] = p[2][k] - p[0][k];
@@ -175,7 +189,8 @@ static void point_on(const struct ao_scene *s, uint64_t *rng, size_t prim, bool 
             x[k] = c[k] + r * n[k];
         return;
     }
-    const uint32_t *idx = &s->indices[3 * (prim - s->sphere_count)];
+    struct ao_vec3 c[3];
+    corners(s, prim - s->sphere_count, c);
     double p[3][3], u = between(rng, 0, 1), v = between(rng, 0, 1);
     if (u + v > 1 && !near) {
         u = 1 - u;
@@ -186,7 +201,7 @@ static void point_on(const struct ao_scene *s, uint64_t *rng, size_t prim, bool 
         v = v * 1.4 - 0.2;
     }
     for (int k = 0; k < 3; k++)
-        from_vec3(s->positions[idx[k]], p[k]);
+        from_vec3(c[k], p[k]);
     for (int k = 0; k < 3; k++)
         x[k] = p[0][k] + u * (p[1][k] - p[0][k]) + v * (p[2][k] - p[0][k]);
     double e1[3], e2[3];
@@ -213,8 +228,8 @@ static void lifted_origin(const struct ao_scene *s, size_t prim, const double x[
         p = ao_sphere_point(s->spheres[prim].center, s->spheres[prim].radius,
                             ao_vec3_make((float)x[0], (float)x[1], (float)x[2]), &outward, &error);
     } else {
-        const uint32_t *idx = &s->indices[3 * (prim - s->sphere_count)];
-        struct ao_vec3 v[3] = {s->positions[idx[0]], s->positions[idx[1]], s->positions[idx[2]]};
+        struct ao_vec3 v[3];
+        corners(s, prim - s->sphere_count, v);
         double p0[3], p1[3], p2[3], e1[3], e2[3], w[3];
         from_vec3(v[0], p0);
         from_vec3(v[1], p1);

@@ -155,14 +155,19 @@ static void test_contact_shadow_is_kept(void **state)
     struct ao_scene gap, touching;
     load(&gap, path, true);
     load(&touching, path, true);
-    /* The ground is the last 4 vertices; raise them to the lowest vertex of the mesh. */
-    size_t mesh_vertices = touching.vertex_count - 4;
+    /* The ground is the last instance's mesh (the bunny, placed once, is flat); raise its 4 vertices
+     * to the lowest vertex of the bunny. */
+    assert_int_equal(touching.instance_count, 2);
+    assert_true(touching.instances[0].flat && touching.instances[1].flat);
+    struct ao_mesh *bunny = &touching.meshes[touching.instances[0].mesh];
+    struct ao_mesh *ground = &touching.meshes[touching.instances[1].mesh];
+    assert_int_equal(ground->vertex_count, 4);
     float lowest = INFINITY;
-    for (size_t i = 0; i < mesh_vertices; i++)
-        lowest = fminf(lowest, touching.positions[i].y);
-    assert_true(touching.positions[mesh_vertices].y < lowest);
-    for (size_t i = mesh_vertices; i < touching.vertex_count; i++)
-        touching.positions[i].y = lowest;
+    for (size_t i = 0; i < bunny->vertex_count; i++)
+        lowest = fminf(lowest, bunny->positions[i].y);
+    assert_true(ground->positions[0].y < lowest);
+    for (size_t i = 0; i < 4; i++)
+        ground->positions[i].y = lowest;
 
     enum { W = 320, H = 240, SPP = 64 };
     float *a = render(&gap, AO_BACKEND_AUTO, W, H, SPP, AO_OUTPUT_AO);

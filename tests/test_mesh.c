@@ -1425,8 +1425,10 @@ static void test_loaders_keep_to_the_budget(void **state)
     ao_mesh_finish(&mesh);
 }
 
-/* One budget covers the whole scene: each mesh line is charged, so the third of three that fit
- * alone is refused, naming it. */
+/* One budget covers the whole scene: a mesh file that three lines name is read and charged once,
+ * each of its placements once, and each copy of it that flattening makes (a one-triangle mesh
+ * placed three times is flattened: the mesh moved for the last placement, copied for the others);
+ * one byte less is refused. */
 static void test_scene_budget_covers_every_mesh_line(void **state)
 {
     (void)state;
@@ -1435,11 +1437,13 @@ static void test_scene_budget_covers_every_mesh_line(void **state)
     static const char text[] = "camera eye 0 1 4 target 0 0 0\nmesh tri.obj\nmesh tri.obj translate 1 0 0\n"
                                "mesh tri.obj translate 2 0 0\n";
     const char *path = temp_file("three.scene", text, sizeof text - 1);
-    /* The scene's text, two triangles kept, and the third's file and check. */
-    uint64_t need = sizeof text + 2 * ao_budget_mesh(1, 3) + sizeof obj + ao_budget_mesh(1, 3);
+    /* The scene's text, the mesh, three placements and two copies. */
+    uint64_t need = sizeof text + 3 * ao_budget_mesh(1, 3) + 3 * AO_BUDGET_INSTANCE;
     struct ao_scene scene;
     assert_true(ao_scene_load_budget(&scene, path, need));
     assert_int_equal(scene.triangle_count, 3);
+    assert_int_equal(scene.mesh_count, 3);
+    assert_int_equal(scene.instance_count, 3);
     ao_scene_finish(&scene);
     assert_false(ao_scene_load_budget(&scene, path, need - 1));
 }
