@@ -3,6 +3,18 @@
 
 static const float PI = 3.14159265358979323846f;
 
+/* How far from the local origin the viewer's pan and zoom may take the eye and the target: far
+ * beyond any scene (scene.h's AO_SCENE_MAX_EXTENT, 2^31), and with an orbit about a target there
+ * (at most 3 times this) well inside Embree's bound on ray origins (1.844e18, about 2^60.7), beyond
+ * which its traversal aborts. */
+static const float MOVE_LIMIT = 0x1p48f;
+
+/* Whether p lies within MOVE_LIMIT of the origin in every coordinate (not NaN). */
+static bool within_reach(struct ao_vec3 p)
+{
+    return fabsf(p.x) <= MOVE_LIMIT && fabsf(p.y) <= MOVE_LIMIT && fabsf(p.z) <= MOVE_LIMIT;
+}
+
 bool ao_camera_view(const struct ao_camera *c, int width, int height, struct ao_view *v)
 {
     struct ao_vec3 dir = ao_vec3_sub(c->target, c->eye);
@@ -67,8 +79,11 @@ void ao_camera_pan(struct ao_camera *c, float dx, float dy)
         return;
     float extent = 2.0f * v.tan_half_fov * ao_vec3_length(ao_vec3_sub(c->target, c->eye));
     struct ao_vec3 move = ao_vec3_add(ao_vec3_scale(v.right, -dx * extent), ao_vec3_scale(v.up, dy * extent));
-    c->eye = ao_vec3_add(c->eye, move);
-    c->target = ao_vec3_add(c->target, move);
+    struct ao_vec3 eye = ao_vec3_add(c->eye, move), target = ao_vec3_add(c->target, move);
+    if (within_reach(eye) && within_reach(target)) {
+        c->eye = eye;
+        c->target = target;
+    }
 }
 
 void ao_camera_zoom(struct ao_camera *c, float factor)
@@ -76,8 +91,9 @@ void ao_camera_zoom(struct ao_camera *c, float factor)
     struct ao_vec3 offset = ao_vec3_sub(c->eye, c->target);
     float radius = ao_vec3_length(offset);
     float next = fmaxf(radius * factor, 1e-4f * radius);
-    if (next > 0.0f && isfinite(next))
-        c->eye = ao_vec3_add(c->target, ao_vec3_scale(offset, next / radius));
+    struct ao_vec3 eye = ao_vec3_add(c->target, ao_vec3_scale(offset, next / radius));
+    if (next > 0.0f && isfinite(next) && within_reach(eye))
+        c->eye = eye;
 }
 
 void ao_camera_frame_box(struct ao_camera *c, struct ao_vec3 lo, struct ao_vec3 hi)

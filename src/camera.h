@@ -43,10 +43,12 @@ static inline struct ao_vec3 ao_camera_ray(const struct ao_view *v, float x, flo
 /* Orbits the eye about the target by yaw and pitch radians, keeping it off the poles. */
 void ao_camera_orbit(struct ao_camera *c, float yaw, float pitch);
 
-/* Moves eye and target sideways and up by fractions of the view's height at the target. */
+/* Moves eye and target sideways and up by fractions of the view's height at the target; not where
+ * either would pass 2^48 from the origin in a coordinate (camera.c's MOVE_LIMIT). */
 void ao_camera_pan(struct ao_camera *c, float dx, float dy);
 
-/* Moves the eye towards the target by factor (< 1 zooms in), never onto it. */
+/* Moves the eye towards the target by factor (< 1 zooms in), never onto it, nor past 2^48 from the
+ * origin in a coordinate. */
 void ao_camera_zoom(struct ao_camera *c, float factor);
 
 /* Points the camera at a bounding box from the front, slightly above, so that it fills the view. */

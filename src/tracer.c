@@ -1,7 +1,6 @@
 /* Embree 3 back end; see tracer.h. The only file that includes Embree. */
 #include "tracer.h"
 
-#include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -226,27 +225,14 @@ void ao_tracer_thread_init(void)
 #endif
 }
 
-/* Embree 3's bound on ray origins and directions (FLT_LARGE in its kernels: 1.844e18, a tenth of
- * sqrt(FLT_MAX)): beyond it, or at NaN, its traversal asserts `ray.valid()` and aborts. Scenes stay
- * far inside it (scene.h's AO_SCENE_MAX_EXTENT), but the viewer's pan and zoom move the eye
- * without bound, so eye rays are checked here. */
-static const float EMBREE_LARGE = 1.844e18f;
-
-/* Whether Embree accepts a ray from (ox, oy, oz) along (dx, dy, dz); false for NaN too. */
-static inline bool embree_valid(float ox, float oy, float oz, float dx, float dy, float dz)
-{
-    return (fabsf(ox) <= EMBREE_LARGE) & (fabsf(oy) <= EMBREE_LARGE) & (fabsf(oz) <= EMBREE_LARGE) &
-           (fabsf(dx) <= EMBREE_LARGE) & (fabsf(dy) <= EMBREE_LARGE) & (fabsf(dz) <= EMBREE_LARGE);
-}
-
 /* Copies our packet into Embree's ray layout, with a validity mask for the unused lanes (which get
- * lane 0's ray, so that no garbage reaches Embree) and for rays Embree would refuse (embree_valid:
- * they miss). */
+ * lane 0's ray, so that no garbage reaches Embree). Every ray is within Embree's bound on origins
+ * and directions (1.844e18; beyond it its traversal aborts): scenes are refused beyond 2^31
+ * across, and the viewer's moves stop at 2^48 (camera.c). */
 static void to_embree(const struct ao_packet *rays, struct RTCRay16 *out, int *valid)
 {
     for (int k = 0; k < AO_PACKET_SIZE; k++) { /* every lane, so that the loop vectorizes */
-        valid[k] = k < rays->count && embree_valid(rays->org_x[k], rays->org_y[k], rays->org_z[k], rays->dir_x[k],
-                                                   rays->dir_y[k], rays->dir_z[k]) ? -1 : 0;
+        valid[k] = k < rays->count ? -1 : 0;
         out->org_x[k] = rays->org_x[k];
         out->org_y[k] = rays->org_y[k];
         out->org_z[k] = rays->org_z[k];

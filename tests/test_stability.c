@@ -519,21 +519,32 @@ static void test_scenes_at_the_ends_of_the_size_range_render_as_at_size_1(void *
     }
 }
 
-/* Embree asserts (and aborts) on a ray from beyond 1.844e18; the viewer's zoom and pan can put the
- * eye there. Such eye rays miss; the others of the packet still hit. */
-static void test_eye_rays_beyond_embrees_range_miss(void **state)
+/* Embree asserts (and aborts) on a ray from beyond 1.844e18. Scenes are refused long before; the
+ * viewer's zoom and pan stop at 2^48 from the origin, and an orbit there keeps the eye within 3
+ * times that: 20,000 wheel steps out and pans of a hundred views each leave the eye and target
+ * within reach, and the eye rays from there trace (the ground still answers). */
+static void test_moves_keep_the_eye_within_embrees_range(void **state)
 {
     (void)state;
     struct fixture f;
     setup_with(&f, "camera eye 0 1 4 target 0 0 0\nquad corner -1 0 -1 edge1 0 0 2 edge2 2 0 0\n", "far-eye.scene",
                AO_BACKEND_EMBREE);
-    struct ao_packet eye = {.org_x = {0, 0, 0}, .org_y = {1, 2e18f, NAN}, .org_z = {0, 0, 0},
-                            .dir_x = {0, 0, 0}, .dir_y = {-1, -1, -1}, .dir_z = {0, 0, 0},
-                            .tfar = {INFINITY, INFINITY, INFINITY}, .count = 3};
-    struct ao_hit hits[3];
-    ao_tracer_intersect(f.tracer, &eye, hits);
-    assert_true(hits[0].t == 1.0f);
-    assert_true(hits[1].t == INFINITY && hits[2].t == INFINITY);
+    struct ao_camera c = f.scene.camera;
+    for (int k = 0; k < 20000; k++) {
+        ao_camera_zoom(&c, 1.0f / 0.85f);
+        ao_camera_pan(&c, 100.0f, -100.0f);
+        ao_camera_orbit(&c, 0.3f, 0.1f);
+    }
+    const float reach = 3.0f * 0x1p48f;
+    assert_true(fabsf(c.eye.x) <= reach && fabsf(c.eye.y) <= reach && fabsf(c.eye.z) <= reach);
+    assert_true(fabsf(c.target.x) <= 0x1p48f && fabsf(c.target.y) <= 0x1p48f && fabsf(c.target.z) <= 0x1p48f);
+    assert_true(ao_vec3_length(ao_vec3_sub(c.eye, c.target)) > 0x1p40f); /* the moves did take it far */
+    /* Back towards the quad: an eye ray from high above the origin straight down hits it. */
+    struct ao_packet eye = {.org_x = {0}, .org_y = {c.eye.y > 0 ? fabsf(c.eye.y) : 0x1p48f}, .org_z = {0},
+                            .dir_x = {0}, .dir_y = {-1}, .dir_z = {0}, .tfar = {INFINITY}, .count = 1};
+    struct ao_hit hit;
+    ao_tracer_intersect(f.tracer, &eye, &hit);
+    assert_true(isfinite(hit.t));
     teardown(&f);
 }
 
@@ -772,7 +783,7 @@ int main(void)
         cmocka_unit_test(test_default_scene_renders_the_same_far_from_the_origin),
         cmocka_unit_test(test_camera_moves_hold_far_from_the_origin),
         cmocka_unit_test(test_scenes_at_the_ends_of_the_size_range_render_as_at_size_1),
-        cmocka_unit_test(test_eye_rays_beyond_embrees_range_miss),
+        cmocka_unit_test(test_moves_keep_the_eye_within_embrees_range),
         cmocka_unit_test(test_degenerate_geometry_gives_no_nan),
         cmocka_unit_test(test_silhouettes_converge_to_the_box_filter),
         cmocka_unit_test(test_long_accumulation_resolves_exactly),
