@@ -968,6 +968,18 @@ static bool build_quads(struct ao_scene *s, struct world *w, size_t *next, struc
     return true;
 }
 
+/* Gives the mesh's positions the spare entry scene.h promises (realloc: no copy for big arrays,
+ * which the C library maps and remaps); false when memory is short. */
+static bool pad(struct ao_mesh *m)
+{
+    struct ao_vec3 *p = realloc(m->positions, (m->vertex_count + 1) * sizeof *p);
+    if (!p)
+        return false;
+    p[m->vertex_count] = ao_vec3_make(0.0f, 0.0f, 0.0f);
+    m->positions = p;
+    return true;
+}
+
 /* Moves the scene from world space into its local frame and narrows it to float: every mesh
  * placement (moved into the frame, or instanced with its map into it), quad, sphere centre and the
  * camera become world - origin, with the origin at the bounding box's centre, so that float
@@ -999,6 +1011,9 @@ static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
     }
     for (size_t next = 0; next < w->quad_count;)
         if (!build_quads(s, w, &next, origin))
+            return fail(c, "out of memory");
+    for (size_t i = 0; i < s->mesh_count; i++)
+        if (!pad(&s->meshes[i]))
             return fail(c, "out of memory");
     for (size_t i = 0; i < s->instance_count; i++)
         s->triangle_count += s->meshes[s->instances[i].mesh].triangle_count;
@@ -1178,7 +1193,7 @@ void ao_scene_finish(struct ao_scene *scene)
 bool ao_scene_add_flat_mesh(struct ao_scene *scene, struct ao_mesh *mesh, struct ao_vec3 albedo)
 {
     uint32_t a;
-    bool ok = scene->mesh_count < UINT32_MAX && scene->instance_count < UINT32_MAX &&
+    bool ok = scene->mesh_count < UINT32_MAX && scene->instance_count < UINT32_MAX && pad(mesh) &&
               resize(&scene->meshes, scene->mesh_count + 1, sizeof *scene->meshes) &&
               resize(&scene->instances, scene->instance_count + 1, sizeof *scene->instances) &&
               add_albedo(scene, albedo, &a);

@@ -53,7 +53,10 @@ struct ao_scene {
     float ao_distance;            /* occlusion range; INFINITY when not given */
     struct ao_sphere *spheres;    /* centres in the local frame */
     size_t sphere_count;
-    struct ao_mesh *meshes;       /* unique meshes (mesh.h); the quads are meshes too */
+    struct ao_mesh *meshes;       /* unique meshes (mesh.h); the quads are meshes too; each one's
+                                     positions have a spare zero entry after the last vertex, so
+                                     that the tracer can share them with Embree (which reads 16
+                                     bytes at a time) */
     size_t mesh_count;
     struct ao_instance *instances;
     size_t instance_count;

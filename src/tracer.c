@@ -4,7 +4,6 @@
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <string.h>
 #include <time.h>
 
 #include <embree3/rtcore.h>
@@ -46,24 +45,17 @@ static bool monitor(void *user, ssize_t bytes, bool post)
     return true;
 }
 
-/* A triangle geometry of the mesh's vertices and triangles. */
+/* A triangle geometry over the mesh's own vertex and index arrays, shared, not copied (scene.h:
+ * the positions are padded as Embree needs). */
 static RTCGeometry triangles_of(struct ao_tracer *t, const struct ao_mesh *m)
 {
     RTCGeometry g = rtcNewGeometry(t->device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                       m->vertex_count);
-    unsigned *idx = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
-                                            m->triangle_count);
-    if (!v || !idx) {
-        rtcReleaseGeometry(g);
+    if (!g)
         return NULL;
-    }
-    for (size_t i = 0; i < m->vertex_count; i++) {
-        v[3 * i + 0] = m->positions[i].x;
-        v[3 * i + 1] = m->positions[i].y;
-        v[3 * i + 2] = m->positions[i].z;
-    }
-    memcpy(idx, m->indices, 3 * m->triangle_count * sizeof *idx);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, m->positions, 0,
+                               sizeof *m->positions, m->vertex_count);
+    rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m->indices, 0, 3 * sizeof *m->indices,
+                               m->triangle_count);
     rtcCommitGeometry(g);
     return g;
 }
