@@ -276,6 +276,26 @@ static void write_bunnies(void)
     write_text("bunnies.scene", "camera eye 2 22 30 target 0 0 -4 fov 50\nbackground 1\nao-distance 1.5\nmesh bunnies.gltf\n");
 }
 
+/* AUTO's rule (scene.h): four bunnies, 20k triangles placed, are below AO_SCENE_FLATTEN_TRIANGLES
+ * and flattened, as copies in one BVH (the 100,000 spheres below are above it and instanced). */
+static void test_auto_flattens_a_mesh_placed_a_few_times(void **state)
+{
+    (void)state;
+    write_bunnies();
+    struct fixture f;
+    setup(&f, "bunnies.scene", AO_INSTANCING_AUTO, false);
+    assert_true(f.scene.triangle_count <= AO_SCENE_FLATTEN_TRIANGLES);
+    assert_int_equal(f.scene.mesh_count, 4);
+    assert_int_equal(f.scene.instance_count, 4);
+    for (int i = 0; i < 4; i++)
+        assert_true(f.scene.instances[i].flat);
+    struct ao_tracer_stats stats;
+    ao_tracer_describe(f.tracer, &stats);
+    assert_int_equal(stats.bvhs, 1);
+    assert_int_equal(stats.instances, 0);
+    teardown(&f);
+}
+
 /* One mesh under four nodes loads once and builds one BVH: the scene holds 1 mesh and 4 instances,
  * the tracer 2 BVHs (the top level, the bunny's) and 4 Embree instances, and Embree holds less than
  * the same scene flattened (4 copies in one BVH) by more than 2 copies' worth. */
@@ -284,7 +304,7 @@ static void test_one_mesh_under_many_nodes_is_built_once(void **state)
     (void)state;
     write_bunnies();
     struct fixture inst, flat;
-    setup(&inst, "bunnies.scene", AO_INSTANCING_AUTO, false);
+    setup(&inst, "bunnies.scene", AO_INSTANCING_ALWAYS, false);
     setup(&flat, "bunnies.scene", AO_INSTANCING_NEVER, false);
     assert_int_equal(inst.scene.mesh_count, 1);
     assert_int_equal(inst.scene.instance_count, 4);
@@ -528,7 +548,7 @@ static void test_three_mesh_lines_load_one_mesh(void **state)
              "mesh %s/assets/../assets/bunny.obj rotate 0 1 0 90 translate -12 0 0 albedo 0.7\n", root, root, root);
     write_text("three.scene", text);
     struct fixture f;
-    setup(&f, "three.scene", AO_INSTANCING_AUTO, false);
+    setup(&f, "three.scene", AO_INSTANCING_ALWAYS, false);
     assert_int_equal(f.scene.mesh_count, 1);
     assert_int_equal(f.scene.instance_count, 3);
     assert_int_equal(f.scene.triangle_count, 3 * f.scene.meshes[0].triangle_count);
@@ -758,6 +778,7 @@ int main(void)
     if (!mkdtemp(dir))
         return 1;
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_auto_flattens_a_mesh_placed_a_few_times),
         cmocka_unit_test(test_one_mesh_under_many_nodes_is_built_once),
         cmocka_unit_test(test_instances_shade_as_flattened),
         cmocka_unit_test(test_instanced_image_matches_flattened),

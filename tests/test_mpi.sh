@@ -200,8 +200,8 @@ differ)
   status=$?
   [ "$status" = 2 ] && [ "$(grep -c "^aoview-mpi: rank 1 loaded another scene than rank 0" mismatch.err)" = 1 ] &&
     [ ! -e mismatch.pfm ] || fail "rank 1 with another albedo was not refused once (status $status): $(cat mismatch.err)"
-  # Two placements of the bunny (instanced) that differ on rank 1 only in one placement's
-  # translation, by 0.001: the same mesh, another instance map, another image.
+  # Two placements of the bunny (flattened: scene.h's AUTO rule) that differ on rank 1 only in one
+  # placement's translation, by 0.001: the same file, other positions, another image.
   bunny=$AO_SOURCE_ROOT/assets/bunny.obj
   printf 'camera eye 0 8 30 target 0 0 0\nmesh %s\nmesh %s translate 12 0 0\n' "$bunny" "$bunny" > placed.scene
   printf 'camera eye 0 8 30 target 0 0 0\nmesh %s\nmesh %s translate 12.001 0 0\n' "$bunny" "$bunny" > moved.scene
@@ -209,7 +209,7 @@ differ)
     -np 1 "$mpi_bin" --size 96x64 --spp 16 moved.scene 2>mismatch.err
   status=$?
   [ "$status" = 2 ] && [ "$(grep -c "^aoview-mpi: rank 1 loaded another scene than rank 0" mismatch.err)" = 1 ] &&
-    [ ! -e mismatch.pfm ] || fail "rank 1 with another instance map was not refused once (status $status): $(cat mismatch.err)"
+    [ ! -e mismatch.pfm ] || fail "rank 1 with another placement was not refused once (status $status): $(cat mismatch.err)"
   # The scene missing on rank 2 alone: its own line names it.
   "${mpirun[@]}" -np 2 "$mpi_bin" --headless --size 96x64 --spp 16 -o mismatch.pfm "$spheres" : \
     -np 1 "$mpi_bin" --size 96x64 --spp 16 missing.scene 2>mismatch.err
