@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "render.h"
+#include "render_image.h"
 #include "scene.h"
 #include "tracer.h"
 
@@ -51,16 +52,7 @@ static float *render(const struct ao_scene *scene, enum ao_backend backend, int 
                                       .ao_distance = INFINITY, .sequence = AO_SEQUENCE_RANDOM};
     struct ao_settings settings = {.width = width, .height = height, .sampling = AO_SAMPLING_COSINE, .aa = true,
                                    .spppp = 1, .output = output, .camera = scene->camera};
-    struct ao_render *r = ao_render_create(&config, &settings);
-    assert_non_null(r);
-    assert_true(ao_render_wait(r));
-    const struct ao_frame *frame = ao_render_take_frame(r);
-    assert_non_null(frame);
-    size_t bytes = 3 * sizeof(float) * (size_t)width * (size_t)height;
-    float *copy = malloc(bytes);
-    assert_non_null(copy);
-    memcpy(copy, frame->rgb, bytes);
-    ao_render_destroy(r);
+    float *copy = render_image(&config, &settings);
     ao_tracer_destroy(tracer);
     return copy;
 }

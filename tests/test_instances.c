@@ -16,6 +16,7 @@
 #include "ao.h"
 #include "mesh.h"
 #include "render.h"
+#include "render_image.h"
 #include "scene.h"
 #include "tracer.h"
 
@@ -226,16 +227,7 @@ static float *render(const struct fixture *f, int width, int height, uint32_t sp
                                       .sequence = AO_SEQUENCE_RANDOM};
     struct ao_settings settings = {.width = width, .height = height, .sampling = AO_SAMPLING_COSINE, .aa = aa,
                                    .spppp = spp < 16 ? spp : 16, .camera = f->scene.camera, .output = output};
-    struct ao_render *r = ao_render_create(&config, &settings);
-    assert_non_null(r);
-    assert_true(ao_render_wait(r));
-    const struct ao_frame *frame = ao_render_take_frame(r);
-    assert_non_null(frame);
-    size_t bytes = 3 * sizeof(float) * (size_t)width * (size_t)height;
-    float *copy = malloc(bytes);
-    assert_non_null(copy);
-    memcpy(copy, frame->rgb, bytes);
-    ao_render_destroy(r);
+    float *copy = render_image(&config, &settings);
     return copy;
 }
 

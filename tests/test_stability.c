@@ -18,6 +18,7 @@
 #include "accum.h"
 #include "ao.h"
 #include "render.h"
+#include "render_image.h"
 #include "scene.h"
 #include "tracer.h"
 
@@ -58,16 +59,7 @@ static float *render_passes(const struct fixture *f, int width, int height, uint
                                       .threads = 2, .seed = 9, .target_spp = spp, .ao_distance = INFINITY};
     struct ao_settings settings = {.width = width, .height = height, .sampling = sampling, .aa = aa, .spppp = spppp,
                                    .camera = f->scene.camera};
-    struct ao_render *r = ao_render_create(&config, &settings);
-    assert_non_null(r);
-    assert_true(ao_render_wait(r));
-    const struct ao_frame *frame = ao_render_take_frame(r);
-    assert_non_null(frame);
-    size_t bytes = 3 * sizeof(float) * (size_t)width * (size_t)height;
-    float *copy = malloc(bytes);
-    assert_non_null(copy);
-    memcpy(copy, frame->rgb, bytes);
-    ao_render_destroy(r);
+    float *copy = render_image(&config, &settings);
     return copy;
 }
 
