@@ -237,8 +237,34 @@ void ao_model_finish(struct ao_model *model)
     memset(model, 0, sizeof *model);
 }
 
-/* Every placement of the model applied, into one mesh: positions in double, narrowed once; normals
- * through ao_affine_normals; triangles of a mirroring placement turned round. False (reported) when
+size_t ao_mesh_place(struct ao_mesh *dst, size_t vertex_base, size_t triangle_base, const struct ao_mesh *src,
+                     const struct ao_affine *map)
+{
+    double n[9], q[3];
+    bool mirror = ao_affine_normals(map, n) < 0.0;
+    size_t bad = src->vertex_count;
+    for (size_t v = 0; v < src->vertex_count; v++) {
+        struct ao_vec3 a = src->positions[v], b = src->normals[v];
+        ao_affine_point(map, a.x, a.y, a.z, q);
+        struct ao_vec3 *o = &dst->positions[vertex_base + v];
+        *o = ao_vec3_make((float)q[0], (float)q[1], (float)q[2]);
+        if (bad == src->vertex_count && !ao_vec3_is_finite(*o))
+            bad = v;
+        dst->normals[vertex_base + v] = ao_load_unit(n[0] * b.x + n[3] * b.y + n[6] * b.z,
+                                                     n[1] * b.x + n[4] * b.y + n[7] * b.z,
+                                                     n[2] * b.x + n[5] * b.y + n[8] * b.z);
+    }
+    uint32_t base = (uint32_t)vertex_base, *t = dst->indices + 3 * triangle_base;
+    for (size_t k = 0; k < src->triangle_count; k++) {
+        uint32_t i0 = src->indices[3 * k], i1 = src->indices[3 * k + 1], i2 = src->indices[3 * k + 2];
+        t[3 * k] = base + i0;
+        t[3 * k + 1] = base + (mirror ? i2 : i1);
+        t[3 * k + 2] = base + (mirror ? i1 : i2);
+    }
+    return bad;
+}
+
+/* Every placement of the model applied, into one mesh (ao_mesh_place). False (reported) when
  * memory or 2^32 vertices run out, or a position leaves float's range. */
 static bool flatten(const struct ao_model *model, struct ao_mesh *out, const char *path,
                     const struct ao_budget *budget)
@@ -263,26 +289,10 @@ static bool flatten(const struct ao_model *model, struct ao_mesh *out, const cha
     for (size_t i = 0; i < model->placement_count; i++) {
         const struct ao_placement *p = &model->placements[i];
         const struct ao_mesh *m = &model->meshes[p->mesh];
-        double n[9], q[3];
-        bool mirror = ao_affine_normals(&p->to_model, n) < 0.0;
-        uint32_t base = (uint32_t)out->vertex_count;
-        for (size_t v = 0; v < m->vertex_count; v++) {
-            struct ao_vec3 a = m->positions[v], b = m->normals[v];
-            ao_affine_point(&p->to_model, a.x, a.y, a.z, q);
-            struct ao_vec3 *o = &out->positions[base + v];
-            *o = ao_vec3_make((float)q[0], (float)q[1], (float)q[2]);
-            if (!ao_vec3_is_finite(*o)) {
-                ao_load_report(path, 0, "mesh %zu: vertex %zu is not a finite float once placed", p->mesh, v);
-                return false;
-            }
-            out->normals[base + v] = ao_load_unit(n[0] * b.x + n[3] * b.y + n[6] * b.z, n[1] * b.x + n[4] * b.y + n[7] * b.z,
-                                                  n[2] * b.x + n[5] * b.y + n[8] * b.z);
-        }
-        uint32_t *t = out->indices + 3 * out->triangle_count;
-        for (size_t k = 0; k < m->triangle_count; k++) {
-            t[3 * k] = base + m->indices[3 * k];
-            t[3 * k + 1] = base + m->indices[3 * k + (mirror ? 2 : 1)];
-            t[3 * k + 2] = base + m->indices[3 * k + (mirror ? 1 : 2)];
+        size_t bad = ao_mesh_place(out, out->vertex_count, out->triangle_count, m, &p->to_model);
+        if (bad < m->vertex_count) {
+            ao_load_report(path, 0, "mesh %zu: vertex %zu is not a finite float once placed", p->mesh, bad);
+            return false;
         }
         out->vertex_count += m->vertex_count;
         out->triangle_count += m->triangle_count;

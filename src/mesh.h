@@ -75,6 +75,13 @@ bool ao_model_load_budget(struct ao_model *model, const char *path, struct ao_bu
 /* Frees what ao_model_load_budget allocated and zeroes model; accepts an empty model. */
 void ao_model_finish(struct ao_model *model);
 
+/* Writes src moved by map into dst's arrays from vertex vertex_base and triangle triangle_base on
+ * (dst may be src with both bases 0: moved in place): positions in double, narrowed once; normals
+ * through ao_affine_normals; a mirroring map's triangles turned round, indices raised by
+ * vertex_base. Returns the first vertex whose position is not a finite float, or src's count. */
+size_t ao_mesh_place(struct ao_mesh *dst, size_t vertex_base, size_t triangle_base, const struct ao_mesh *src,
+                     const struct ao_affine *map);
+
 /* Recomputes mesh->normals from the triangles (angle-weighted face normals). */
 bool ao_mesh_compute_normals(struct ao_mesh *mesh);
 

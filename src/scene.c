@@ -716,6 +716,7 @@ static bool survey(struct ao_scene *s, struct world *w)
     free(w->info);
     if (!(w->info = calloc(s->mesh_count ? s->mesh_count : 1, sizeof *w->info)))
         return false;
+    uint64_t reserved = 0;   /* the budget AUTO's flattened copies will take (build_instance) */
     for (size_t i = 0; i < w->placement_count; i++)
         w->info[w->placements[i].mesh].placements++;
     for (size_t m = 0; m < s->mesh_count; m++) {
@@ -730,10 +731,17 @@ static bool survey(struct ao_scene *s, struct world *w)
         }
         info->left = info->placements;
         size_t placed = info->placements * mesh->triangle_count;
+        uint64_t copy = ao_budget_mesh(mesh->triangle_count, mesh->vertex_count), copies = UINT64_MAX;
+        if (info->placements > 1 && copy <= (UINT64_MAX - reserved) / (info->placements - 1))
+            copies = copy * (info->placements - 1);
+        bool flat = info->placements < 2 || (placed / info->placements == mesh->triangle_count &&
+                                              placed <= AO_SCENE_FLATTEN_TRIANGLES &&
+                                              ao_budget_fits(w->budget, reserved + copies));
         info->instanced = w->instancing == AO_INSTANCING_ALWAYS ? info->placements > 0
                           : w->instancing == AO_INSTANCING_NEVER ? false
-                          : info->placements > 1 && placed / info->placements == mesh->triangle_count &&
-                                placed > AO_SCENE_FLATTEN_TRIANGLES;
+                          : !flat;
+        if (w->instancing != AO_INSTANCING_ALWAYS && !info->instanced && info->placements > 1)
+            reserved += copies;
     }
     for (size_t i = 0; i < w->placement_count; i++) {
         struct mesh_info *info = &w->info[w->placements[i].mesh];
@@ -855,8 +863,7 @@ static bool check_range(const struct world *w, struct cursor *c, bool any, struc
 }
 
 /* Writes src (a mesh in its own frame) moved by to_local into dst (the same mesh, moved in place, or
- * an empty one that receives a copy): positions in double, narrowed once; normals through
- * ao_affine_normals; the triangles of a mirroring map turned round. False when memory is short. */
+ * an empty one that receives a copy) by ao_mesh_place. False when memory is short. */
 static bool flatten(struct ao_mesh *dst, const struct ao_mesh *src, const struct ao_affine *to_local)
 {
     if (dst != src) {
@@ -869,23 +876,7 @@ static bool flatten(struct ao_mesh *dst, const struct ao_mesh *src, const struct
             return false;
         }
     }
-    double n[9], q[3];
-    bool mirror = ao_affine_normals(to_local, n) < 0.0;
-    for (size_t v = 0; v < src->vertex_count; v++) {
-        struct ao_vec3 p = src->positions[v], m = src->normals[v];
-        ao_affine_point(to_local, p.x, p.y, p.z, q);
-        dst->positions[v] = ao_vec3_make((float)q[0], (float)q[1], (float)q[2]);
-        struct dvec u = {0};
-        unit(dvec_make(n[0] * m.x + n[3] * m.y + n[6] * m.z, n[1] * m.x + n[4] * m.y + n[7] * m.z,
-                       n[2] * m.x + n[5] * m.y + n[8] * m.z), &u);   /* zero stays zero */
-        dst->normals[v] = narrow(u);
-    }
-    for (size_t t = 0; t < src->triangle_count; t++) {
-        uint32_t i0 = src->indices[3 * t], i1 = src->indices[3 * t + 1], i2 = src->indices[3 * t + 2];
-        dst->indices[3 * t] = i0;
-        dst->indices[3 * t + 1] = mirror ? i2 : i1;
-        dst->indices[3 * t + 2] = mirror ? i1 : i2;
-    }
+    ao_mesh_place(dst, 0, 0, src, to_local);   /* check_range keeps every position finite */
     return true;
 }
 

@@ -79,10 +79,10 @@ bool ao_scene_load(struct ao_scene *scene, const char *path);
  * needs how much. */
 bool ao_scene_load_budget(struct ao_scene *scene, const char *path, uint64_t budget_bytes);
 
-/* Which meshes the scene instances: AUTO those placed more than once and with more than
- * AO_SCENE_FLATTEN_TRIANGLES triangles placed (the rule measured in docs/performance.md); ALWAYS
- * every mesh file's mesh (the quads stay flat), NEVER none (every placement flattened, as copies);
- * for tests and benchmarks. A transform too ill-conditioned for the tracer's error bound is
+/* Which meshes the scene instances: AUTO those placed more than once with more than
+ * AO_SCENE_FLATTEN_TRIANGLES triangles placed (the rule measured in docs/performance.md) or whose
+ * flattened copies would not fit in the scene budget; ALWAYS every mesh file's mesh (the quads
+ * stay flat), NEVER none (every placement flattened, as copies), for tests and benchmarks. A transform too ill-conditioned for the tracer's error bound is
  * flattened whatever this says. */
 enum ao_instancing { AO_INSTANCING_AUTO, AO_INSTANCING_ALWAYS, AO_INSTANCING_NEVER };
 
