@@ -1428,7 +1428,7 @@ static void test_loaders_keep_to_the_budget(void **state)
 /* One budget covers the whole scene: a mesh file that three lines name is read and charged once,
  * each of its placements once, and each copy of it that flattening makes (a one-triangle mesh
  * placed three times is flattened: the mesh moved for the last placement, copied for the others);
- * one byte less is refused. */
+ * with one byte less it is instanced, and below the mesh and its placements refused. */
 static void test_scene_budget_covers_every_mesh_line(void **state)
 {
     (void)state;
@@ -1445,7 +1445,16 @@ static void test_scene_budget_covers_every_mesh_line(void **state)
     assert_int_equal(scene.mesh_count, 3);
     assert_int_equal(scene.instance_count, 3);
     ao_scene_finish(&scene);
-    assert_false(ao_scene_load_budget(&scene, path, need - 1));
+    /* One byte less: the copies do not fit, so the mesh is instanced instead (scene.h's AUTO). */
+    assert_true(ao_scene_load_budget(&scene, path, need - 1));
+    assert_int_equal(scene.mesh_count, 1);
+    assert_false(scene.instances[0].flat);
+    ao_scene_finish(&scene);
+    /* Without room for the copies' rule, the mesh and its placements alone: one byte less refused. */
+    uint64_t least = sizeof text + ao_budget_mesh(1, 3) + 3 * AO_BUDGET_INSTANCE;
+    assert_true(ao_scene_load_budget(&scene, path, least));
+    ao_scene_finish(&scene);
+    assert_false(ao_scene_load_budget(&scene, path, least - 1));
 }
 
 /* ------------------------------------------------------------------ bad input */
