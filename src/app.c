@@ -304,15 +304,14 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
         fprintf(stderr, "aoview: %s\n", ao_text_escape(app->scene.notes, (char[sizeof app->scene.notes * 4]){0},
                                                         sizeof app->scene.notes * 4));
     ao_text_escape(app->scene.name, name, sizeof name);
-    size_t instanced = 0;
-    for (size_t i = 0; i < app->scene.instance_count; i++)
-        instanced += !app->scene.instances[i].flat;
-    if (!opts->quiet && instanced)
-        fprintf(stderr, "aoview: %s: %zu triangles (%zu instances of meshes built once), %zu spheres, traced by %s\n",
-                name, app->scene.triangle_count, instanced, app->scene.sphere_count, ao_tracer_backend(app->tracer));
-    else if (!opts->quiet)
-        fprintf(stderr, "aoview: %s: %zu triangles, %zu spheres, traced by %s\n", name,
-                app->scene.triangle_count, app->scene.sphere_count, ao_tracer_backend(app->tracer));
+    struct ao_tracer_stats built;
+    ao_tracer_describe(app->tracer, &built);
+    char instances[64] = "";
+    if (built.instances)
+        snprintf(instances, sizeof instances, " (%zu instances of meshes built once)", built.instances);
+    if (!opts->quiet)
+        fprintf(stderr, "aoview: %s: %zu triangles%s, %zu spheres, traced by %s\n", name, app->scene.triangle_count,
+                instances, app->scene.sphere_count, ao_tracer_backend(app->tracer));
 
     /* Renderer. */
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
