@@ -9,10 +9,11 @@
 
 #include "file.h"
 
-/* Appends n elements and returns the first, or NULL when memory or size_t runs out. */
+/* Appends n elements and returns the first (storage exists after any call, even for n = 0), or
+ * NULL when memory or size_t runs out. */
 void *ao_load_append(struct ao_load_array *a, size_t n)
 {
-    if (n > a->capacity - a->count) {
+    if (!a->data || n > a->capacity - a->count) {
         size_t want = a->capacity ? a->capacity : 64;
         while (want - a->count < n) {
             if (want > SIZE_MAX / 2 / a->size)

@@ -51,7 +51,7 @@ typedef bool ao_load_model_format(struct ao_model *model, const char *path, cons
 ao_load_format ao_load_obj, ao_load_ply, ao_load_stl;
 ao_load_model_format ao_load_gltf;
 
-/* Appends n elements to a and returns the first, or NULL when memory or size_t runs out. */
+/* Appends n elements to a (storage exists after any call) and returns the first, or NULL when memory runs out. */
 void *ao_load_append(struct ao_load_array *a, size_t n);
 
 /* Hands the array's storage to the caller (who frees it) and empties the array. */
