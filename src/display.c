@@ -46,11 +46,10 @@ struct ao_display *ao_display_create_from_source(const struct ao_glapi *gl, cons
     /* The triangle comes from gl_VertexID, but core profile still wants a vertex array bound. */
     gl->GenVertexArrays(1, &d->vao);
 
-    /* Exact at 1:1 (fragments sample texel centres); magnified, each pixel stays a block, so the
-     * noise under study is shown as it is rather than smoothed; shrunk, linear. */
+    /* Magnified, each pixel stays a block, so the noise under study is shown as it is rather than
+     * smoothed; shrunk, linear (draw_image picks the minifying filter). */
     gl->GenTextures(1, &d->texture);
     gl->BindTexture(GL_TEXTURE_2D, d->texture);
-    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
@@ -136,6 +135,11 @@ static void draw_image(struct ao_display *d, struct ao_display_rect r)
     gl->UseProgram(d->program);
     gl->ActiveTexture(GL_TEXTURE0);
     gl->BindTexture(GL_TEXTURE_2D, d->texture);
+    /* At 1:1 the level of detail is 0 only up to rounding: a linear minifying filter would then
+     * blend in about 1e-5 of a neighbour, enough to move a pixel near a rounding boundary by one
+     * 8-bit step between two files of one image. Nearest reads each texel as it is. */
+    bool shrunk = r.width < d->image_width || r.height < d->image_height;
+    gl->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, shrunk ? GL_LINEAR : GL_NEAREST);
     gl->BindVertexArray(d->vao);
     gl->DrawArrays(GL_TRIANGLES, 0, 3);
 }

@@ -144,6 +144,65 @@ static void test_dense_ramp_matches_cpu(void **state)
     assert_int_equal(rmdir(dir), 0);
 }
 
+/* Writes rgb (width x height) as a PNG and reads it back. */
+static uint8_t *png_of(const char *dir, const char *name, const float *rgb, int width, int height)
+{
+    char path[64];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    assert_true(ao_headless_write_png(path, rgb, width, height));
+    uint8_t *got = NULL;
+    int got_width = 0, got_height = 0;
+    assert_true(ao_image_read_png(path, &got, &got_width, &got_height));
+    assert_int_equal(got_width, width);
+    assert_int_equal(got_height, height);
+    assert_int_equal(unlink(path), 0);
+    return got;
+}
+
+/* One image, alone and as the left half of a side-by-side pair twice as wide, gives the same
+ * bytes: what --compare's test and a user diffing the two files rely on. A linear minifying filter
+ * at a level of detail a rounding error above 0 blends in a sliver of a neighbour, which moves
+ * only values within a few ulps of an 8-bit rounding boundary; so every other pixel sweeps the
+ * 64 floats on each side of each of 100 boundaries (the GPU's pow puts its boundary a few ulps
+ * from libm's), between black and white neighbours that make any blend show. */
+static void test_half_of_a_pair_matches_alone(void **state)
+{
+    (void)state;
+    int width = 160, height = 160;
+    char dir[] = "/tmp/aoview-test-display-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+    size_t row = 3 * (size_t)width, count = row * (size_t)height;
+    float *alone = malloc(sizeof *alone * count), *pair = malloc(sizeof *pair * 2 * count);
+    assert_non_null(alone);
+    assert_non_null(pair);
+    for (size_t i = 0; i < count / 3; i++) {
+        size_t x = i % (size_t)width, y = i / (size_t)width, swept = i / 2;
+        float encoded = ((float)(60 + swept / 128 % 100) + 0.5f) / 255.0f;
+        float v = powf((encoded + 0.055f) / 1.055f, 2.4f);
+        for (int step = (int)(swept % 128) - 64; step != 0; step += step < 0 ? 1 : -1)
+            v = nextafterf(v, step < 0 ? 0.0f : 2.0f);
+        v = (x + y) % 2 ? (float)(y % 2) : v;
+        alone[3 * i] = alone[3 * i + 1] = alone[3 * i + 2] = v;
+    }
+    for (size_t y = 0; y < (size_t)height; y++) {
+        memcpy(pair + 2 * y * row, alone + y * row, row * sizeof *pair);
+        for (size_t k = 0; k < row; k++)
+            pair[(2 * y + 1) * row + k] = 0.5f;
+    }
+    uint8_t *one = png_of(dir, "alone.png", alone, width, height);
+    uint8_t *two = png_of(dir, "pair.png", pair, 2 * width, height);
+    for (size_t y = 0; y < (size_t)height; y++)
+        for (size_t k = 0; k < row; k++)
+            if (one[y * row + k] != two[2 * y * row + k])
+                fail_msg("pixel (%zu, %zu): %d alone, %d in the pair", k / 3, y, one[y * row + k],
+                         two[2 * y * row + k]);
+    free(one);
+    free(two);
+    free(alone);
+    free(pair);
+    assert_int_equal(rmdir(dir), 0);
+}
+
 /* Letterbox: the image keeps its aspect ratio, centred, bars on the wider side only. */
 static void test_fit_letterboxes(void **state)
 {
@@ -428,6 +487,7 @@ int main(void)
         cmocka_unit_test(test_odd_size_matches_cpu),
         cmocka_unit_test(test_thin_sizes_match_cpu),
         cmocka_unit_test(test_dense_ramp_matches_cpu),
+        cmocka_unit_test(test_half_of_a_pair_matches_alone),
         cmocka_unit_test(test_fit_letterboxes),
         cmocka_unit_test(test_golden_bunny_uniform),
         cmocka_unit_test(test_golden_bunny_cosine),
