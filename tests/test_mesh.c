@@ -1628,6 +1628,89 @@ static void test_compute_normals(void **state)
     assert_mesh_empty(&mesh);
 }
 
+/* A bumpy grid of 2 n^2 triangles whose vertices are numbered in a shuffled order, so that every
+ * part of a parallel normals pass meets triangles that it shares with the others. */
+static void shuffled_grid(struct ao_mesh *mesh, uint32_t n)
+{
+    uint32_t side = n + 1, *order = malloc((size_t)side * side * sizeof *order);
+    *mesh = (struct ao_mesh){.vertex_count = (size_t)side * side, .triangle_count = 2 * (size_t)n * n};
+    mesh->positions = malloc(mesh->vertex_count * sizeof *mesh->positions);
+    mesh->indices = malloc(3 * mesh->triangle_count * sizeof *mesh->indices);
+    assert_non_null(order);
+    assert_non_null(mesh->positions);
+    assert_non_null(mesh->indices);
+    for (uint32_t i = 0; i < side * side; i++)
+        order[i] = i;
+    uint64_t seed = 12345;
+    for (uint32_t i = side * side - 1; i > 0; i--) {
+        seed = seed * 6364136223846793005u + 1442695040888963407u;
+        uint32_t j = (uint32_t)((seed >> 33) % (i + 1)), swap = order[i];
+        order[i] = order[j], order[j] = swap;
+    }
+    for (uint32_t y = 0; y < side; y++)
+        for (uint32_t x = 0; x < side; x++)
+            mesh->positions[order[y * side + x]] = ao_vec3_make((float)x, (float)y, 3.0f * sinf(0.37f * (float)x) *
+                                                                                    cosf(0.23f * (float)y));
+    uint32_t *t = mesh->indices;
+    for (uint32_t y = 0; y < n; y++)
+        for (uint32_t x = 0; x < n; x++, t += 6) {
+            uint32_t a = order[y * side + x], b = order[y * side + x + 1], c = order[(y + 1) * side + x],
+                     d = order[(y + 1) * side + x + 1];
+            uint32_t two[6] = {a, b, d, a, d, c};
+            memcpy(t, two, sizeof two);
+        }
+    free(order);
+}
+
+/* Normals are computed in parallel: the same bits on any number of threads, and within float
+ * rounding of the angle-weighted sum taken with libm's atan2, triangle by triangle, as defined. */
+static void test_normals_any_thread_count(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    shuffled_grid(&mesh, 300);
+    assert_true(ao_mesh_compute_normals_on(&mesh, 1));
+    struct ao_vec3 *one = malloc(mesh.vertex_count * sizeof *one);
+    assert_non_null(one);
+    memcpy(one, mesh.normals, mesh.vertex_count * sizeof *one);
+    static const int counts[] = {2, 3, 7, 0};
+    for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++) {
+        memset(mesh.normals, 0xff, mesh.vertex_count * sizeof *mesh.normals);
+        assert_true(ao_mesh_compute_normals_on(&mesh, counts[k]));
+        assert_memory_equal(one, mesh.normals, mesh.vertex_count * sizeof *one);
+    }
+    double (*sum)[3] = calloc(mesh.vertex_count, sizeof *sum);
+    assert_non_null(sum);
+    for (size_t t = 0; t < mesh.triangle_count; t++) {
+        const uint32_t *v = mesh.indices + 3 * t;
+        double p[3][3];
+        for (int c = 0; c < 3; c++)
+            p[c][0] = mesh.positions[v[c]].x, p[c][1] = mesh.positions[v[c]].y, p[c][2] = mesh.positions[v[c]].z;
+        double a[3], b[3], n[3];
+        for (int i = 0; i < 3; i++)
+            a[i] = p[1][i] - p[0][i], b[i] = p[2][i] - p[0][i];
+        n[0] = a[1] * b[2] - a[2] * b[1], n[1] = a[2] * b[0] - a[0] * b[2], n[2] = a[0] * b[1] - a[1] * b[0];
+        double area = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int c = 0; c < 3; c++) {
+            double e[3], f[3];
+            for (int i = 0; i < 3; i++)
+                e[i] = p[(c + 1) % 3][i] - p[c][i], f[i] = p[(c + 2) % 3][i] - p[c][i];
+            double angle = atan2(area, e[0] * f[0] + e[1] * f[1] + e[2] * f[2]);
+            for (int i = 0; i < 3; i++)
+                sum[v[c]][i] += n[i] / area * angle;
+        }
+    }
+    for (size_t i = 0; i < mesh.vertex_count; i++) {
+        double length = sqrt(sum[i][0] * sum[i][0] + sum[i][1] * sum[i][1] + sum[i][2] * sum[i][2]);
+        assert_float_equal(one[i].x, sum[i][0] / length, 1e-6);
+        assert_float_equal(one[i].y, sum[i][1] / length, 1e-6);
+        assert_float_equal(one[i].z, sum[i][2] / length, 1e-6);
+    }
+    free(sum);
+    free(one);
+    ao_mesh_finish(&mesh);
+}
+
 /* The shipped bunny: its counts, y up, finite unit normals, and outward orientation. */
 static void test_bunny(void **state)
 {
@@ -1733,6 +1816,7 @@ int main(void)
         cmocka_unit_test(test_unreadable_file),
         cmocka_unit_test(test_mutations),
         cmocka_unit_test(test_compute_normals),
+        cmocka_unit_test(test_normals_any_thread_count),
         cmocka_unit_test(test_bunny),
     };
     return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);
