@@ -612,6 +612,92 @@ static void test_ply_binary_errors(void **state)
     expect_failure(temp_file("overflow.ply", b.data, b.size), ":7: ", "declares");
 }
 
+/* The layouts of write_ply: the common binary one (floats and a list of uchar and int, read
+ * straight from the bytes), with an extra vertex property (read so too), others read value by
+ * value (a double x, a list of ushort and uint beside another face property; ascii). */
+enum ply_layout { PLY_PLAIN, PLY_EXTRA_VERTEX, PLY_GENERAL, PLY_ASCII };
+
+/* Writes mesh (positions and triangles) as a PLY file of the given layout; returns its path. */
+static const char *write_ply(const struct ao_mesh *mesh, const char *name, enum ply_layout layout)
+{
+    char *path = path_buffer();
+    snprintf(path, 4200, "%s/%s", temp_dir, name);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    fprintf(f, "ply\nformat %s 1.0\nelement vertex %zu\nproperty %s x\n%sproperty float y\nproperty float z\n"
+               "element face %zu\n%sproperty list %s vertex_indices\nend_header\n",
+            layout == PLY_ASCII ? "ascii" : "binary_little_endian", mesh->vertex_count,
+            layout == PLY_GENERAL ? "double" : "float", layout == PLY_EXTRA_VERTEX ? "property uchar red\n" : "",
+            mesh->triangle_count, layout == PLY_GENERAL ? "property uchar flags\n" : "",
+            layout == PLY_GENERAL ? "ushort uint" : "uchar int");
+    for (size_t i = 0; i < mesh->vertex_count; i++) {
+        struct ao_vec3 p = mesh->positions[i];
+        double x = p.x;
+        unsigned char red = 7;
+        if (layout == PLY_ASCII)
+            fprintf(f, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
+        else if (layout == PLY_GENERAL)
+            fwrite(&x, 8, 1, f);
+        else
+            fwrite(&p.x, 4, 1, f);
+        if (layout == PLY_EXTRA_VERTEX)
+            fwrite(&red, 1, 1, f);
+        if (layout != PLY_ASCII)
+            fwrite(&p.y, 4, 2, f);
+    }
+    for (size_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *v = mesh->indices + 3 * t;
+        unsigned char three[2] = {3, 0}, flags = 1;
+        if (layout == PLY_ASCII)
+            fprintf(f, "3 %u %u %u\n", v[0], v[1], v[2]);
+        else if (layout == PLY_GENERAL)
+            fwrite(&flags, 1, 1, f), fwrite(three, 1, 2, f);
+        else
+            fwrite(three, 1, 1, f);
+        if (layout != PLY_ASCII)
+            fwrite(v, 4, 3, f);
+    }
+    assert_int_equal(fclose(f), 0);
+    return path;
+}
+
+/* Binary rows read straight from the bytes give the mesh that reading value by value gives, bit
+ * for bit: the bunny in every layout of write_ply. Big-endian files are still refused. */
+static void test_ply_layouts_agree(void **state)
+{
+    (void)state;
+    char path[4200];
+    snprintf(path, sizeof path, "%s/assets/bunny.obj", getenv("AO_SOURCE_ROOT"));
+    struct ao_mesh bunny, mesh;
+    load_ok(&bunny, path);
+    static const char *const names[] = {"plain.ply", "extra.ply", "general.ply", "ascii.ply"};
+    for (int layout = PLY_PLAIN; layout <= PLY_ASCII; layout++) {
+        load_ok(&mesh, write_ply(&bunny, names[layout], (enum ply_layout)layout));
+        assert_int_equal(mesh.vertex_count, bunny.vertex_count);
+        assert_int_equal(mesh.triangle_count, bunny.triangle_count);
+        assert_memory_equal(mesh.positions, bunny.positions, bunny.vertex_count * sizeof *bunny.positions);
+        assert_memory_equal(mesh.normals, bunny.normals, bunny.vertex_count * sizeof *bunny.normals);
+        assert_memory_equal(mesh.indices, bunny.indices, 3 * bunny.triangle_count * sizeof *bunny.indices);
+        ao_mesh_finish(&mesh);
+    }
+    expect_failure(fixture("bad_big_endian.ply"), ":2: ", "big-endian binary PLY is not supported");
+    /* Every proper prefix of the plain file fails cleanly, in one line. */
+    const char *plain = write_ply(&bunny, "plain.ply", PLY_PLAIN);
+    FILE *f = fopen(plain, "rb");
+    assert_non_null(f);
+    static unsigned char bytes[1 << 17];
+    size_t size = fread(bytes, 1, sizeof bytes, f);
+    assert_true(size < sizeof bytes);
+    fclose(f);
+    for (size_t cut = 0; cut < size; cut += cut < 300 ? 1 : 997) {
+        char err[1024];
+        assert_false(load_captured(&mesh, temp_file("cut.ply", bytes, cut), err, sizeof err));
+        assert_mesh_empty(&mesh);
+        assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    }
+    ao_mesh_finish(&bunny);
+}
+
 /* Every proper prefix of a binary file fails cleanly. */
 static void test_ply_binary_truncated(void **state)
 {
@@ -1794,6 +1880,7 @@ int main(void)
         cmocka_unit_test(test_ply_binary),
         cmocka_unit_test(test_ply_binary_errors),
         cmocka_unit_test(test_ply_binary_truncated),
+        cmocka_unit_test(test_ply_layouts_agree),
         cmocka_unit_test(test_stl_ascii),
         cmocka_unit_test(test_stl_binary),
         cmocka_unit_test(test_gltf_nodes),

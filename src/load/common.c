@@ -1,4 +1,6 @@
 /* What the mesh loaders share (see load.h): growth arrays, line tokens, numbers, error lines. */
+/* Linux's madvise and MADV_HUGEPAGE, which POSIX lacks, for ao_load_advise_huge alone. */
+#define _DEFAULT_SOURCE
 #include "load/load.h"
 
 #include <math.h>
@@ -6,25 +8,36 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include "file.h"
+
+/* Makes room for n more elements; false when memory or size_t runs out. */
+bool ao_load_reserve(struct ao_load_array *a, size_t n)
+{
+    if (n <= a->capacity - a->count)
+        return true;
+    size_t want = a->capacity ? a->capacity : 64;
+    while (want - a->count < n) {
+        if (want > SIZE_MAX / 2 / a->size)
+            return false;
+        want *= 2;
+    }
+    unsigned char *data = realloc(a->data, want * a->size);
+    if (!data)
+        return false;
+    a->data = data;
+    a->capacity = want;
+    ao_load_advise_huge(data, want * a->size);
+    return true;
+}
 
 /* Appends n elements and returns the first, or NULL when memory or size_t runs out. */
 void *ao_load_append(struct ao_load_array *a, size_t n)
 {
-    if (n > a->capacity - a->count) {
-        size_t want = a->capacity ? a->capacity : 64;
-        while (want - a->count < n) {
-            if (want > SIZE_MAX / 2 / a->size)
-                return NULL;
-            want *= 2;
-        }
-        unsigned char *data = realloc(a->data, want * a->size);
-        if (!data)
-            return NULL;
-        a->data = data;
-        a->capacity = want;
-    }
+    if (!ao_load_reserve(a, n))
+        return NULL;
     void *first = a->data + a->count * a->size;
     a->count += n;
     return first;
@@ -168,4 +181,18 @@ struct ao_vec3 ao_load_unit(double x, double y, double z)
     x /= big, y /= big, z /= big;
     double length = sqrt(x * x + y * y + z * z);
     return ao_vec3_make((float)(x / length), (float)(y / length), (float)(z / length));
+}
+
+/* Advises the whole pages inside [data, data + size) into transparent huge pages, where the system
+ * has them (Linux's "madvise" mode) and the array is big enough to gain. */
+void ao_load_advise_huge(void *data, size_t size)
+{
+#ifdef MADV_HUGEPAGE
+    uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE), start = (uintptr_t)data;
+    uintptr_t begin = (start + page - 1) / page * page, end = (start + size) / page * page;
+    if (size >= AO_LOAD_HUGE_ARRAY && end > begin)
+        madvise((void *)begin, end - begin, MADV_HUGEPAGE);
+#else
+    (void)data, (void)size;
+#endif
 }
