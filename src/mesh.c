@@ -198,8 +198,11 @@ static bool compute_all_normals(struct ao_mesh *mesh, int threads)
 {
     if (mesh->vertex_count == 0)
         return true;
-    if (!mesh->normals && !(mesh->normals = malloc(mesh->vertex_count * sizeof *mesh->normals)))
-        return false;
+    if (!mesh->normals) {
+        if (!(mesh->normals = malloc(mesh->vertex_count * sizeof *mesh->normals)))
+            return false;
+        ao_load_advise_huge(mesh->normals, mesh->vertex_count * sizeof *mesh->normals);
+    }
     angle_weighted_normals(mesh, mesh->normals, threads);
     return true;
 }
@@ -223,6 +226,7 @@ static bool fill_lacking_normals(struct ao_mesh *mesh, const bool *lacking, cons
     struct ao_vec3 *computed = malloc(mesh->vertex_count * sizeof *computed);
     if (!computed)
         return ao_load_out_of_memory(path);
+    ao_load_advise_huge(computed, mesh->vertex_count * sizeof *computed);
     angle_weighted_normals(mesh, computed, 0);
     for (size_t i = 0; i < mesh->vertex_count; i++)
         if (lacking[i])
@@ -314,17 +318,18 @@ bool ao_model_load_budget(struct ao_model *model, const char *path, struct ao_bu
 {
     memset(model, 0, sizeof *model);
     int format = format_of(path);
-    char *text;
+    const char *text;
     size_t size;
+    bool mapped;
     if (format < 0) {
         ao_load_report(path, 0, "unknown mesh format; expected .obj, .ply, .stl, .gltf or .glb");
         return false;
     }
-    if (!ao_file_read_budget(path, budget, &text, &size))
+    if (!ao_file_map_budget(path, budget, &text, &size, &mapped))
         return false;
     bool ok = formats[format].load_model ? formats[format].load_model(model, path, text, size, budget)
                                          : load_single(formats[format].load, model, path, text, size, budget);
-    free(text);
+    ao_file_unmap(text, size, mapped);
     ao_budget_give(budget, (uint64_t)size + 1);
     if (!ok)
         ao_model_finish(model);
