@@ -163,18 +163,22 @@ static void normals_part(void *user, int k)
         bool mine[3] = {v[0] - first < count, v[1] - first < count, v[2] - first < count};
         if (!(mine[0] | mine[1] | mine[2]))
             continue;
-        struct dvec n = area_vector(mesh, t);
+        struct dvec p[3] = {position(mesh, v[0]), position(mesh, v[1]), position(mesh, v[2])};
+        struct dvec edge[3] = {dsub(p[1], p[0]), dsub(p[2], p[1]), dsub(p[0], p[2])};
+        struct dvec b = dsub(p[2], p[0]);
+        struct dvec n = {edge[0].y * b.z - edge[0].z * b.y, edge[0].z * b.x - edge[0].x * b.z,
+                         edge[0].x * b.y - edge[0].y * b.x};   /* area_vector's, as it computes it */
         double twice_area = sqrt(ddot(n, n));
         if (twice_area == 0.0)
             continue;
+        /* Corner c's edges are edge[c] and -edge[c + 2]; |a x b| = twice the area at every corner,
+         * so the angle comes stably from it and a . b. */
+        double dots[3] = {ddot(edge[0], b), -ddot(edge[1], edge[0]), -ddot(edge[2], edge[1])};
+        double scale = 1.0 / twice_area;
         for (int c = 0; c < 3; c++) {
             if (!mine[c])
                 continue;
-            struct dvec p = position(mesh, v[c]);
-            struct dvec a = dsub(position(mesh, v[(c + 1) % 3]), p);
-            struct dvec b = dsub(position(mesh, v[(c + 2) % 3]), p);
-            /* |a x b| = twice the area at every corner, so the angle comes stably from it. */
-            double weight = corner_angle(twice_area, ddot(a, b)) / twice_area;
+            double weight = corner_angle(twice_area, dots[c]) * scale;
             struct ao_vec3 add = ao_vec3_make((float)(n.x * weight), (float)(n.y * weight),
                                               (float)(n.z * weight));
             out[v[c]] = ao_vec3_add(out[v[c]], add);
