@@ -185,8 +185,7 @@ static bool add_vertices(struct ao_gltf *g, const struct ao_gltf_elements *posit
     if (!p || !n || !lacking)
         return ao_load_out_of_memory(g->path);
     for (size_t i = 0; i < positions->count; i++) {
-        p[i] = ao_vec3_make((float)ao_gltf_value(positions, i, 0), (float)ao_gltf_value(positions, i, 1),
-                            (float)ao_gltf_value(positions, i, 2));
+        p[i] = ao_gltf_position(positions, i);
         if (!ao_vec3_is_finite(p[i]))
             return ao_gltf_error(g, "%s: vertex %zu is not a finite float", where, i);
         lacking[i] = !normals;
@@ -261,7 +260,18 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
     if (shared)
         *shared = (struct shared){g->instance, normal_key, base};
 
-    /* Triangles, every index checked once (a strip's and a fan's corners serve several). */
+    /* Triangles, every index checked once (a strip's and a fan's corners serve several); a list's
+     * in one pass. */
+    size_t bad;
+    uint32_t *list = indexed && mode == MODE_TRIANGLES ? ao_load_append(&g->indices, corners) : NULL;
+    if (indexed && mode == MODE_TRIANGLES && !list && corners)
+        return ao_load_out_of_memory(g->path);
+    if (list && !ao_gltf_list_indices(&indices, base, positions.count, list, &bad))
+        return ao_gltf_error(g, "%s: index %u at %zu is out of range (%zu vertices)", where,
+                             ao_gltf_index_at(&indices, bad), bad, positions.count);
+    g->triangles += list ? triangles : 0;
+    if (list)
+        return true;
     for (size_t i = 0; indexed && i < corners; i++) {
         uint32_t v = ao_gltf_index_at(&indices, i);
         if (v >= positions.count)
