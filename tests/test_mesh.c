@@ -1238,6 +1238,33 @@ static void test_gltf_leniency(void **state)
                    "buffer 1 has no 'uri' and is not a GLB's BIN chunk: it has no data");
 }
 
+/* A mesh whose first primitive has no normals and whose second has: the first's vertices get
+ * computed normals, the second's keep the file's (kept from the first primitive that has some). */
+static void test_gltf_normals_from_a_later_primitive(void **state)
+{
+    (void)state;
+    static const float data[3][3][3] = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}},
+                                         {{1, 0, 0}, {1, 0, 0}, {1, 0, 0}}};
+    static const char json[] =
+        "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}},"
+        " {\"attributes\": {\"POSITION\": 1, \"NORMAL\": 2}}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 2, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 36},"
+        " {\"buffer\": 0, \"byteOffset\": 72, \"byteLength\": 36}],\n"
+        " \"buffers\": [{\"byteLength\": %zu, \"uri\": \"%s\"}]}\n";
+    struct ao_mesh mesh;
+    load_ok(&mesh, gltf_file("later_normals.gltf", json, &data, sizeof data));
+    assert_int_equal(mesh.vertex_count, 6);
+    for (int i = 0; i < 3; i++) {
+        assert_vec3_near(mesh.normals[i], 0, 0, 1);
+        assert_vec3_near(mesh.normals[3 + i], 1, 0, 0);
+    }
+    ao_mesh_finish(&mesh);
+}
+
 /* KHR_mesh_quantization: positions and normals as 8- and 16-bit integers, normalized or not, in
  * 4-byte aligned strides, under the node transform that gives them their size (as exporters write
  * them). Normalized signed values map to c / 127 or c / 32767, at least -1 (so -32768 is -1, as
@@ -1948,6 +1975,7 @@ int main(void)
         cmocka_unit_test(test_gltf_required_extensions),
         cmocka_unit_test(test_gltf_leniency),
         cmocka_unit_test(test_gltf_quantized),
+        cmocka_unit_test(test_gltf_normals_from_a_later_primitive),
         cmocka_unit_test(test_gltf_sparse),
         cmocka_unit_test(test_gltf_meshopt),
         cmocka_unit_test(test_loaders_keep_to_the_budget),
