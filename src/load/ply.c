@@ -535,6 +535,10 @@ static bool fixed_vertex_rows(const struct ply_reader *r, const struct ply_eleme
 static bool read_vertex_rows(struct ply_reader *r, const size_t offset[ROLE_COUNT], size_t row)
 {
     size_t count = (size_t)r->element->count, fit = (size_t)(r->end - r->cur) / row;
+    /* The header's counts were checked; faces read before the vertices may have fanned further. */
+    r->row_index = 0;
+    if (!within_budget(r, r->indices.count / 3, count))
+        return false;
     struct ao_vec3 *p = ao_load_append(&r->positions, count);
     struct ao_vec3 *n = r->has_normals ? ao_load_append(&r->normals, count) : NULL;
     if ((count && !p) || (r->has_normals && count && !n))
