@@ -1,6 +1,7 @@
-/* The mesh interface: dispatch by extension to the loaders of src/load/ (one file per format),
- * and what every format shares once it has triangles: degenerate triangles dropped and
- * angle-weighted vertex normals computed where the file gives none. */
+/* The mesh interface: dispatch by extension to the loaders of src/load/ (one file per format,
+ * each given the file mapped), and what every format shares once it has triangles: degenerate
+ * triangles dropped and angle-weighted vertex normals computed where the file gives none, both on
+ * one thread per core for a big mesh. */
 #include "mesh.h"
 
 #include <math.h>
