@@ -3,11 +3,14 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <signal.h>
+#include <stdatomic.h>
 #include <stdarg.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
@@ -64,8 +67,48 @@ bool ao_file_read_prefix(int fd, size_t length, char **data, const char **why)
     return true;
 }
 
-/* ao_file_read, charging budget first when there is one. */
-static bool read_file(const char *path, struct ao_budget *budget, char **text, size_t *size)
+/* The line a SIGBUS prints while a file is mapped: another process shrank it under the parser.
+ * Empty (length 0) while none is mapped. One mapping at a time: loads run one after another. */
+static char bus_line[AO_TEXT_SIZE + 64]; /* the escaped name and the message fit */
+static atomic_size_t bus_length;
+
+/* SIGBUS while a file is mapped: its one line and exit status 1 (as any runtime error); otherwise
+ * what SIGBUS does by default. */
+static void on_bus(int sig)
+{
+    size_t length = atomic_load(&bus_length);
+    if (length == 0) {
+        signal(sig, SIG_DFL);
+        raise(sig);
+        return;
+    }
+    if (write(STDERR_FILENO, bus_line, length) < 0) {
+        /* nowhere left to say it */
+    }
+    _exit(EXIT_FAILURE);
+}
+
+/* The first length bytes of the open file fd, a NUL after them, into *data: mapped read-only
+ * (*mapped) when the file ends inside a page, whose rest the system fills with zeros (POSIX) so
+ * that the NUL is there; read when it ends at a page's end or cannot be mapped. False with the
+ * reason in *why. */
+static bool map_file(int fd, size_t length, char **data, bool *mapped, const char **why)
+{
+    void *bytes = length % (size_t)sysconf(_SC_PAGESIZE) != 0 ? mmap(NULL, length, PROT_READ, MAP_PRIVATE, fd, 0)
+                                                              : MAP_FAILED;
+    *mapped = bytes != MAP_FAILED;
+    if (!*mapped)
+        return ao_file_read_prefix(fd, length, data, why);
+    struct sigaction action = {.sa_handler = on_bus}; /* set at each mapping, whatever came since */
+    sigemptyset(&action.sa_mask);
+    sigaction(SIGBUS, &action, NULL);
+    posix_madvise(bytes, length, POSIX_MADV_SEQUENTIAL);
+    *data = bytes;
+    return true;
+}
+
+/* ao_file_read (or, given mapped, ao_file_map_budget), charging budget first when there is one. */
+static bool read_file(const char *path, struct ao_budget *budget, bool *mapped, char **text, size_t *size)
 {
     /* Non-blocking, so that opening a FIFO returns at once (to be refused below). */
     int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
@@ -82,7 +125,8 @@ static bool read_file(const char *path, struct ao_budget *budget, char **text, s
         ao_budget_explain(budget, charge, why, sizeof why);
         reason = why;
     }
-    if (!reason && ao_file_read_prefix(fd, (size_t)st.st_size, text, &reason))
+    if (!reason && (mapped ? map_file(fd, (size_t)st.st_size, text, mapped, &reason)
+                        : ao_file_read_prefix(fd, (size_t)st.st_size, text, &reason)))
         *size = (size_t)st.st_size;
     else if (taken)
         ao_budget_give(budget, charge);
@@ -96,12 +140,33 @@ static bool read_file(const char *path, struct ao_budget *budget, char **text, s
 
 bool ao_file_read(const char *path, char **text, size_t *size)
 {
-    return read_file(path, NULL, text, size);
+    return read_file(path, NULL, NULL, text, size);
 }
 
 bool ao_file_read_budget(const char *path, struct ao_budget *budget, char **text, size_t *size)
 {
-    return read_file(path, budget, text, size);
+    return read_file(path, budget, NULL, text, size);
+}
+
+bool ao_file_map_budget(const char *path, struct ao_budget *budget, const char **text, size_t *size, bool *mapped)
+{
+    char *bytes = NULL, name[AO_TEXT_SIZE];
+    int n = snprintf(bus_line, sizeof bus_line, "%s: the file shrank while it was being read\n",
+                     ao_text_escape(path, name, sizeof name));
+    bool ok = read_file(path, budget, mapped, &bytes, size);
+    if (ok && *mapped && n > 0)
+        atomic_store(&bus_length, (size_t)n);
+    *text = bytes;
+    return ok;
+}
+
+void ao_file_unmap(const char *text, size_t size, bool mapped)
+{
+    if (mapped) {
+        atomic_store(&bus_length, 0);
+        munmap((void *)(uintptr_t)text, size);
+    } else
+        free((void *)(uintptr_t)text);
 }
 
 void ao_file_report(const char *format, ...)

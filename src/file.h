@@ -27,6 +27,17 @@ FILE *ao_file_open_output(const char *path, const char *what, bool *created);
  * gives the bytes back (ao_budget_give(budget, *size + 1)) once it frees the text. Any thread. */
 bool ao_file_read_budget(const char *path, struct ao_budget *budget, char **text, size_t *size);
 
+/* ao_file_read_budget without a copy, for big files read once: the file is mapped read-only
+ * (*mapped; its pages are the page cache's, so nothing is zeroed or copied), a NUL after it; a
+ * file whose length is a whole number of pages (no room for the NUL), or that cannot be mapped, is
+ * read. Release it with ao_file_unmap, then give back the charge. A file another process shrinks
+ * while it is mapped ends this one with "path: the file shrank while it was being read" and status
+ * 1 (a SIGBUS handler; other SIGBUS keep their default). One mapping at a time. Any thread. */
+bool ao_file_map_budget(const char *path, struct ao_budget *budget, const char **text, size_t *size, bool *mapped);
+
+/* Releases what ao_file_map_budget gave (text, size and mapped as it gave them). */
+void ao_file_unmap(const char *text, size_t size, bool mapped);
+
 /* Reads the first `length` bytes of the open file fd into a malloc'd buffer (a NUL after them)
  * the caller frees. Refuses, before allocating, what is not a regular file or holds fewer bytes;
  * then returns false with the reason in *why (static text) and prints nothing. Any thread. */

@@ -82,8 +82,13 @@ void ao_model_finish(struct ao_model *model);
 size_t ao_mesh_place(struct ao_mesh *dst, size_t vertex_base, size_t triangle_base, const struct ao_mesh *src,
                      const struct ao_affine *map);
 
-/* Recomputes mesh->normals from the triangles (angle-weighted face normals). */
+/* Recomputes mesh->normals from the triangles (angle-weighted face normals), on one thread per core
+ * for a big mesh; false (reported) when memory runs out. Any thread. */
 bool ao_mesh_compute_normals(struct ao_mesh *mesh);
+
+/* ao_mesh_compute_normals on so many threads (0: its choice); the normals are the same, bit for
+ * bit, whatever the number. */
+bool ao_mesh_compute_normals_on(struct ao_mesh *mesh, int threads);
 
 /* Frees what ao_mesh_load allocated and zeroes mesh; accepts an empty mesh. */
 void ao_mesh_finish(struct ao_mesh *mesh);

@@ -14,10 +14,13 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <meshoptimizer.h>
 
+#include "file.h"
+#include "load/load.h"
 #include "mesh.h"
 #include "scene.h"
 
@@ -328,6 +331,58 @@ static struct bytes binary_triangle(const char *list_types, size_t count_size, u
     return b;
 }
 
+/* ------------------------------------------------------------------ numbers */
+
+/* Checks one token against strtod and strtof: the same bits, and the same verdict. */
+static void assert_number_as_libc(const char *token)
+{
+    struct ao_load_span s = {token, token + strlen(token)};
+    char *stop;
+    double want = strtod(token, &stop), got = 0.0;
+    bool ok = ao_load_parse_number(s, &got);
+    assert_int_equal(ok, stop == s.end);
+    if (ok && memcmp(&want, &got, sizeof want) != 0)
+        fail_msg("'%s': strtod %.17g, parsed %.17g", token, want, got);
+    float want_f = strtof(token, &stop), got_f = 0.0f;
+    ok = ao_load_parse_float(s, &got_f);
+    assert_int_equal(ok, stop == s.end && isfinite(want_f));
+    if (ok && memcmp(&want_f, &got_f, sizeof want_f) != 0)
+        fail_msg("'%s': strtof %.9g, parsed %.9g", token, want_f, got_f);
+}
+
+/* The numbers of text files parse as strtod and strtof parse them, bit for bit, the fast path for
+ * short decimals included: random values in every notation and precision, the halfway points
+ * between adjacent floats (where rounding twice would go wrong), extremes and malformed tokens. */
+static void test_numbers_as_libc(void **state)
+{
+    (void)state;
+    static const char *const fixed[] = {"0", "-0", "+1", "1.", ".5", "-.5", "1e5", "1E-5", "1e+5", "007", "0.000",
+                                        "3.4028235e38", "3.4028236e38", "1e39", "-1e39", "1e-38", "1.17549435e-38",
+                                        "1e-40", "1e-46", "9007199254740993", "123456789012345678901",
+                                        "0.1234567890123456789", "1e22", "1e23", "1e-22", "1e-23", "inf", "nan",
+                                        "0x1p3", "1e", "1e+", ".", "-", "1.2.3", "1e5.5", "12a", "1e99999", ""};
+    for (size_t i = 0; i < sizeof fixed / sizeof fixed[0]; i++)
+        assert_number_as_libc(fixed[i]);
+    uint64_t seed = 99;
+    char token[64];
+    for (int i = 0; i < 200000; i++) {
+        seed = seed * 6364136223846793005u + 1442695040888963407u;
+        uint32_t bits = (uint32_t)(seed >> 32);
+        float f;
+        memcpy(&f, &bits, sizeof f);
+        if (!isfinite(f))
+            continue;
+        static const char *const formats[] = {"%.9g", "%.6g", "%.17g", "%.3f", "%.9e", "%g"};
+        snprintf(token, sizeof token, formats[i % 6], f);
+        assert_number_as_libc(token);
+        float next = nextafterf(f, INFINITY);
+        snprintf(token, sizeof token, "%.17g", ((double)f + (double)next) / 2);
+        assert_number_as_libc(token);
+        snprintf(token, sizeof token, "%.9g", (double)(bits % 2000000) / 1000.0 - 1000.0);
+        assert_number_as_libc(token);
+    }
+}
+
 /* ------------------------------------------------------------------ OBJ */
 
 static void test_obj_triangle(void **state)
@@ -610,6 +665,92 @@ static void test_ply_binary_errors(void **state)
                  "element junk 4611686018427387905\nproperty double d\nelement face 1\n"
                  "property list uchar int vertex_indices\nend_header\n");
     expect_failure(temp_file("overflow.ply", b.data, b.size), ":7: ", "declares");
+}
+
+/* The layouts of write_ply: the common binary one (floats and a list of uchar and int, read
+ * straight from the bytes), with an extra vertex property (read so too), others read value by
+ * value (a double x, a list of ushort and uint beside another face property; ascii). */
+enum ply_layout { PLY_PLAIN, PLY_EXTRA_VERTEX, PLY_GENERAL, PLY_ASCII };
+
+/* Writes mesh (positions and triangles) as a PLY file of the given layout; returns its path. */
+static const char *write_ply(const struct ao_mesh *mesh, const char *name, enum ply_layout layout)
+{
+    char *path = path_buffer();
+    snprintf(path, 4200, "%s/%s", temp_dir, name);
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    fprintf(f, "ply\nformat %s 1.0\nelement vertex %zu\nproperty %s x\n%sproperty float y\nproperty float z\n"
+               "element face %zu\n%sproperty list %s vertex_indices\nend_header\n",
+            layout == PLY_ASCII ? "ascii" : "binary_little_endian", mesh->vertex_count,
+            layout == PLY_GENERAL ? "double" : "float", layout == PLY_EXTRA_VERTEX ? "property uchar red\n" : "",
+            mesh->triangle_count, layout == PLY_GENERAL ? "property uchar flags\n" : "",
+            layout == PLY_GENERAL ? "ushort uint" : "uchar int");
+    for (size_t i = 0; i < mesh->vertex_count; i++) {
+        struct ao_vec3 p = mesh->positions[i];
+        double x = p.x;
+        unsigned char red = 7;
+        if (layout == PLY_ASCII)
+            fprintf(f, "%.9g %.9g %.9g\n", p.x, p.y, p.z);
+        else if (layout == PLY_GENERAL)
+            fwrite(&x, 8, 1, f);
+        else
+            fwrite(&p.x, 4, 1, f);
+        if (layout == PLY_EXTRA_VERTEX)
+            fwrite(&red, 1, 1, f);
+        if (layout != PLY_ASCII)
+            fwrite(&p.y, 4, 2, f);
+    }
+    for (size_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *v = mesh->indices + 3 * t;
+        unsigned char three[2] = {3, 0}, flags = 1;
+        if (layout == PLY_ASCII)
+            fprintf(f, "3 %u %u %u\n", v[0], v[1], v[2]);
+        else if (layout == PLY_GENERAL)
+            fwrite(&flags, 1, 1, f), fwrite(three, 1, 2, f);
+        else
+            fwrite(three, 1, 1, f);
+        if (layout != PLY_ASCII)
+            fwrite(v, 4, 3, f);
+    }
+    assert_int_equal(fclose(f), 0);
+    return path;
+}
+
+/* Binary rows read straight from the bytes give the mesh that reading value by value gives, bit
+ * for bit: the bunny in every layout of write_ply. Big-endian files are still refused. */
+static void test_ply_layouts_agree(void **state)
+{
+    (void)state;
+    char path[4200];
+    snprintf(path, sizeof path, "%s/assets/bunny.obj", getenv("AO_SOURCE_ROOT"));
+    struct ao_mesh bunny, mesh;
+    load_ok(&bunny, path);
+    static const char *const names[] = {"plain.ply", "extra.ply", "general.ply", "ascii.ply"};
+    for (int layout = PLY_PLAIN; layout <= PLY_ASCII; layout++) {
+        load_ok(&mesh, write_ply(&bunny, names[layout], (enum ply_layout)layout));
+        assert_int_equal(mesh.vertex_count, bunny.vertex_count);
+        assert_int_equal(mesh.triangle_count, bunny.triangle_count);
+        assert_memory_equal(mesh.positions, bunny.positions, bunny.vertex_count * sizeof *bunny.positions);
+        assert_memory_equal(mesh.normals, bunny.normals, bunny.vertex_count * sizeof *bunny.normals);
+        assert_memory_equal(mesh.indices, bunny.indices, 3 * bunny.triangle_count * sizeof *bunny.indices);
+        ao_mesh_finish(&mesh);
+    }
+    expect_failure(fixture("bad_big_endian.ply"), ":2: ", "big-endian binary PLY is not supported");
+    /* Every proper prefix of the plain file fails cleanly, in one line. */
+    const char *plain = write_ply(&bunny, "plain.ply", PLY_PLAIN);
+    FILE *f = fopen(plain, "rb");
+    assert_non_null(f);
+    static unsigned char bytes[1 << 17];
+    size_t size = fread(bytes, 1, sizeof bytes, f);
+    assert_true(size < sizeof bytes);
+    fclose(f);
+    for (size_t cut = 0; cut < size; cut += cut < 300 ? 1 : 997) {
+        char err[1024];
+        assert_false(load_captured(&mesh, temp_file("cut.ply", bytes, cut), err, sizeof err));
+        assert_mesh_empty(&mesh);
+        assert_true(strchr(err, '\n') == err + strlen(err) - 1);
+    }
+    ao_mesh_finish(&bunny);
 }
 
 /* Every proper prefix of a binary file fails cleanly. */
@@ -1099,6 +1240,33 @@ static void test_gltf_leniency(void **state)
                    "buffer 1 has no 'uri' and is not a GLB's BIN chunk: it has no data");
 }
 
+/* A mesh whose first primitive has no normals and whose second has: the first's vertices get
+ * computed normals, the second's keep the file's (kept from the first primitive that has some). */
+static void test_gltf_normals_from_a_later_primitive(void **state)
+{
+    (void)state;
+    static const float data[3][3][3] = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{0, 0, 1}, {1, 0, 1}, {0, 1, 1}},
+                                         {{1, 0, 0}, {1, 0, 0}, {1, 0, 0}}};
+    static const char json[] =
+        "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}},"
+        " {\"attributes\": {\"POSITION\": 1, \"NORMAL\": 2}}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 1, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 2, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}, {\"buffer\": 0, \"byteOffset\": 36, \"byteLength\": 36},"
+        " {\"buffer\": 0, \"byteOffset\": 72, \"byteLength\": 36}],\n"
+        " \"buffers\": [{\"byteLength\": %zu, \"uri\": \"%s\"}]}\n";
+    struct ao_mesh mesh;
+    load_ok(&mesh, gltf_file("later_normals.gltf", json, &data, sizeof data));
+    assert_int_equal(mesh.vertex_count, 6);
+    for (int i = 0; i < 3; i++) {
+        assert_vec3_near(mesh.normals[i], 0, 0, 1);
+        assert_vec3_near(mesh.normals[3 + i], 1, 0, 0);
+    }
+    ao_mesh_finish(&mesh);
+}
+
 /* KHR_mesh_quantization: positions and normals as 8- and 16-bit integers, normalized or not, in
  * 4-byte aligned strides, under the node transform that gives them their size (as exporters write
  * them). Normalized signed values map to c / 127 or c / 32767, at least -1 (so -32768 is -1, as
@@ -1567,6 +1735,42 @@ static void test_unreadable_file(void **state)
     expect_failure(path, ": ", "cannot open: Permission denied");
 }
 
+/* A mapped file that another process shrinks under the parser: reading past its new end ends the
+ * process with the file's one line and status 1, not a crash (run in a child, which it ends). */
+static void test_file_shrunk_while_mapped(void **state)
+{
+    (void)state;
+    static char bytes[3 * 4096 + 100];
+    memset(bytes, '#', sizeof bytes);
+    const char *path = temp_file("shrinks.obj", bytes, sizeof bytes);
+    int err[2];
+    assert_int_equal(pipe(err), 0);
+    pid_t child = fork();
+    assert_true(child >= 0);
+    if (child == 0) {
+        dup2(err[1], STDERR_FILENO);
+        const char *text;
+        size_t size;
+        bool mapped;
+        if (!ao_file_map_budget(path, NULL, &text, &size, &mapped) || !mapped || truncate(path, 10) != 0)
+            _exit(3);
+        volatile char last = text[size - 1]; /* on a page past the new end */
+        (void)last;
+        _exit(0);
+    }
+    close(err[1]);
+    char line[256] = "";
+    ssize_t got = read(err[0], line, sizeof line - 1);
+    close(err[0]);
+    int status;
+    assert_int_equal(waitpid(child, &status, 0), child);
+    assert_true(WIFEXITED(status));
+    assert_int_equal(WEXITSTATUS(status), 1);
+    assert_true(got > 0);
+    if (!strstr(line, "shrinks.obj: the file shrank while it was being read\n"))
+        fail_msg("stderr: %s", line);
+}
+
 /* Random byte changes to valid files (fixed seed) load or fail cleanly, never anything else. */
 static void test_mutations(void **state)
 {
@@ -1637,6 +1841,89 @@ static void test_compute_normals(void **state)
     assert_mesh_empty(&mesh);
 }
 
+/* A bumpy grid of 2 n^2 triangles whose vertices are numbered in a shuffled order, so that every
+ * part of a parallel normals pass meets triangles that it shares with the others. */
+static void shuffled_grid(struct ao_mesh *mesh, uint32_t n)
+{
+    uint32_t side = n + 1, *order = malloc((size_t)side * side * sizeof *order);
+    *mesh = (struct ao_mesh){.vertex_count = (size_t)side * side, .triangle_count = 2 * (size_t)n * n};
+    mesh->positions = malloc(mesh->vertex_count * sizeof *mesh->positions);
+    mesh->indices = malloc(3 * mesh->triangle_count * sizeof *mesh->indices);
+    assert_non_null(order);
+    assert_non_null(mesh->positions);
+    assert_non_null(mesh->indices);
+    for (uint32_t i = 0; i < side * side; i++)
+        order[i] = i;
+    uint64_t seed = 12345;
+    for (uint32_t i = side * side - 1; i > 0; i--) {
+        seed = seed * 6364136223846793005u + 1442695040888963407u;
+        uint32_t j = (uint32_t)((seed >> 33) % (i + 1)), swap = order[i];
+        order[i] = order[j], order[j] = swap;
+    }
+    for (uint32_t y = 0; y < side; y++)
+        for (uint32_t x = 0; x < side; x++)
+            mesh->positions[order[y * side + x]] = ao_vec3_make((float)x, (float)y, 3.0f * sinf(0.37f * (float)x) *
+                                                                                    cosf(0.23f * (float)y));
+    uint32_t *t = mesh->indices;
+    for (uint32_t y = 0; y < n; y++)
+        for (uint32_t x = 0; x < n; x++, t += 6) {
+            uint32_t a = order[y * side + x], b = order[y * side + x + 1], c = order[(y + 1) * side + x],
+                     d = order[(y + 1) * side + x + 1];
+            uint32_t two[6] = {a, b, d, a, d, c};
+            memcpy(t, two, sizeof two);
+        }
+    free(order);
+}
+
+/* Normals are computed in parallel: the same bits on any number of threads, and within float
+ * rounding of the angle-weighted sum taken with libm's atan2, triangle by triangle, as defined. */
+static void test_normals_any_thread_count(void **state)
+{
+    (void)state;
+    struct ao_mesh mesh;
+    shuffled_grid(&mesh, 300);
+    assert_true(ao_mesh_compute_normals_on(&mesh, 1));
+    struct ao_vec3 *one = malloc(mesh.vertex_count * sizeof *one);
+    assert_non_null(one);
+    memcpy(one, mesh.normals, mesh.vertex_count * sizeof *one);
+    static const int counts[] = {2, 3, 7, 0};
+    for (size_t k = 0; k < sizeof counts / sizeof counts[0]; k++) {
+        memset(mesh.normals, 0xff, mesh.vertex_count * sizeof *mesh.normals);
+        assert_true(ao_mesh_compute_normals_on(&mesh, counts[k]));
+        assert_memory_equal(one, mesh.normals, mesh.vertex_count * sizeof *one);
+    }
+    double (*sum)[3] = calloc(mesh.vertex_count, sizeof *sum);
+    assert_non_null(sum);
+    for (size_t t = 0; t < mesh.triangle_count; t++) {
+        const uint32_t *v = mesh.indices + 3 * t;
+        double p[3][3];
+        for (int c = 0; c < 3; c++)
+            p[c][0] = mesh.positions[v[c]].x, p[c][1] = mesh.positions[v[c]].y, p[c][2] = mesh.positions[v[c]].z;
+        double a[3], b[3], n[3];
+        for (int i = 0; i < 3; i++)
+            a[i] = p[1][i] - p[0][i], b[i] = p[2][i] - p[0][i];
+        n[0] = a[1] * b[2] - a[2] * b[1], n[1] = a[2] * b[0] - a[0] * b[2], n[2] = a[0] * b[1] - a[1] * b[0];
+        double area = sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        for (int c = 0; c < 3; c++) {
+            double e[3], f[3];
+            for (int i = 0; i < 3; i++)
+                e[i] = p[(c + 1) % 3][i] - p[c][i], f[i] = p[(c + 2) % 3][i] - p[c][i];
+            double angle = atan2(area, e[0] * f[0] + e[1] * f[1] + e[2] * f[2]);
+            for (int i = 0; i < 3; i++)
+                sum[v[c]][i] += n[i] / area * angle;
+        }
+    }
+    for (size_t i = 0; i < mesh.vertex_count; i++) {
+        double length = sqrt(sum[i][0] * sum[i][0] + sum[i][1] * sum[i][1] + sum[i][2] * sum[i][2]);
+        assert_float_equal(one[i].x, sum[i][0] / length, 1e-6);
+        assert_float_equal(one[i].y, sum[i][1] / length, 1e-6);
+        assert_float_equal(one[i].z, sum[i][2] / length, 1e-6);
+    }
+    free(sum);
+    free(one);
+    ao_mesh_finish(&mesh);
+}
+
 /* The shipped bunny: its counts, y up, finite unit normals, and outward orientation. */
 static void test_bunny(void **state)
 {
@@ -1705,6 +1992,7 @@ int main(void)
     }
     snprintf(data_dir, sizeof data_dir, "%s/tests/data/mesh", root);
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_numbers_as_libc),
         cmocka_unit_test(test_obj_triangle),
         cmocka_unit_test(test_obj_polygon_fan),
         cmocka_unit_test(test_obj_corner_forms),
@@ -1720,6 +2008,7 @@ int main(void)
         cmocka_unit_test(test_ply_binary),
         cmocka_unit_test(test_ply_binary_errors),
         cmocka_unit_test(test_ply_binary_truncated),
+        cmocka_unit_test(test_ply_layouts_agree),
         cmocka_unit_test(test_stl_ascii),
         cmocka_unit_test(test_stl_binary),
         cmocka_unit_test(test_gltf_nodes),
@@ -1733,6 +2022,7 @@ int main(void)
         cmocka_unit_test(test_gltf_required_extensions),
         cmocka_unit_test(test_gltf_leniency),
         cmocka_unit_test(test_gltf_quantized),
+        cmocka_unit_test(test_gltf_normals_from_a_later_primitive),
         cmocka_unit_test(test_gltf_sparse),
         cmocka_unit_test(test_gltf_meshopt),
         cmocka_unit_test(test_loaders_keep_to_the_budget),
@@ -1740,8 +2030,10 @@ int main(void)
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_unreadable_file),
+        cmocka_unit_test(test_file_shrunk_while_mapped),
         cmocka_unit_test(test_mutations),
         cmocka_unit_test(test_compute_normals),
+        cmocka_unit_test(test_normals_any_thread_count),
         cmocka_unit_test(test_bunny),
     };
     return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);

@@ -57,10 +57,10 @@ one_line() {
   [ "$(wc -l < err.txt)" = 1 ] && grep -qF -- "$2" err.txt || fail "$1: expected one line with '$2', got: $(cat err.txt)"
 }
 
-# A signal while a 2-million-triangle OBJ (57 MB) is being parsed: sent once aoview has read the
-# whole file (its read count in /proc), so that the parse and the BVH build, about 1.5 s here, are
-# still to come. It must exit at once with 128 + signal and one line; before, the signal waited
-# for the end of loading, then for the first pass, and wrote its image over out.pfm.
+# A signal while a 2-million-triangle OBJ (57 MB) is being parsed: sent once aoview has mapped the
+# file (its maps in /proc; a file read instead shows in its read count), so that the parse and the
+# BVH build, about 1.5 s here, are still to come. It must exit at once with 128 + signal and one
+# line, without waiting for loading or a first pass and without writing an image over out.pfm.
 python3 - <<'PY'
 n = 1000
 with open('grid.obj', 'w') as f:
@@ -82,6 +82,7 @@ for case in "INT 130 stats.csv" "TERM 143 new.csv"; do
   for _ in $(seq 1000); do
     read_bytes=$(awk '/^rchar/ { print $2 }' "/proc/$pid/io" 2>/dev/null)
     [ "${read_bytes:-0}" -ge "$grid_bytes" ] && break
+    grep -q '/grid\.obj$' "/proc/$pid/maps" 2>/dev/null && break
     sleep 0.01
   done
   start=$(date +%s%N)

@@ -1,31 +1,45 @@
 /* What the mesh loaders share (see load.h): growth arrays, line tokens, numbers, error lines. */
+/* Linux's madvise and MADV_HUGEPAGE, which POSIX lacks, for ao_load_advise_huge alone. */
+#define _DEFAULT_SOURCE
 #include "load/load.h"
 
+#include <float.h>
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
+#include <unistd.h>
 
 #include "file.h"
 
-/* Appends n elements and returns the first (storage exists after any call, even for n = 0), or
- * NULL when memory or size_t runs out. */
+/* Makes room for n more elements (storage exists after any call, even for n = 0, so that no null
+ * pointer meets an offset); false when memory or size_t runs out. */
+bool ao_load_reserve(struct ao_load_array *a, size_t n)
+{
+    if (a->data && n <= a->capacity - a->count)
+        return true;
+    size_t want = a->capacity ? a->capacity : 64;
+    while (want - a->count < n) {
+        if (want > SIZE_MAX / 2 / a->size)
+            return false;
+        want *= 2;
+    }
+    unsigned char *data = realloc(a->data, want * a->size);
+    if (!data)
+        return false;
+    a->data = data;
+    a->capacity = want;
+    ao_load_advise_huge(data, want * a->size);
+    return true;
+}
+
+/* Appends n elements and returns the first, or NULL when memory or size_t runs out. */
 void *ao_load_append(struct ao_load_array *a, size_t n)
 {
-    if (!a->data || n > a->capacity - a->count) {
-        size_t want = a->capacity ? a->capacity : 64;
-        while (want - a->count < n) {
-            if (want > SIZE_MAX / 2 / a->size)
-                return NULL;
-            want *= 2;
-        }
-        unsigned char *data = realloc(a->data, want * a->size);
-        if (!data)
-            return NULL;
-        a->data = data;
-        a->capacity = want;
-    }
+    if (!ao_load_reserve(a, n))
+        return NULL;
     void *first = a->data + a->count * a->size;
     a->count += n;
     return first;
@@ -93,24 +107,26 @@ bool ao_load_out_of_memory(const char *path)
     return false;
 }
 
+/* The blanks of ao_load_is_blank as bits of a mask indexed by character. */
+#define BLANKS ((uint64_t)1 << ' ' | 1u << '\t' | 1u << '\r' | 1u << '\f' | 1u << '\v')
+
 /* Whitespace inside a line ('\r' too, so CRLF files need no special case). */
 bool ao_load_is_blank(char c)
 {
-    return c == ' ' || c == '\t' || c == '\r' || c == '\f' || c == '\v';
+    return (unsigned char)c <= ' ' && (BLANKS >> (unsigned char)c & 1);
 }
 
 /* Moves to the next whitespace-separated token of the line; false at its end. */
 bool ao_load_next_token(struct ao_load_tokens *t, struct ao_load_span *s)
 {
-    while (t->p < t->end && ao_load_is_blank(*t->p))
-        t->p++;
-    if (t->p == t->end)
-        return false;
-    s->begin = t->p;
-    while (t->p < t->end && !ao_load_is_blank(*t->p))
-        t->p++;
-    s->end = t->p;
-    return true;
+    const char *p = t->p, *end = t->end;
+    while (p < end && ao_load_is_blank(*p))
+        p++;
+    s->begin = p;
+    while (p < end && !ao_load_is_blank(*p))
+        p++;
+    s->end = t->p = p;
+    return s->begin < p;
 }
 
 /* True when the token is exactly word. */
@@ -127,18 +143,95 @@ int ao_load_span_length(struct ao_load_span s)
     return n < 40 ? (int)n : 40;
 }
 
+/* Reads a token of the form [+-]digits[.digits][(e|E)[+-]digits] (digits on at least one side of
+ * the point) of at most 19 significant digits as sign, mantissa and power of ten; false for every
+ * other token (strtod's other forms, longer mantissas, exponents past 9999, errors), which the
+ * callers hand to strtod. */
+static bool simple_decimal(struct ao_load_span s, bool *negative, uint64_t *mantissa, int *power)
+{
+    const char *p = s.begin;
+    int digits = 0, scale = 0, exponent = 0;
+    bool any = false, point = false, minus = false;
+    uint64_t m = 0;
+    *negative = p < s.end && *p == '-';
+    p += p < s.end && (*p == '-' || *p == '+');
+    for (; p < s.end; p++) {
+        if (*p == '.' && !point) {
+            point = true;
+            continue;
+        }
+        if (*p < '0' || *p > '9')
+            break;
+        any = true;
+        scale -= point;
+        if (m == 0 && *p == '0')
+            continue;
+        if (++digits > 19)
+            return false;
+        m = m * 10 + (uint64_t)(*p - '0');
+    }
+    if (!any)
+        return false;
+    if (p < s.end && (*p == 'e' || *p == 'E')) {
+        p++;
+        minus = p < s.end && *p == '-';
+        p += p < s.end && (*p == '-' || *p == '+');
+        if (p == s.end || *p < '0' || *p > '9')
+            return false;
+        for (; p < s.end && *p >= '0' && *p <= '9'; p++)
+            if ((exponent = exponent * 10 + (*p - '0')) > 9999)
+                return false;
+    }
+    *mantissa = m;
+    *power = scale + (minus ? -exponent : exponent);
+    return p == s.end;
+}
+
+/* The value of a simple_decimal token, correctly rounded to double (Clinger 1990: the mantissa
+ * below 2^53 and 10^|power| up to 10^22 are exact doubles, so one product or quotient rounds once);
+ * false when the token is not one whose value this computes so. */
+static bool fast_double(struct ao_load_span s, double *out)
+{
+    static const double tens[23] = {1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+                                     1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+    bool negative;
+    uint64_t m;
+    int power;
+    if (!simple_decimal(s, &negative, &m, &power) || m > (uint64_t)1 << 53 || power < -22 || power > 22)
+        return false;
+    double value = power < 0 ? (double)m / tens[-power] : (double)m * tens[power];
+    *out = negative ? -value : value;
+    return true;
+}
+
 /* Parses a whole token as a number (strtod syntax); false when anything is left over. A token
- * always ends at a blank, a newline, '#' or the text's terminating NUL, where strtod stops. */
+ * always ends at a blank, a newline, '#' or the text's terminating NUL, where strtod stops. Most
+ * tokens a file holds are read by fast_double, as strtod would read them; others by strtod. */
 bool ao_load_parse_number(struct ao_load_span s, double *out)
 {
+    if (fast_double(s, out))
+        return true;
     char *stop;
     *out = strtod(s.begin, &stop);
     return stop == s.end;
 }
 
-/* Parses a whole token as a finite single-precision number. */
+/* Parses a whole token as a finite single-precision number: through fast_double, whose one
+ * rounding to double and then to float is the single rounding strtof makes unless the double
+ * lies exactly halfway between two floats (the only double the second rounding can get wrong, the
+ * nearest double to a value being nearer than any halfway point) or among the subnormal floats;
+ * those and other tokens go to strtof. */
 bool ao_load_parse_float(struct ao_load_span s, float *out)
 {
+    double d;
+    uint64_t bits;
+    if (fast_double(s, &d) && (d == 0.0 || fabs(d) >= FLT_MIN)) {
+        memcpy(&bits, &d, sizeof bits);
+        if ((bits & 0x1fffffffu) != 0x10000000u) {
+            *out = (float)d;
+            return isfinite(*out);
+        }
+    }
     char *stop;
     *out = strtof(s.begin, &stop);
     return stop == s.end && isfinite(*out);
@@ -169,4 +262,21 @@ struct ao_vec3 ao_load_unit(double x, double y, double z)
     x /= big, y /= big, z /= big;
     double length = sqrt(x * x + y * y + z * z);
     return ao_vec3_make((float)(x / length), (float)(y / length), (float)(z / length));
+}
+
+/* Advises the pages that [data, data + size) touches into transparent huge pages, where the system
+ * has them (Linux's "madvise" mode) and the array is big enough to gain. The advice covers all of
+ * a big block that malloc mapped by itself (from its page-aligned header to its end), so that its
+ * mapping stays whole and realloc can still move it without copying; pages shared with other
+ * blocks only change how they are backed. */
+void ao_load_advise_huge(void *data, size_t size)
+{
+#ifdef MADV_HUGEPAGE
+    uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE), start = (uintptr_t)data;
+    uintptr_t begin = start / page * page, end = (start + size + page - 1) / page * page;
+    if (size >= AO_LOAD_HUGE_ARRAY)
+        madvise((void *)begin, end - begin, MADV_HUGEPAGE);
+#else
+    (void)data, (void)size;
+#endif
 }

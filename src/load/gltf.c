@@ -173,22 +173,29 @@ static void triangle_corners(uint64_t mode, size_t k, size_t out[3])
 }
 
 /* Appends a primitive's vertices to the mesh being built, in the mesh's own frame: positions as
- * the file gives them, normals made unit, or flagged as lacking when normals is NULL. */
+ * the file gives them, normals made unit, or flagged as lacking when normals is NULL. The normals
+ * and flags are kept from the mesh's first primitive with normals on (zero and lacking before it):
+ * a mesh without any has none to hold. */
 static bool add_vertices(struct ao_gltf *g, const struct ao_gltf_elements *positions,
                          const struct ao_gltf_elements *normals, const char *where)
 {
     if (g->positions.count + positions->count >= AO_LOAD_NO_INDEX)
         return ao_gltf_error(g, "%s: more than %u vertices in one mesh", where, AO_LOAD_NO_INDEX - 1);
+    size_t earlier = g->positions.count - g->normals.count;
+    bool keep = normals || g->normals.count > 0;
     struct ao_vec3 *p = ao_load_append(&g->positions, positions->count);
-    struct ao_vec3 *n = ao_load_append(&g->normals, positions->count);
-    bool *lacking = ao_load_append(&g->lacking, positions->count);
-    if (!p || !n || !lacking)
+    struct ao_vec3 *n = keep ? ao_load_append(&g->normals, earlier + positions->count) : NULL;
+    bool *lacking = keep ? ao_load_append(&g->lacking, earlier + positions->count) : NULL;
+    if (!p || (keep && (!n || !lacking)))
         return ao_load_out_of_memory(g->path);
+    for (size_t i = 0; keep && i < earlier; i++)
+        *n++ = ao_vec3_make(0.0f, 0.0f, 0.0f), *lacking++ = true;
     for (size_t i = 0; i < positions->count; i++) {
-        p[i] = ao_vec3_make((float)ao_gltf_value(positions, i, 0), (float)ao_gltf_value(positions, i, 1),
-                            (float)ao_gltf_value(positions, i, 2));
+        p[i] = ao_gltf_position(positions, i);
         if (!ao_vec3_is_finite(p[i]))
             return ao_gltf_error(g, "%s: vertex %zu is not a finite float", where, i);
+        if (!keep)
+            continue;
         lacking[i] = !normals;
         n[i] = ao_vec3_make(0.0f, 0.0f, 0.0f);
         if (normals) {
@@ -261,7 +268,18 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
     if (shared)
         *shared = (struct shared){g->instance, normal_key, base};
 
-    /* Triangles, every index checked once (a strip's and a fan's corners serve several). */
+    /* Triangles, every index checked once (a strip's and a fan's corners serve several); a list's
+     * in one pass. */
+    size_t bad;
+    uint32_t *list = indexed && mode == MODE_TRIANGLES ? ao_load_append(&g->indices, corners) : NULL;
+    if (indexed && mode == MODE_TRIANGLES && !list && corners)
+        return ao_load_out_of_memory(g->path);
+    if (list && !ao_gltf_list_indices(&indices, base, positions.count, list, &bad))
+        return ao_gltf_error(g, "%s: index %u at %zu is out of range (%zu vertices)", where,
+                             ao_gltf_index_at(&indices, bad), bad, positions.count);
+    g->triangles += list ? triangles : 0;
+    if (list)
+        return true;
     for (size_t i = 0; indexed && i < corners; i++) {
         uint32_t v = ao_gltf_index_at(&indices, i);
         if (v >= positions.count)

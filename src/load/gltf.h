@@ -155,6 +155,13 @@ double ao_gltf_value(const struct ao_gltf_elements *e, size_t i, int k);
 /* Index element i. */
 uint32_t ao_gltf_index_at(const struct ao_gltf_elements *e, size_t i);
 
+/* Element i of VEC3 positions as floats: ao_gltf_value's numbers narrowed, floats read as they lie. */
+struct ao_vec3 ao_gltf_position(const struct ao_gltf_elements *e, size_t i);
+
+/* A triangle list's indices plus base into out (e->count of them); false at the first index at or
+ * above limit, its place in *bad. */
+bool ao_gltf_list_indices(const struct ao_gltf_elements *e, uint32_t base, size_t limit, uint32_t *out, size_t *bad);
+
 /* Frees what the data layer holds (buffers, decoded views). */
 void ao_gltf_free_data(struct ao_gltf *g);
 

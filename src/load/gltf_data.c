@@ -663,6 +663,31 @@ uint32_t ao_gltf_index_at(const struct ao_gltf_elements *e, size_t i)
            : e->component_type == AO_QUANTIZE_UNSIGNED_SHORT ? (uint32_t)(p[0] | p[1] << 8) : p[0];
 }
 
+struct ao_vec3 ao_gltf_position(const struct ao_gltf_elements *e, size_t i)
+{
+    const unsigned char *p = e->first + i * e->stride;
+    if (e->component_type != AO_QUANTIZE_FLOAT)
+        return ao_vec3_make((float)ao_gltf_value(e, i, 0), (float)ao_gltf_value(e, i, 1),
+                            (float)ao_gltf_value(e, i, 2));
+    uint32_t bits[3] = {le32(p), le32(p + 4), le32(p + 8)};
+    float f[3];
+    memcpy(f, bits, sizeof f);
+    return ao_vec3_make(f[0], f[1], f[2]);
+}
+
+bool ao_gltf_list_indices(const struct ao_gltf_elements *e, uint32_t base, size_t limit, uint32_t *out, size_t *bad)
+{
+    for (size_t i = 0; i < e->count; i++) {
+        uint32_t v = ao_gltf_index_at(e, i);
+        if (v >= limit) {
+            *bad = i;
+            return false;
+        }
+        out[i] = base + v;
+    }
+    return true;
+}
+
 /* ------------------------------------------------------------------ loading and freeing */
 
 bool ao_gltf_begin_data(struct ao_gltf *g)

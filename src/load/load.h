@@ -51,8 +51,20 @@ typedef bool ao_load_model_format(struct ao_model *model, const char *path, cons
 ao_load_format ao_load_obj, ao_load_ply, ao_load_stl;
 ao_load_model_format ao_load_gltf;
 
+/* Makes room for n more elements of a without appending them (one allocation where the count is
+ * known ahead); false when memory or size_t runs out. */
+bool ao_load_reserve(struct ao_load_array *a, size_t n);
+
 /* Appends n elements to a (storage exists after any call) and returns the first, or NULL when memory runs out. */
 void *ao_load_append(struct ao_load_array *a, size_t n);
+
+/* Arrays of at least this many bytes are advised into huge pages (ao_load_advise_huge). */
+#define AO_LOAD_HUGE_ARRAY ((size_t)4 << 20)
+
+/* Asks the system to back the array [data, data + size) (malloc'd, not yet filled) with huge pages
+ * when it is AO_LOAD_HUGE_ARRAY bytes or more: filling 240 MB of fresh 4 KiB pages costs 0.8 s of
+ * page faults in a virtual machine, of 2 MiB pages 0.02 s. Does nothing where the system cannot. */
+void ao_load_advise_huge(void *data, size_t size);
 
 /* Hands the array's storage to the caller (who frees it) and empties the array. */
 void *ao_load_take(struct ao_load_array *a);

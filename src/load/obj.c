@@ -22,7 +22,10 @@ struct obj_reader {
     struct ao_load_array normals;     /* struct ao_vec3, normalized */
     size_t texcoord_count;    /* vt lines, only to check indices */
     struct ao_load_array face;        /* struct corner: the face being read */
-    struct ao_load_array corners;     /* struct corner: 3 per triangle */
+    struct ao_load_array corner_positions;  /* uint32_t, 3 per triangle: the mesh's indices when
+                                               the file gives no normals */
+    struct ao_load_array corner_normals;    /* uint32_t, one per corner from the first face
+                                               with a normal on (earlier ones backfilled) */
     bool has_normals;         /* some corner references a normal */
     const struct ao_budget *budget;
 };
@@ -193,14 +196,29 @@ static bool parse_obj_face(struct obj_reader *o, struct ao_load_tokens *t)
         ao_load_report(o->path, o->line, "face with %zu vertices; at least 3 needed", o->face.count);
         return false;
     }
-    return ao_load_fan(&o->corners, &o->face) || ao_load_out_of_memory(o->path);
+    /* The fan (c0, ci, ci+1): positions, and normals (AO_LOAD_NO_INDEX where absent) once any
+     * corner has had one, the corners before it backfilled. */
+    const struct corner *c = (const struct corner *)o->face.data;
+    size_t fan = 3 * (o->face.count - 2), missing = o->corner_positions.count - o->corner_normals.count;
+    uint32_t *p = ao_load_append(&o->corner_positions, fan);
+    uint32_t *n = p && o->has_normals ? ao_load_append(&o->corner_normals, missing + fan) : NULL;
+    if (!p || (o->has_normals && !n))
+        return ao_load_out_of_memory(o->path);
+    for (size_t i = 0; n && i < missing; i++)
+        *n++ = AO_LOAD_NO_INDEX;
+    for (size_t i = 1; i + 1 < o->face.count; i++, p += 3) {
+        p[0] = c[0].position, p[1] = c[i].position, p[2] = c[i + 1].position;
+        if (n)
+            n[0] = c[0].normal, n[1] = c[i].normal, n[2] = c[i + 1].normal, n += 3;
+    }
+    return true;
 }
 
 /* The file has no counts ahead of its data: the budget is checked as they grow, after each line
  * that adds positions, normals (both held like vertices) or triangles. */
 static bool within_budget(const struct obj_reader *o)
 {
-    return ao_load_fits(o->budget, o->corners.count / 3, o->positions.count + o->normals.count, o->path,
+    return ao_load_fits(o->budget, o->corner_positions.count / 3, o->positions.count + o->normals.count, o->path,
                         o->line);
 }
 
@@ -226,11 +244,7 @@ static bool parse_obj_line(struct obj_reader *o, const char *begin, const char *
 /* Without any file normals: positions are the vertices, as in the file. */
 static bool build_shared_vertices(struct obj_reader *o, struct ao_mesh *mesh)
 {
-    const struct corner *corners = (const struct corner *)o->corners.data;
-    if (!(mesh->indices = malloc(o->corners.count * sizeof *mesh->indices)))
-        return ao_load_out_of_memory(o->path);
-    for (size_t i = 0; i < o->corners.count; i++)
-        mesh->indices[i] = corners[i].position;
+    mesh->indices = ao_load_take(&o->corner_positions);
     mesh->vertex_count = o->positions.count;
     mesh->positions = ao_load_take(&o->positions);
     return ao_load_finish(mesh, o->path, NULL);
@@ -295,7 +309,7 @@ static bool split_vertex(struct obj_reader *o, struct vertex_map *map, struct sp
         ao_load_report(o->path, 0, "too many distinct vertices for 32-bit indices");
         return false;
     }
-    if (!ao_load_fits(o->budget, o->corners.count / 3, map->count + 1, o->path, 0))
+    if (!ao_load_fits(o->budget, o->corner_positions.count / 3, map->count + 1, o->path, 0))
         return false;
     struct ao_vec3 *p = ao_load_append(&out->positions, 1), *n = ao_load_append(&out->normals, 1);
     bool *lacking = ao_load_append(&out->lacking, 1);
@@ -321,12 +335,14 @@ static bool build_split_vertices(struct obj_reader *o, struct ao_mesh *mesh)
     struct split_output out = {.positions = {.size = sizeof(struct ao_vec3)},
                                .normals = {.size = sizeof(struct ao_vec3)},
                                .lacking = {.size = sizeof(bool)}};
-    const struct corner *corners = (const struct corner *)o->corners.data;
-    bool ok = (mesh->indices = malloc(o->corners.count * sizeof *mesh->indices)) != NULL;
+    const uint32_t *positions = (const uint32_t *)o->corner_positions.data;
+    const uint32_t *normals = (const uint32_t *)o->corner_normals.data;
+    size_t count = o->corner_positions.count;
+    bool ok = (mesh->indices = malloc(count * sizeof *mesh->indices)) != NULL;
     if (!ok)
         ao_load_out_of_memory(o->path);
-    for (size_t i = 0; ok && i < o->corners.count; i++)
-        ok = split_vertex(o, &map, &out, corners[i], &mesh->indices[i]);
+    for (size_t i = 0; ok && i < count; i++)
+        ok = split_vertex(o, &map, &out, (struct corner){positions[i], normals[i]}, &mesh->indices[i]);
     free(map.slots);
     if (ok) {
         mesh->vertex_count = out.positions.count;
@@ -351,7 +367,8 @@ bool ao_load_obj(struct ao_mesh *mesh, const char *path, const char *text, size_
         .positions = {.size = sizeof(struct ao_vec3)},
         .normals = {.size = sizeof(struct ao_vec3)},
         .face = {.size = sizeof(struct corner)},
-        .corners = {.size = sizeof(struct corner)},
+        .corner_positions = {.size = sizeof(uint32_t)},
+        .corner_normals = {.size = sizeof(uint32_t)},
     };
     const char *end = text + size;
     bool ok = true;
@@ -363,12 +380,13 @@ bool ao_load_obj(struct ao_mesh *mesh, const char *path, const char *text, size_
         line = newline ? newline + 1 : end;
     }
     if (ok) {
-        mesh->triangle_count = o.corners.count / 3;
+        mesh->triangle_count = o.corner_positions.count / 3;
         ok = o.has_normals ? build_split_vertices(&o, mesh) : build_shared_vertices(&o, mesh);
     }
     ao_load_free(&o.positions);
     ao_load_free(&o.normals);
     ao_load_free(&o.face);
-    ao_load_free(&o.corners);
+    ao_load_free(&o.corner_positions);
+    ao_load_free(&o.corner_normals);
     return ok;
 }

@@ -504,7 +504,118 @@ static bool add_face(struct ply_reader *r)
     return ao_load_fan(&r->indices, &r->face) || ao_load_out_of_memory(r->path);
 }
 
-/* Every row of every element, in header order. */
+/* True on a little-endian host, where a binary PLY's values can be copied as they lie. */
+static bool host_is_little_endian(void)
+{
+    const uint16_t one = 1;
+    unsigned char first;
+    memcpy(&first, &one, 1);
+    return first == 1;
+}
+
+/* Binary vertex rows of fixed size (every property a scalar) whose position and normal
+ * properties are floats: their byte offsets by role and the row size, for read_vertex_rows;
+ * false for other rows, which read_row reads. */
+static bool fixed_vertex_rows(const struct ply_reader *r, const struct ply_element *e,
+                              size_t offset[ROLE_COUNT], size_t *row)
+{
+    *row = 0;
+    for (size_t i = e->first; i < e->first + e->property_count; i++) {
+        const struct ply_property *p = property_at(r, i);
+        if (p->is_list || (p->role != ROLE_NONE && p->type != PLY_FLOAT32))
+            return false;
+        offset[p->role] = *row;
+        *row += ply_types[p->type].size;
+    }
+    return r->binary && host_is_little_endian();
+}
+
+/* The vertex element's rows as fixed_vertex_rows describes them, straight from the bytes into
+ * the positions and normals, with read_row and add_vertex's checks and messages. */
+static bool read_vertex_rows(struct ply_reader *r, const size_t offset[ROLE_COUNT], size_t row)
+{
+    size_t count = (size_t)r->element->count, fit = (size_t)(r->end - r->cur) / row;
+    /* The header's counts were checked; faces read before the vertices may have fanned further. */
+    r->row_index = 0;
+    if (!within_budget(r, r->indices.count / 3, count))
+        return false;
+    struct ao_vec3 *p = ao_load_append(&r->positions, count);
+    struct ao_vec3 *n = r->has_normals ? ao_load_append(&r->normals, count) : NULL;
+    if ((count && !p) || (r->has_normals && count && !n))
+        return ao_load_out_of_memory(r->path);
+    const unsigned char *bytes = (const unsigned char *)r->cur;
+    for (size_t i = 0; i < count; i++, bytes += row) {
+        float f[ROLE_COUNT];
+        r->row_index = i;
+        if (i == fit)
+            return ply_error(r, "unexpected end of file");
+        for (int role = ROLE_X; role <= (r->has_normals ? ROLE_NZ : ROLE_Z); role++)
+            memcpy(&f[role], bytes + offset[role], sizeof f[role]);
+        p[i] = ao_vec3_make(f[ROLE_X], f[ROLE_Y], f[ROLE_Z]);
+        if (!ao_vec3_is_finite(p[i]))
+            return ply_error(r, "vertex position is not a finite float");
+        if (!n)
+            continue;
+        if (!isfinite(f[ROLE_NX]) || !isfinite(f[ROLE_NY]) || !isfinite(f[ROLE_NZ]))
+            return ply_error(r, "vertex normal is not finite");
+        n[i] = ao_load_unit(f[ROLE_NX], f[ROLE_NY], f[ROLE_NZ]);
+    }
+    r->cur = (const char *)bytes;
+    return true;
+}
+
+/* Binary face rows of the common form: the one property a list of uchar count and int or uint
+ * indices; for read_face_rows. */
+static bool plain_face_rows(const struct ply_reader *r, const struct ply_element *e)
+{
+    const struct ply_property *p = property_at(r, e->first);
+    return r->binary && host_is_little_endian() && e->property_count == 1 && p->count_type == PLY_UINT8 &&
+           (p->type == PLY_INT32 || p->type == PLY_UINT32);
+}
+
+/* The face element's rows as plain_face_rows describes them, straight from the bytes into
+ * triangle fans, with read_list, add_index and add_face's checks and messages. */
+static bool read_face_rows(struct ply_reader *r)
+{
+    bool is_signed = property_at(r, r->element->first)->type == PLY_INT32;
+    uint64_t vertices = element_at(r, r->vertex_element)->count, checked = r->element->count;
+    const unsigned char *bytes = (const unsigned char *)r->cur, *end = (const unsigned char *)r->end;
+    if (!ao_load_reserve(&r->indices, 3 * (size_t)r->element->count))
+        return ao_load_out_of_memory(r->path);
+    for (r->row_index = 0; r->row_index < r->element->count; r->row_index++) {
+        if (bytes == end)
+            return ply_error(r, "unexpected end of file");
+        uint32_t corners = *bytes++, index[255];
+        if (corners > (size_t)(end - bytes) / 4)
+            return ply_error(r, "list of %u items runs past the end of the file", (unsigned)corners);
+        memcpy(index, bytes, 4 * (size_t)corners);
+        bytes += 4 * (size_t)corners;
+        for (uint32_t i = 0; i < corners; i++) {
+            double value = is_signed ? (double)(int32_t)index[i] : (double)index[i];
+            if (!(value >= 0.0 && value < (double)vertices))
+                return ply_error(r, "vertex index %.17g is not an integer in [0, %llu)", value,
+                                 (unsigned long long)vertices);
+        }
+        if (corners < 3)
+            return ply_error(r, "face with %u vertices; at least 3 needed", (unsigned)corners);
+        /* The header's face count was checked against the budget as triangles; a polygon's fan
+         * may go further. */
+        uint64_t triangles = r->indices.count / 3 + corners - 2;
+        if (triangles > checked && !within_budget(r, triangles, r->positions.count))
+            return false;
+        checked = triangles > checked ? triangles : checked;
+        uint32_t *t = ao_load_append(&r->indices, 3 * ((size_t)corners - 2));
+        if (!t)
+            return ao_load_out_of_memory(r->path);
+        for (uint32_t i = 1; i + 1 < corners; i++, t += 3)
+            t[0] = index[0], t[1] = index[i], t[2] = index[i + 1];
+    }
+    r->cur = (const char *)bytes;
+    return true;
+}
+
+/* Every row of every element, in header order: binary vertex and face rows of the usual forms
+ * straight from their bytes, the others value by value. */
 static bool read_elements(struct ply_reader *r)
 {
     r->line = r->data_line;
@@ -513,6 +624,17 @@ static bool read_elements(struct ply_reader *r)
         /* An element without properties has no bytes, whatever its count. */
         if (r->element->property_count == 0)
             continue;
+        size_t offset[ROLE_COUNT], row;
+        if (i == r->vertex_element && fixed_vertex_rows(r, r->element, offset, &row)) {
+            if (!read_vertex_rows(r, offset, row))
+                return false;
+            continue;
+        }
+        if (i == r->face_element && plain_face_rows(r, r->element)) {
+            if (!read_face_rows(r))
+                return false;
+            continue;
+        }
         for (r->row_index = 0; r->row_index < r->element->count; r->row_index++) {
             double values[ROLE_COUNT] = {0};
             r->face.count = 0;
