@@ -25,32 +25,16 @@ enum { SIZE = 512, SPPPP = 16, PASSES = 8, MAX_ROUNDS = 21, MAX_FILES = 8, SPHER
 /* Mrays/s (eye and AO rays over the render time) of PASSES passes after a first one. */
 static double rate(const struct ao_scene *scene, const struct ao_tracer *tracer)
 {
-    struct ao_render_config config = {.scene = scene, .tracer = tracer, .threads = 2, .seed = 1,
-                                      .target_spp = SPPPP * (PASSES + 1), .ao_distance = scene->ao_distance};
-    struct ao_settings settings = {.width = SIZE, .height = SIZE, .sampling = AO_SAMPLING_COSINE, .aa = true,
-                                   .spppp = SPPPP, .camera = scene->camera};
-    struct ao_render *r = ao_render_create(&config, &settings);
-    if (!r || !ao_render_wait(r))
-        exit(1);
-    struct ao_frame_info info = ao_render_take_frame(r)->info;
-    ao_render_destroy(r);
+    struct ao_frame_info info = bench_render(scene, tracer, SIZE, SIZE, SPPPP, SPPPP * (PASSES + 1));
     return (double)(info.eye_rays + info.shadow_rays) / info.seconds / 1e6;
 }
 
 /* Seconds from starting a 640x480 render to its first pass of one sample a pixel. */
 static double first_pass(const struct ao_scene *scene, const struct ao_tracer *tracer)
 {
-    struct ao_render_config config = {.scene = scene, .tracer = tracer, .threads = 2, .seed = 1, .target_spp = 1,
-                                      .ao_distance = scene->ao_distance};
-    struct ao_settings settings = {.width = 640, .height = 480, .sampling = AO_SAMPLING_COSINE, .aa = true,
-                                   .spppp = 1, .camera = scene->camera};
     double start = bench_now();
-    struct ao_render *r = ao_render_create(&config, &settings);
-    if (!r || !ao_render_wait(r))
-        exit(1);
-    double seconds = bench_now() - start;
-    ao_render_destroy(r);
-    return seconds;
+    bench_render(scene, tracer, 640, 480, 1, 1);
+    return bench_now() - start;
 }
 
 /* Peak resident memory of the process so far, bytes. */

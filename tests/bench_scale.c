@@ -91,22 +91,6 @@ static void write_files(const char *dir, const struct bench_mesh *m)
     }
 }
 
-/* Renders passes of spppp samples until target_spp; the last frame's facts. */
-static struct ao_frame_info render(const struct ao_scene *scene, const struct ao_tracer *tracer, int spppp,
-                                   uint32_t target_spp)
-{
-    struct ao_render_config config = {.scene = scene, .tracer = tracer, .threads = 2, .seed = 1,
-                                      .target_spp = target_spp, .ao_distance = scene->ao_distance};
-    struct ao_settings settings = {.width = WIDTH, .height = HEIGHT, .sampling = AO_SAMPLING_COSINE, .aa = true,
-                                   .spppp = spppp, .camera = scene->camera};
-    struct ao_render *r = ao_render_create(&config, &settings);
-    if (!r || !ao_render_wait(r))
-        exit(1);
-    struct ao_frame_info info = ao_render_take_frame(r)->info;
-    ao_render_destroy(r);
-    return info;
-}
-
 /* One measurement of path in this process; prints the PHASES figures on one line. */
 static int measure(const char *path)
 {
@@ -120,9 +104,10 @@ static int measure(const char *path)
     if (!tracer)
         return 1;
     double built = bench_now();
-    render(&scene, tracer, 1, 1);
+    bench_render(&scene, tracer, WIDTH, HEIGHT, 1, 1);
     double first = bench_now();
-    struct ao_frame_info info = render(&scene, tracer, RATE_SPPPP, RATE_SPPPP * RATE_PASSES);
+    struct ao_frame_info info =
+        bench_render(&scene, tracer, WIDTH, HEIGHT, RATE_SPPPP, RATE_SPPPP * RATE_PASSES);
     struct ao_mesh *big = &scene.meshes[0];
     for (size_t m = 1; m < scene.mesh_count; m++)
         big = scene.meshes[m].triangle_count > big->triangle_count ? &scene.meshes[m] : big;

@@ -45,27 +45,35 @@ static float *gradient(int width, int height)
     return rgb;
 }
 
-/* Renders rgb through ao_headless_write_png, reads the PNG back and checks every channel of every
- * pixel against ao_image_encode_srgb8 within 1/255 (GPU pow against libm powf). */
-static void check_round_trip(int width, int height)
+/* Writes rgb (width x height) through ao_headless_write_png into dir/name, reads it back and
+ * removes the file. */
+static uint8_t *png_of(const char *dir, const char *name, const float *rgb, int width, int height)
 {
-    char dir[] = "/tmp/aoview-test-display-XXXXXX";
-    assert_non_null(mkdtemp(dir));
-    char path[sizeof dir + 16];
-    snprintf(path, sizeof path, "%s/out.png", dir);
-
-    float *rgb = gradient(width, height);
-    size_t count = 3 * (size_t)width * (size_t)height;
-    uint8_t *expected = malloc(count);
-    assert_non_null(expected);
-    ao_image_encode_srgb8(rgb, count, expected);
-
+    char path[64];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
     assert_true(ao_headless_write_png(path, rgb, width, height));
     uint8_t *got = NULL;
     int got_width = 0, got_height = 0;
     assert_true(ao_image_read_png(path, &got, &got_width, &got_height));
     assert_int_equal(got_width, width);
     assert_int_equal(got_height, height);
+    assert_int_equal(unlink(path), 0);
+    return got;
+}
+
+/* Renders rgb through ao_headless_write_png, reads the PNG back and checks every channel of every
+ * pixel against ao_image_encode_srgb8 within 1/255 (GPU pow against libm powf). */
+static void check_round_trip(int width, int height)
+{
+    char dir[] = "/tmp/aoview-test-display-XXXXXX";
+    assert_non_null(mkdtemp(dir));
+
+    float *rgb = gradient(width, height);
+    size_t count = 3 * (size_t)width * (size_t)height;
+    uint8_t *expected = malloc(count);
+    assert_non_null(expected);
+    ao_image_encode_srgb8(rgb, count, expected);
+    uint8_t *got = png_of(dir, "out.png", rgb, width, height);
 
     int worst = 0;
     size_t worst_at = 0;
@@ -84,7 +92,6 @@ static void check_round_trip(int width, int height)
     free(got);
     free(expected);
     free(rgb);
-    assert_int_equal(unlink(path), 0);
     assert_int_equal(rmdir(dir), 0);
 }
 
@@ -112,9 +119,6 @@ static void test_dense_ramp_matches_cpu(void **state)
     int width = 256, height = 64;
     char dir[] = "/tmp/aoview-test-display-XXXXXX";
     assert_non_null(mkdtemp(dir));
-    char path[sizeof dir + 16];
-    snprintf(path, sizeof path, "%s/ramp.png", dir);
-
     size_t count = 3 * (size_t)width * (size_t)height;
     float *rgb = malloc(sizeof *rgb * count);
     uint8_t *expected = malloc(count);
@@ -124,10 +128,7 @@ static void test_dense_ramp_matches_cpu(void **state)
         rgb[i] = -0.01f + 1.02f * (float)i / (float)(count - 1);
     ao_image_encode_srgb8(rgb, count, expected);
 
-    assert_true(ao_headless_write_png(path, rgb, width, height));
-    uint8_t *got = NULL;
-    int got_width = 0, got_height = 0;
-    assert_true(ao_image_read_png(path, &got, &got_width, &got_height));
+    uint8_t *got = png_of(dir, "ramp.png", rgb, width, height);
     int off = 0;
     for (size_t i = 0; i < count; i++) {
         int diff = abs((int)got[i] - (int)expected[i]);
@@ -140,23 +141,7 @@ static void test_dense_ramp_matches_cpu(void **state)
     free(got);
     free(expected);
     free(rgb);
-    assert_int_equal(unlink(path), 0);
     assert_int_equal(rmdir(dir), 0);
-}
-
-/* Writes rgb (width x height) as a PNG and reads it back. */
-static uint8_t *png_of(const char *dir, const char *name, const float *rgb, int width, int height)
-{
-    char path[64];
-    snprintf(path, sizeof path, "%s/%s", dir, name);
-    assert_true(ao_headless_write_png(path, rgb, width, height));
-    uint8_t *got = NULL;
-    int got_width = 0, got_height = 0;
-    assert_true(ao_image_read_png(path, &got, &got_width, &got_height));
-    assert_int_equal(got_width, width);
-    assert_int_equal(got_height, height);
-    assert_int_equal(unlink(path), 0);
-    return got;
 }
 
 /* One image, alone and as the left half of a side-by-side pair twice as wide, gives the same
