@@ -34,7 +34,7 @@ static void report(void *user, enum RTCError code, const char *message)
 
 /* Embree's memory monitor: what the device holds now and at most (Embree calls it from its build
  * threads; it never refuses). */
-static bool monitor(void *user, ssize_t bytes, bool post)
+static bool embree_memory_monitor(void *user, ssize_t bytes, bool post)
 {
     (void)post;
     struct ao_tracer *t = user;
@@ -155,7 +155,7 @@ struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_ba
         return NULL;
     }
     rtcSetDeviceErrorFunction(t->device, report, NULL);
-    rtcSetDeviceMemoryMonitorFunction(t->device, monitor, t);
+    rtcSetDeviceMemoryMonitorFunction(t->device, embree_memory_monitor, t);
     t->mesh_count = scene->mesh_count;
     t->meshes = calloc(scene->mesh_count ? scene->mesh_count : 1, sizeof *t->meshes);
     t->scene = t->meshes ? rtcNewScene(t->device) : NULL;
