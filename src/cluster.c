@@ -3,6 +3,7 @@
  * collectives), loans (any render thread: asks, lends, repaid sums, given-up passes), images (the
  * gathers) and control (the listener and main: interruptions, the summary at the end). */
 #include "cluster.h"
+#include "pack.h"
 
 #include <limits.h>
 #include <mpi.h>
@@ -48,9 +49,11 @@ struct lend_entry {
 };
 enum { LEND_BYTES = sizeof(struct lend_header) + LEND_MOST * sizeof(struct lend_entry) };
 
-/* A range of this rank's list lent to another rank, whose sums come back into the pass's sums. */
+/* A range of this rank's list lent to another rank, whose sums come back packed (pack.h) and are
+ * unpacked into the pass's sums. */
 struct lent {
     int first, count;
+    unsigned char *packed;   /* the receive's buffer, until the sums are unpacked */
     bool reported;           /* handed to the renderer to add */
 };
 
@@ -109,6 +112,7 @@ struct ao_cluster {
     MPI_Request answering;
     int owner, first, count, handed, repaid;
     struct ao_vec3 *loan_sums;
+    unsigned char *repay_packed;  /* loan_sums packed, while their send is in flight */
     MPI_Request repaying;
     uint64_t tiles;          /* tiles this rank traced: its own and borrowed */
 
@@ -243,6 +247,7 @@ static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t speed
     unsigned char message[LEND_BYTES];
     struct lend_header header = {.pass = pass};
     struct lend_entry entries[LEND_MOST];
+    unsigned char *packed = NULL;
     if (pass == c->pass && c->open && !given_up(c) && c->lent_count < c->lent_capacity) {
         int tiles[LEND_MOST];
         struct ao_tile_work works[LEND_MOST];
@@ -252,7 +257,8 @@ static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t speed
         int left = c->current->left(c->current->renderer), first = 0;
         int want = (int)((double)left * share + 0.999);
         want = want < LEND_MOST ? want : LEND_MOST;
-        header.count = want > 0 ? c->current->lend(c->current->renderer, want, &first, tiles, works) : 0;
+        packed = want > 0 ? malloc(ao_pack_bound((size_t)want * (size_t)c->current->pixels)) : NULL;
+        header.count = packed ? c->current->lend(c->current->renderer, want, &first, tiles, works) : 0;
         header.first = first;
         for (int k = 0; k < header.count; k++)
             entries[k] = (struct lend_entry){.tile = tiles[k], .work = works[k]};
@@ -260,14 +266,13 @@ static void answer(struct ao_cluster *c, int rank, uint64_t pass, uint64_t speed
     memcpy(message, &header, sizeof header);
     memcpy(message + sizeof header, entries, (size_t)header.count * sizeof *entries);
     int bytes = (int)(sizeof header + (size_t)header.count * sizeof *entries);
-    if (header.count > 0) { /* the sums come back into the pass's sums, in one message */
-        int floats = 3 * header.count * c->current->pixels;
-        struct ao_vec3 *sums = c->current->sums + (size_t)header.first * (size_t)c->current->pixels;
-        MPI_Irecv(sums, floats, MPI_FLOAT, rank, TAG_REPAY, c->loans, &c->lent_requests[c->lent_count]);
-        c->lent[c->lent_count++] = (struct lent){header.first, header.count, false};
+    if (header.count > 0) { /* the sums come back packed, in one message */
+        size_t bound = ao_pack_bound((size_t)header.count * (size_t)c->current->pixels);
+        MPI_Irecv(packed, (int)bound, MPI_BYTE, rank, TAG_REPAY, c->loans, &c->lent_requests[c->lent_count]);
+        c->lent[c->lent_count++] = (struct lent){header.first, header.count, packed, false};
         c->lent_entries += header.count;
-        if (c->rank == 0)
-            c->loan_in += (double)floats * sizeof(float);
+    } else {
+        free(packed);
     }
     MPI_Send(message, bytes, MPI_BYTE, rank, TAG_LEND, c->loans);
     if (c->rank == 0)
@@ -308,16 +313,28 @@ static void serve(struct ao_cluster *c)
     pthread_mutex_unlock(&c->lock);
 }
 
-/* Lock held: the next range lent whose sums have come back, into arrived; left as it is when none
- * has. */
+/* Lock held: the next range lent whose sums have come back, unpacked into the pass's sums, into
+ * arrived; left as it is when none has. */
 static void take_repaid(struct ao_cluster *c, int arrived[2])
 {
     for (int k = 0; k < c->lent_count; k++) {
-        int done = 0;
+        int done = 0, bytes = 0;
+        MPI_Status status;
         if (c->lent[k].reported)
             continue;
-        MPI_Test(&c->lent_requests[k], &done, MPI_STATUS_IGNORE);
+        MPI_Test(&c->lent_requests[k], &done, &status);
         if (done) {
+            size_t pixels = (size_t)c->current->pixels;
+            MPI_Get_count(&status, MPI_BYTE, &bytes);
+            if (!ao_unpack_sums(c->lent[k].packed, (size_t)bytes, c->current->sums + (size_t)c->lent[k].first * pixels,
+                                (size_t)c->lent[k].count * pixels)) { /* the ranks run one binary: never */
+                fprintf(stderr, "aoview-mpi: rank %d sent sums that do not unpack\n", status.MPI_SOURCE);
+                MPI_Abort(MPI_COMM_WORLD, 1);
+            }
+            free(c->lent[k].packed);
+            c->lent[k].packed = NULL;
+            if (c->rank == 0)
+                c->loan_in += bytes;
             c->lent[k].reported = true;
             arrived[0] = c->lent[k].first;
             arrived[1] = c->lent[k].first + c->lent[k].count;
@@ -352,10 +369,10 @@ static void repay_if_traced(struct ao_cluster *c)
 {
     if (!c->holding || c->repaid < c->count || c->repaying != MPI_REQUEST_NULL)
         return;
-    int floats = 3 * c->count * c->current->pixels;
-    MPI_Isend(c->loan_sums, floats, MPI_FLOAT, c->owner, TAG_REPAY, c->loans, &c->repaying);
+    size_t bytes = ao_pack_sums(c->loan_sums, (size_t)c->count * (size_t)c->current->pixels, c->repay_packed);
+    MPI_Isend(c->repay_packed, (int)bytes, MPI_BYTE, c->owner, TAG_REPAY, c->loans, &c->repaying);
     if (c->rank == 0)
-        c->loan_out += (double)floats * sizeof(float);
+        c->loan_out += (double)bytes;
 }
 
 /* Lock held: whether the grant held is all traced and its sums have left (then it is let go). */
@@ -824,12 +841,13 @@ struct ao_cluster *ao_cluster_create(void)
     c->deferred = calloc(ranks, sizeof *c->deferred);
     c->answer = malloc(LEND_BYTES);
     c->loan_sums = malloc((size_t)LEND_MOST * AO_TILE_PIXELS * sizeof *c->loan_sums);
+    c->repay_packed = malloc(ao_pack_bound((size_t)LEND_MOST * AO_TILE_PIXELS));
     c->answers = calloc(ranks, sizeof *c->answers);
     c->signals = calloc(ranks, sizeof *c->signals);
     c->tiles_by_rank = calloc(ranks, sizeof *c->tiles_by_rank);
     c->gather_requests = calloc(ranks, sizeof *c->gather_requests);
     c->gather_types = calloc(ranks, sizeof *c->gather_types);
-    bool ok = c->deferred && c->answer && c->loan_sums && c->answers && c->signals && c->tiles_by_rank &&
+    bool ok = c->deferred && c->answer && c->loan_sums && c->repay_packed && c->answers && c->signals && c->tiles_by_rank &&
               c->gather_requests && c->gather_types;
     if (ok) {
         MPI_Irecv(c->ask, 2, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_ASK, c->loans, &c->asked);
@@ -1015,6 +1033,12 @@ void ao_cluster_destroy(struct ao_cluster *cluster)
             MPI_Cancel(&cluster->answers[r]);
             MPI_Wait(&cluster->answers[r], MPI_STATUS_IGNORE);
         }
+    for (int k = 0; k < cluster->lent_count; k++) /* sums that never came (the run stopped) */
+        if (cluster->lent[k].packed) {
+            MPI_Cancel(&cluster->lent_requests[k]);
+            MPI_Wait(&cluster->lent_requests[k], MPI_STATUS_IGNORE);
+            free(cluster->lent[k].packed);
+        }
     MPI_Op_free(&cluster->tally_op);
     MPI_Type_free(&cluster->tally_type);
     MPI_Comm_free(&cluster->passes);
@@ -1027,6 +1051,7 @@ void ao_cluster_destroy(struct ao_cluster *cluster)
     free(cluster->deferred);
     free(cluster->answer);
     free(cluster->loan_sums);
+    free(cluster->repay_packed);
     free(cluster->answers);
     free(cluster->signals);
     free(cluster->tiles_by_rank);
