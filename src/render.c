@@ -14,44 +14,22 @@
 #include "frames.h"
 #include "pool.h"
 #include "preview.h"
-
-/* Tiles are TILE x TILE pixels (AO_TILE_PIXELS). */
-enum { TILE = 16 };
-_Static_assert(TILE * TILE <= AO_TILE_PIXELS, "a tile must fit ao_estimate_tile");
-
-/* Adaptive sampling works on whole tiles. A tile takes MIN_PASSES passes (two in each half) and
- * MIN_SPP samples per pixel before its error estimate decides anything. Then it joins a pass when
- * the error a sample removes there, variance / spp (the derivative of variance/n), is at least
- * SKIP_BELOW of the largest such value among the tiles: the greedy rule for the least image RMSE
- * per sample, so work goes where the error falls fastest. A tile whose estimate says "no error"
- * is rechecked once the busiest tile has RECHECK times its samples, so that none is left behind on
- * a lucky estimate. */
-enum { MIN_PASSES = 4, MIN_SPP = 16, RECHECK = 8 };
-static const double SKIP_BELOW = 0.25, ROUNDING = 1e-6;
+#include "tile.h"
 
 /* --spppp auto: the first pass after a restart takes one sample per pixel, so that the first
  * frame comes at once; then each pass of a half (even, odd) takes AUTO_PER_RAY samples, then
- * doubles what that half's sequence has given (tile_work), up to about AUTO_SAMPLES samples over
- * the pixels it traces (8 spp a pass at 640x480, 128 at 160x120),
- * in rounds of one eye ray with AUTO_PER_RAY AO samples; both chosen by time to 1 % and 0.5 % RMSE
+ * doubles what that half's sequence has given (ao_tile_work_of), up to about AUTO_SAMPLES samples
+ * over the pixels it traces (8 spp a pass at 640x480, 128 at 160x120), in rounds of one eye ray
+ * with AUTO_PER_RAY AO samples; both chosen by time to 1 % and 0.5 % RMSE
  * (docs/adaptive.md). The schedule depends on samples, not on seconds, so that the image stays a
  * function of the seed and settings alone. */
 enum { AUTO_SAMPLES = 1 << 22, AUTO_PER_RAY = 8 };
-
-/* What a tile has taken since the last restart; written by the thread that traces it. */
-struct tile_state {
-    uint32_t passes;
-    uint32_t rays[2], spp[2];            /* eye rays and AO samples per pixel, even and odd passes */
-    uint32_t next[2];                    /* the next sample number of each half (auto passes skip some) */
-    double variance;                     /* over its pixels, the sum of their estimated variances */
-    double mean;                         /* over its pixels, the sum of their averages */
-};
 
 /* One tile of the image as a gather moves it (struct ao_render_share's gather): its running average
  * (its pixels row by row, clipped to the image), its error estimate (as struct ao_frame's) and the
  * fewest samples a pixel of it has. */
 struct tile_record {
-    float rgb[3 * TILE * TILE];
+    float rgb[3 * AO_TILE * AO_TILE];
     float error;
     uint32_t fewest;
 };
@@ -87,11 +65,9 @@ struct ao_render {
     uint64_t pass_serial;                /* numbers the passes */
     struct ao_context ctx;
     uint64_t pass_restarts;
-    int samples;                         /* AO samples per pixel of this pass (fewer where the tile
-                                            is that close to target_spp) */
-    int per_ray;                         /* AO samples per eye ray; 0: all on one eye ray */
+    struct ao_tile_pass tile_pass;       /* what the pass gives each tile */
     int tiles_x, tiles_y;
-    struct tile_state *tiles;            /* tiles_x * tiles_y, row by row */
+    struct ao_tile_state *tiles;            /* tiles_x * tiles_y, row by row */
     double image_mean;                   /* of the running average, as of the last survey */
     int *work;                           /* the pass's tiles, grouped by share */
     struct share *shares;                /* one per thread, the render thread's first */
@@ -108,7 +84,7 @@ struct ao_render {
 
     /* With a share (aoview-mpi): the tiles this process owns; its work list as one span of entries
      * [front, back) (front in the low half) that its threads take from the front and the share
-     * lends from the back; the lent entries' sums (TILE x TILE an entry); whether the share gave
+     * lends from the back; the lent entries' sums (AO_TILE x AO_TILE an entry); whether the share gave
      * the pass up; the records of a gather (this process's tiles', and the leader's of every
      * tile); the leader's passes not gathered yet; seconds in the share's waits since the last
      * pass, which count in the next. */
@@ -142,50 +118,17 @@ static bool aborted(struct ao_render *r)
 
 /* ---- tiles: run by the render thread and every worker ---- */
 
-/* The part of its pixels' streams tile ts traces in this pass; *next (unless NULL) gets the half's
- * next sample number after it. */
-static struct ao_tile_work tile_work(const struct ao_render *r, const struct tile_state *ts, uint32_t *next)
-{
-    int half = (int)(ts->passes & 1);
-    uint32_t spp = ts->spp[0] + ts->spp[1], left = r->config.target_spp - spp;
-    int samples = (uint32_t)r->samples < left ? r->samples : (int)left;
-    uint32_t start = ts->next[half]; /* the half's next sample number */
-    bool own = r->ctx.sequence == AO_SEQUENCE_SOBOL, first = r->per_ray && ts->passes == 0;
-    struct ao_tile_work w = {.half = half, .rounds = 1, .count = samples};
-    if (r->per_ray) {
-        /* Auto passes: the first pass takes one sample, so that the first frame comes at once;
-         * after it each pass of a half takes as many samples as the half's sequence has given
-         * (per_ray at first): 1, 8, 8, 8, 8, 16, 16, 32, ... With Sobol numbers that first sample
-         * comes from a sequence of its own (half 2 in ao.c), so each later pass of a half, and each
-         * eye ray's per_ray samples within it, is an aligned block of the half's sequence from
-         * its start: a stratified net of directions. (Passes of 1, 1, 1, 1, 2, 2, 4, 4 at first
-         * gave many eye rays few AO samples: docs/adaptive.md.) A tile rejoining late grows by
-         * doubling, its halves balanced. Whole rounds of per_ray samples (the rest in a later
-         * pass), or its eye rays would be too few for AA. */
-        uint32_t grow = first ? 1 : start ? start : (uint32_t)r->per_ray;
-        samples = (uint32_t)samples <= grow ? samples : (int)grow;
-        if (samples > r->per_ray)
-            w.rounds = samples / r->per_ray, w.count = r->per_ray;
-        else
-            w.count = samples;
-        if (first && own)
-            w.half = 2;
-    }
-    /* Random streams are numbered since the restart; Sobol ones within the half (see ao.h). */
-    w.first_ray = w.half == 2 ? 0 : own ? ts->rays[half] : ts->rays[0] + ts->rays[1];
-    w.first_sample = w.half == 2 ? 0 : own ? start : spp;
-    if (next) /* the first sample is outside the half's sequence (or, random, not counted in it) */
-        *next = first ? start : start + (uint32_t)(w.rounds * w.count);
-    return w;
-}
-
 /* The pixels of tile t, clipped to the image. */
 static struct ao_tile tile_rect(const struct ao_render *r, int t)
 {
-    struct ao_tile rect = {.x0 = t % r->tiles_x * TILE, .y0 = t / r->tiles_x * TILE};
-    rect.x1 = rect.x0 + TILE < r->width ? rect.x0 + TILE : r->width;
-    rect.y1 = rect.y0 + TILE < r->height ? rect.y0 + TILE : r->height;
-    return rect;
+    return ao_tile_rect(r->width, r->height, t);
+}
+
+/* The part of its pixels' streams tile t traces in this pass; *next (unless NULL) gets the half's
+ * next sample number after it. */
+static struct ao_tile_work tile_work(const struct ao_render *r, int t, uint32_t *next)
+{
+    return ao_tile_work_of(&r->tiles[t], &r->tile_pass, next);
 }
 
 /* Adds tile t's sums of one pass (the work it was given, after which its half's next sample is
@@ -193,40 +136,7 @@ static struct ao_tile tile_rect(const struct ao_render *r, int t)
 static void add_tile(struct ao_render *r, int t, const struct ao_tile_work *work, uint32_t next,
                      const struct ao_vec3 *sums)
 {
-    struct tile_state *ts = &r->tiles[t];
-    struct ao_tile rect = tile_rect(r, t);
-    size_t width = (size_t)r->width;
-    uint32_t samples = (uint32_t)(work->rounds * work->count);
-    int half = work->half & 1; /* half 2 belongs to the even half */
-    if (ts->passes++ == 0) /* a run clears its sums tile by tile, as each is first traced */
-        ao_accum_clear(&r->accum, rect.x0, rect.y0, rect.x1, rect.y1);
-    ts->rays[half] += work->half == 2 ? 0u : (uint32_t)work->rounds;
-    ts->spp[half] += samples;
-    ts->next[half] = next;
-    /* Every pixel of a tile has the even and odd sample counts n_a and n_b of the tile. */
-    double n_a = ts->spp[0], n_b = ts->spp[1], total = 0.0, squares = 0.0;
-    for (int j = rect.y0; j < rect.y1; j++)
-        for (int i = rect.x0; i < rect.x1; i++) {
-            size_t p = (size_t)j * width + (size_t)i;
-            ao_accum_add(&r->accum, p, sums[(j - rect.y0) * (rect.x1 - rect.x0) + (i - rect.x0)], samples,
-                         half);
-            double all = r->accum.sum[3 * p] + r->accum.sum[3 * p + 1] + r->accum.sum[3 * p + 2];
-            double odd = r->accum.odd_sum[p], d = (all - odd) * n_b - odd * n_a;
-            total += all;
-            squares += d * d;
-        }
-    /* A pixel's halves' means A = even/n_a and B = odd/n_b (of the channel mean) are independent
-     * estimates with variances s2/n_a and s2/n_b, so E[(A - B)^2] = s2 (1/n_a + 1/n_b), and the
-     * whole average's variance s2/(n_a + n_b) is (A - B)^2 n_a n_b / (n_a + n_b)^2 in expectation;
-     * with d = 3 (A - B) n_a n_b that is d^2 / (9 n_a n_b n^2). Passes, not samples, are the
-     * independent units (a pass's samples share an eye ray), hence halves made of whole passes.
-     * The float sums of a pass round at a few 1e-8 of their value: relative differences below
-     * ROUNDING are taken for rounding, not noise (a background pass after pass is exactly 0). */
-    double n = n_a + n_b, pixels = (double)((rect.x1 - rect.x0) * (rect.y1 - rect.y0));
-    ts->mean = total / (3.0 * n);
-    double variance = n_a > 0.0 && n_b > 0.0 ? squares / (9.0 * n_a * n_b * n * n) : 0.0;
-    double rounding = ROUNDING * ts->mean / pixels;
-    ts->variance = variance > rounding * rounding * pixels ? variance : 0.0;
+    ao_tile_add(&r->tiles[t], &r->accum, r->width, tile_rect(r, t), work, next, sums);
 }
 
 /* Traces entry n of the work list and adds its sums. */
@@ -235,7 +145,7 @@ static void render_tile(struct ao_render *r, int n, uint64_t *eye, uint64_t *sha
     int t = r->work[n];
     struct ao_tile rect = tile_rect(r, t);
     uint32_t next;
-    struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
+    struct ao_tile_work work = tile_work(r, t, &next);
     struct ao_vec3 sums[AO_TILE_PIXELS];
     ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow);
     add_tile(r, t, &work, next, sums);
@@ -248,8 +158,8 @@ static void add_entries(struct ao_render *r, int begin, int end)
     for (int n = begin; n < end; n++) {
         int t = r->work[n];
         uint32_t next;
-        struct ao_tile_work work = tile_work(r, &r->tiles[t], &next);
-        add_tile(r, t, &work, next, r->pass_sums + (size_t)n * TILE * TILE);
+        struct ao_tile_work work = tile_work(r, t, &next);
+        add_tile(r, t, &work, next, r->pass_sums + (size_t)n * AO_TILE * AO_TILE);
     }
 }
 
@@ -294,7 +204,7 @@ static int lend_entries(void *renderer, int most, int *first, int *tiles, struct
     *first = (int)(back - count);
     for (uint32_t k = 0; k < count; k++) {
         tiles[k] = r->work[*first + (int)k];
-        works[k] = tile_work(r, &r->tiles[tiles[k]], NULL);
+        works[k] = tile_work(r, tiles[k], NULL);
     }
     return (int)count;
 }
@@ -368,7 +278,7 @@ static bool run_pass(struct ao_render *r)
     atomic_store(&r->span, (uint_fast64_t)count << 32);
     atomic_store(&r->given_up, false);
     r->pass_serial++;
-    r->share_pass = (struct ao_share_pass){.serial = r->pass_serial, .count = count, .pixels = TILE * TILE,
+    r->share_pass = (struct ao_share_pass){.serial = r->pass_serial, .count = count, .pixels = AO_TILE * AO_TILE,
                                            .sums = r->pass_sums, .left = entries_left, .lend = lend_entries,
                                            .renderer = r};
     ao_pool_run(r->pool, pass_job, r);
@@ -385,38 +295,17 @@ static bool run_pass(struct ao_render *r)
 
 /* ---- planning: run by the render thread between passes ---- */
 
-/* The pixels of tile t (fewer than TILE x TILE at the right and bottom edges). */
+/* The pixels of tile t (fewer than AO_TILE x AO_TILE at the right and bottom edges). */
 static int tile_pixels(const struct ao_render *r, int t)
 {
-    int x0 = t % r->tiles_x * TILE, y0 = t / r->tiles_x * TILE;
-    int w = r->width - x0 < TILE ? r->width - x0 : TILE;
-    int h = r->height - y0 < TILE ? r->height - y0 : TILE;
-    return w * h;
-}
-
-static uint32_t tile_spp(const struct tile_state *ts)
-{
-    return ts->spp[0] + ts->spp[1];
-}
-
-/* True once adaptive sampling may leave tile ts out of a pass. */
-static bool settled(const struct tile_state *ts)
-{
-    return ts->passes >= MIN_PASSES && tile_spp(ts) >= MIN_SPP;
-}
-
-/* The image variance one more sample per pixel removes from tile t, per pixel: the derivative of
- * variance/n over its pixels (see MIN_PASSES). */
-static double gain(const struct ao_render *r, int t)
-{
-    const struct tile_state *ts = &r->tiles[t];
-    return ts->variance / tile_pixels(r, t) / tile_spp(ts);
+    struct ao_tile rect = tile_rect(r, t);
+    return (rect.x1 - rect.x0) * (rect.y1 - rect.y0);
 }
 
 /* Fills the work list with the tiles of this process's (every tile without a share) that the next
  * pass traces, dealt to the threads' shares by tile row, and returns how many pixels they hold:
- * every tile short of target_spp, or with adaptive sampling those among them that MIN_PASSES's
- * rule picks, with the busiest tile and the largest gain that the last survey found. */
+ * the tiles ao_tile_wanted picks, with the busiest tile's spp and the largest gain that the last
+ * survey found. */
 static size_t select_tiles(struct ao_render *r, bool adaptive)
 {
     /* With a share, one list in row order, the same whatever the threads. */
@@ -432,12 +321,7 @@ static size_t select_tiles(struct ao_render *r, bool adaptive)
             continue;
         }
         for (int t = k * r->tiles_x; t < tiles; t++) {
-            const struct tile_state *ts = &r->tiles[t];
-            uint32_t spp = tile_spp(ts);
-            bool wanted = r->mine[t] && spp < target &&
-                          (!adaptive || !settled(ts) || (gain(r, t) > 0.0 && gain(r, t) >= SKIP_BELOW * fastest) ||
-                           (uint64_t)spp * RECHECK < busiest);
-            if (wanted) {
+            if (r->mine[t] && ao_tile_wanted(&r->tiles[t], tile_pixels(r, t), target, adaptive, busiest, fastest)) {
                 r->work[n++] = t;
                 pixels += (size_t)tile_pixels(r, t);
             }
@@ -493,8 +377,8 @@ static void tally_tiles(const struct ao_render *r, struct ao_share_tally *tally)
     for (int t = 0; t < r->tiles_x * r->tiles_y; t++) {
         if (!r->mine[t])
             continue;
-        const struct tile_state *ts = &r->tiles[t];
-        uint32_t spp = tile_spp(ts);
+        const struct ao_tile_state *ts = &r->tiles[t];
+        uint32_t spp = ao_tile_spp(ts);
         double *most = tally->most;
         most[MOST_SPP] = spp > most[MOST_SPP] ? spp : most[MOST_SPP];
         tally->total[TOTAL_SAMPLES] += (uint64_t)spp * (uint64_t)tile_pixels(r, t);
@@ -504,13 +388,13 @@ static void tally_tiles(const struct ao_render *r, struct ao_share_tally *tally)
             ao_sum_add(&tally->exact[EXACT_SQUARES], tile_squares(r, t));
         if (ts->passes < 2)
             most[MOST_UNHALVED] = 1.0;
-        if (!settled(ts) && spp < target)
+        if (!ao_tile_settled(ts) && spp < target)
             most[MOST_UNSETTLED] = 1.0;
         if (spp < target) {
             tally->total[TOTAL_SHORT] += (uint64_t)tile_pixels(r, t);
             most[MOST_BUSIEST] = spp > most[MOST_BUSIEST] ? spp : most[MOST_BUSIEST];
-            if (settled(ts) && gain(r, t) > most[MOST_FASTEST])
-                most[MOST_FASTEST] = gain(r, t);
+            double gain = ao_tile_settled(ts) ? ao_tile_gain(ts, tile_pixels(r, t)) : 0.0;
+            most[MOST_FASTEST] = gain > most[MOST_FASTEST] ? gain : most[MOST_FASTEST];
         }
     }
     for (int k = 0; k < AO_TALLY_EXACT; k++)
@@ -613,7 +497,7 @@ static uint32_t largest_share(const struct ao_render *r)
 {
     uint32_t most = 0;
     for (int n = 0; n < r->shares[r->config.threads - 1].end; n++) {
-        struct ao_tile_work w = tile_work(r, &r->tiles[r->work[n]], NULL);
+        struct ao_tile_work w = tile_work(r, r->work[n], NULL);
         uint32_t samples = (uint32_t)(w.rounds * w.count);
         most = samples > most ? samples : most;
     }
@@ -641,7 +525,7 @@ static float tile_error(const struct ao_render *r, int t)
 /* Frame f's facts for a whole image of this run, info's included. */
 static void frame_facts(const struct ao_render *r, struct ao_frame *f, const struct ao_frame_info *info)
 {
-    f->tile = TILE;
+    f->tile = AO_TILE;
     f->tiles_x = r->tiles_x;
     f->tiles_y = r->tiles_y;
     f->block = 1;
@@ -768,7 +652,7 @@ static bool preview(struct ao_render *r, const struct ao_camera *camera, const s
         ao_pool_run(r->pool, preview_job, r);
         if (aborted(r))
             break;
-        f->tile = TILE;
+        f->tile = AO_TILE;
         f->tiles_x = f->tiles_y = 0;
         f->block = block;
         f->image_width = r->width;
@@ -847,8 +731,8 @@ static bool gather_frame(struct ao_render *r, const struct ao_frame_info *info)
  * message when memory is short. */
 static bool allocate_run(struct ao_render *r)
 {
-    r->tiles_x = (r->width + TILE - 1) / TILE;
-    r->tiles_y = (r->height + TILE - 1) / TILE;
+    r->tiles_x = (r->width + AO_TILE - 1) / AO_TILE;
+    r->tiles_y = (r->height + AO_TILE - 1) / AO_TILE;
     if (!ao_accum_init(&r->accum, r->width, r->height))
         return false;
     size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y, owned = 0;
@@ -860,7 +744,7 @@ static bool allocate_run(struct ao_render *r)
         for (size_t t = 0; t < tiles; t++)
             owned += r->mine[t] = !share || share->owns(share->user, (int)t, (int)tiles);
     if (share) {
-        r->pass_sums = malloc(tiles * TILE * TILE * sizeof *r->pass_sums);
+        r->pass_sums = malloc(tiles * AO_TILE * AO_TILE * sizeof *r->pass_sums);
         r->records = malloc((owned ? owned : 1) * sizeof *r->records);
         r->all_records = share->follows ? NULL : malloc(tiles * sizeof *r->all_records);
     }
@@ -954,8 +838,10 @@ static void *render_main(void *arg)
             break;
         }
         select_tiles(r, s.adaptive);
-        r->samples = pass_samples(&s, pixels);
-        r->per_ray = s.spppp > 0 ? 0 : AUTO_PER_RAY;
+        r->tile_pass = (struct ao_tile_pass){.target_spp = r->config.target_spp,
+                                             .samples = pass_samples(&s, pixels),
+                                             .per_ray = s.spppp > 0 ? 0 : AUTO_PER_RAY,
+                                             .sobol = r->ctx.sequence == AO_SEQUENCE_SOBOL};
         uint32_t spppp = largest_share(r);
 
         /* Run it, unless nothing is left to sample (adaptive sampling was just turned on), and
