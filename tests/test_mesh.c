@@ -1091,6 +1091,12 @@ static void test_gltf_meshes_load_once(void **state)
     struct ao_mesh mesh;
     assert_false(load_within(&mesh, path, unique + (4 << 20), err, sizeof err));
     assert_non_null(strstr(err, "placed.gltf: 200200 triangles and 202202 vertices need about"));
+
+    /* A model placed once is refused in a line that names its triangles, not "placed 1 times". */
+    path = placed_gltf("once.gltf", 0);
+    assert_false(load_within(&mesh, path, 40 << 10, err, sizeof err));
+    assert_non_null(strstr(err, "once.gltf: 200 triangles and 202 vertices need about"));
+    assert_null(strstr(err, "placed"));
 }
 
 /* A node tree deeper than AO_GLTF_MAX_NODE_DEPTH (1024) is refused in one line naming the limit,

@@ -93,10 +93,12 @@ bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint
     uint64_t charge = ao_budget_model(triangles, vertices, placements);
     if (ao_budget_fits(budget, charge))
         return true;
-    char why[200];
+    char why[200], placed[48] = "";
     ao_budget_explain(budget, charge, why, sizeof why);
-    ao_load_report(path, 0, "%llu triangles and %llu vertices placed %llu times %s", (unsigned long long)triangles,
-                   (unsigned long long)vertices, (unsigned long long)placements, why);
+    if (placements != 1) /* a model placed once is just its triangles */
+        snprintf(placed, sizeof placed, " placed %llu times", (unsigned long long)placements);
+    ao_load_report(path, 0, "%llu triangles and %llu vertices%s %s", (unsigned long long)triangles,
+                   (unsigned long long)vertices, placed, why);
     return false;
 }
 
