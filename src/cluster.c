@@ -847,8 +847,8 @@ struct ao_cluster *ao_cluster_create(void)
     c->tiles_by_rank = calloc(ranks, sizeof *c->tiles_by_rank);
     c->gather_requests = calloc(ranks, sizeof *c->gather_requests);
     c->gather_types = calloc(ranks, sizeof *c->gather_types);
-    bool ok = c->deferred && c->answer && c->loan_sums && c->repay_packed && c->answers && c->signals && c->tiles_by_rank &&
-              c->gather_requests && c->gather_types;
+    bool ok = c->deferred && c->answer && c->loan_sums && c->repay_packed && c->answers && c->signals &&
+              c->tiles_by_rank && c->gather_requests && c->gather_types;
     if (ok) {
         MPI_Irecv(c->ask, 2, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_ASK, c->loans, &c->asked);
         MPI_Irecv(&c->give_up, 1, MPI_UINT64_T, MPI_ANY_SOURCE, TAG_GIVE_UP, c->loans, &c->gave_up);

@@ -67,7 +67,7 @@ struct ao_render {
     uint64_t pass_restarts;
     struct ao_tile_pass tile_pass;       /* what the pass gives each tile */
     int tiles_x, tiles_y;
-    struct ao_tile_state *tiles;            /* tiles_x * tiles_y, row by row */
+    struct ao_tile_state *tiles;         /* tiles_x * tiles_y, row by row */
     double image_mean;                   /* of the running average, as of the last survey */
     int *work;                           /* the pass's tiles, grouped by share */
     struct share *shares;                /* one per thread, the render thread's first */
@@ -84,8 +84,8 @@ struct ao_render {
 
     /* With a share (aoview-mpi): the tiles this process owns; its work list as one span of entries
      * [front, back) (front in the low half) that its threads take from the front and the share
-     * lends from the back; the lent entries' sums (AO_TILE x AO_TILE an entry); whether the share gave
-     * the pass up; the records of a gather (this process's tiles', and the leader's of every
+     * lends from the back; the lent entries' sums (AO_TILE x AO_TILE an entry); whether the share
+     * gave the pass up; the records of a gather (this process's tiles', and the leader's of every
      * tile); the leader's passes not gathered yet; seconds in the share's waits since the last
      * pass, which count in the next. */
     unsigned char *mine;                 /* per tile; every tile without a share */
