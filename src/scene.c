@@ -708,6 +708,22 @@ static void narrow_affine(const struct ao_affine *m, float out[12])
         out[k] = (float)m->m[k];
 }
 
+/* The box lo..hi of mesh's positions, in its own frame (float comparisons: the loop stays in
+ * registers, and a float's minimum is exact). */
+static void box_of(const struct ao_mesh *mesh, struct dvec *lo, struct dvec *hi)
+{
+    float l[3] = {INFINITY, INFINITY, INFINITY}, h[3] = {-INFINITY, -INFINITY, -INFINITY};
+    for (size_t v = 0; v < mesh->vertex_count; v++) {
+        const float p[3] = {mesh->positions[v].x, mesh->positions[v].y, mesh->positions[v].z};
+        for (int k = 0; k < 3; k++) {
+            l[k] = p[k] < l[k] ? p[k] : l[k];
+            h[k] = p[k] > h[k] ? p[k] : h[k];
+        }
+    }
+    *lo = dvec_make(l[0], l[1], l[2]);
+    *hi = dvec_make(h[0], h[1], h[2]);
+}
+
 /* Fills w->info: how often each mesh is placed, its box in its own frame, and whether it is
  * instanced (w->instancing's rule; never where a placement's map is too ill-conditioned for
  * round_trip). False when memory is short. */
@@ -722,13 +738,7 @@ static bool survey(struct ao_scene *s, struct world *w)
     for (size_t m = 0; m < s->mesh_count; m++) {
         struct mesh_info *info = &w->info[m];
         const struct ao_mesh *mesh = &s->meshes[m];
-        info->lo = dvec_make(INFINITY, INFINITY, INFINITY);
-        info->hi = dvec_make(-INFINITY, -INFINITY, -INFINITY);
-        for (size_t v = 0; v < mesh->vertex_count; v++) {
-            struct dvec p = dvec_of(mesh->positions[v]);
-            info->lo = dvec_make(fmin(info->lo.x, p.x), fmin(info->lo.y, p.y), fmin(info->lo.z, p.z));
-            info->hi = dvec_make(fmax(info->hi.x, p.x), fmax(info->hi.y, p.y), fmax(info->hi.z, p.z));
-        }
+        box_of(mesh, &info->lo, &info->hi);
         info->left = info->placements;
         size_t placed = info->placements * mesh->triangle_count;
         uint64_t copy = ao_budget_mesh(mesh->triangle_count, mesh->vertex_count), copies = UINT64_MAX;
@@ -761,14 +771,24 @@ static void grow(struct dvec *lo, struct dvec *hi, struct dvec p)
     *hi = dvec_make(fmax(hi->x, p.x), fmax(hi->y, p.y), fmax(hi->z, p.z));
 }
 
-/* The box lo..hi grown to hold the world positions of placement p: of its mesh's every vertex when
- * flattened (exact), of the corners of its mesh's box when instanced (a box holding the instance). */
+/* True when m's linear part is diagonal: each world coordinate is then a product and a sum of one
+ * mesh coordinate, monotonic in it after rounding too, so the box of the mapped vertices is
+ * exactly the box of the mapped corners of the mesh's box. */
+static bool diagonal(const struct ao_affine *m)
+{
+    return m->m[1] == 0.0 && m->m[2] == 0.0 && m->m[3] == 0.0 && m->m[5] == 0.0 && m->m[6] == 0.0 &&
+           m->m[7] == 0.0;
+}
+
+/* The box lo..hi grown to hold the world positions of placement p: of the corners of its mesh's box
+ * when instanced (a box holding the instance) or mapped by a diagonal map (exact); else of its
+ * mesh's every vertex (exact). */
 static void grow_by_placement(const struct ao_scene *s, const struct world *w, const struct pending *p,
                               struct dvec *lo, struct dvec *hi)
 {
     const struct mesh_info *info = &w->info[p->mesh];
     double q[3];
-    if (info->instanced) {
+    if (info->instanced || diagonal(&p->to_world)) {
         for (int k = 0; k < 8; k++) {
             ao_affine_point(&p->to_world, k & 1 ? info->hi.x : info->lo.x, k & 2 ? info->hi.y : info->lo.y,
                             k & 4 ? info->hi.z : info->lo.z, q);
