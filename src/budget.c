@@ -25,20 +25,38 @@ void ao_budget_give(struct ao_budget *budget, uint64_t bytes)
     budget->used -= bytes;
 }
 
-uint64_t ao_budget_mesh(uint64_t triangles, uint64_t vertices)
+/* The charge at per_triangle bytes a triangle; UINT64_MAX where it overflows. */
+static uint64_t charge_at(uint64_t per_triangle, uint64_t triangles, uint64_t vertices, uint64_t placements)
 {
-    const uint64_t most = UINT64_MAX / 2;
-    if (triangles > most / AO_BUDGET_TRIANGLE || vertices > most / AO_BUDGET_VERTEX)
+    const uint64_t most = UINT64_MAX / 4;
+    if (triangles > most / per_triangle || vertices > most / AO_BUDGET_VERTEX || placements > most / AO_BUDGET_INSTANCE)
         return UINT64_MAX;
-    return triangles * AO_BUDGET_TRIANGLE + vertices * AO_BUDGET_VERTEX;
+    return triangles * per_triangle + vertices * AO_BUDGET_VERTEX + placements * AO_BUDGET_INSTANCE;
 }
 
-uint64_t ao_budget_model(uint64_t triangles, uint64_t vertices, uint64_t placements)
+uint64_t ao_budget_charge(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements)
 {
-    uint64_t mesh = ao_budget_mesh(triangles, vertices);
-    if (mesh == UINT64_MAX || placements > UINT64_MAX / 4 / AO_BUDGET_INSTANCE)
-        return UINT64_MAX;
-    return mesh + placements * AO_BUDGET_INSTANCE;
+    bool compact = budget->bvh == AO_BVH_COMPACT || budget->bvh == AO_BVH_AUTO;
+    return charge_at(compact ? AO_BUDGET_TRIANGLE_COMPACT : AO_BUDGET_TRIANGLE, triangles, vertices, placements);
+}
+
+bool ao_budget_take_mesh(struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t *charge)
+{
+    *charge = ao_budget_charge(budget, triangles, vertices, 0);
+    if (!ao_budget_take(budget, *charge))
+        return false;
+    const uint64_t more = AO_BUDGET_TRIANGLE - AO_BUDGET_TRIANGLE_COMPACT;
+    if (budget->bvh == AO_BVH_AUTO)
+        budget->surplus += triangles < (UINT64_MAX - budget->surplus) / more ? triangles * more
+                                                                             : UINT64_MAX - budget->surplus;
+    return true;
+}
+
+enum ao_bvh ao_budget_bvh(const struct ao_budget *budget)
+{
+    if (budget->bvh != AO_BVH_AUTO)
+        return budget->bvh;
+    return ao_budget_fits(budget, budget->surplus) ? AO_BVH_MEDIUM : AO_BVH_COMPACT;
 }
 
 /* bytes in binary units with one decimal, "512.0 MiB", "4.9 GiB"; below 1 KiB, exact. */

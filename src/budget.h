@@ -8,8 +8,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* The default budget in bytes, 1 GiB: about 6 million triangles of an indexed mesh; every small
- * file that asked for gigabytes is refused (docs/reliability.md). */
+/* The default budget in bytes, 1 GiB: about 6 million triangles of an indexed mesh with the MEDIUM
+ * BVH, 10 million of a binary one with the COMPACT BVH; every small file that asked for gigabytes
+ * is refused (docs/reliability.md). */
 #define AO_BUDGET_DEFAULT ((uint64_t)1 << 30)
 
 /* What each element is charged, in bytes: peak memory per triangle and per vertex through loading,
@@ -19,9 +20,24 @@
  * instance geometry and its share of the top-level BVH: measured in docs/reliability.md). */
 enum { AO_BUDGET_TRIANGLE = 120, AO_BUDGET_VERTEX = 60, AO_BUDGET_NODE = 160, AO_BUDGET_INSTANCE = 512 };
 
-/* A budget: its limit and what is charged now (never more than the limit). The caller owns it. */
+/* A triangle's charge when the BVHs are built compact: AO_BUDGET_TRIANGLE less the 64 bytes a
+ * triangle by which Embree's compact BVH lowers the peak of a 10M-triangle GLB or binary PLY
+ * (docs/reliability.md). */
+enum { AO_BUDGET_TRIANGLE_COMPACT = 56 };
+
+/* How the tracer builds the scene's BVHs (measured in docs/formats.md): MEDIUM, Embree's SAH build,
+ * traces fastest; COMPACT, the same build with leaves that index the shared vertices, takes half
+ * the memory and traces 15-25 % slower; LOW, Embree's Morton build, builds 3x sooner and traces
+ * 10-20 % slower. AUTO is MEDIUM where the whole scene fits the budget so, else COMPACT. */
+enum ao_bvh { AO_BVH_AUTO, AO_BVH_MEDIUM, AO_BVH_COMPACT, AO_BVH_LOW };
+
+/* A budget: its limit, what is charged now (never more than the limit), the BVH whose rates it
+ * charges (AUTO charges COMPACT's) and, for AUTO, what MEDIUM's rates would charge more. The
+ * caller owns it. */
 struct ao_budget {
     uint64_t limit, used;
+    enum ao_bvh bvh;
+    uint64_t surplus;
 };
 
 /* True when bytes more fit in the budget. Any thread (one budget per loading thread). */
@@ -33,12 +49,19 @@ bool ao_budget_take(struct ao_budget *budget, uint64_t bytes);
 /* Gives back bytes taken for a while (a file's text, a parser's tree) once they are freed. */
 void ao_budget_give(struct ao_budget *budget, uint64_t bytes);
 
-/* The charge for a mesh of so many triangles and vertices; UINT64_MAX where it overflows. */
-uint64_t ao_budget_mesh(uint64_t triangles, uint64_t vertices);
+/* The charge for unique meshes of so many triangles and vertices placed so many times at the rates
+ * of budget's BVH (a triangle AO_BUDGET_TRIANGLE_COMPACT for COMPACT and AUTO, AO_BUDGET_TRIANGLE
+ * for the others); UINT64_MAX where it overflows. */
+uint64_t ao_budget_charge(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements);
 
-/* The charge for unique meshes of so many triangles and vertices placed so many times in all;
- * UINT64_MAX where it overflows. */
-uint64_t ao_budget_model(uint64_t triangles, uint64_t vertices, uint64_t placements);
+/* Charges a mesh of so many triangles and vertices (ao_budget_charge) when it fits, and for AUTO
+ * counts what MEDIUM would charge more; false, charging nothing, when it does not fit. *charge:
+ * the charge. */
+bool ao_budget_take_mesh(struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t *charge);
+
+/* The BVH a scene loaded within budget gets: AUTO's is MEDIUM when MEDIUM's charges would have fit
+ * too, else COMPACT; any other, as asked. */
+enum ao_bvh ao_budget_bvh(const struct ao_budget *budget);
 
 /* Writes why bytes do not fit, for a one-line message: "need about 4.9 GiB, more than the 1.0 GiB
  * left of the scene budget (raise it with --scene-budget)"; exact byte counts where the two would

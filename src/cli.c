@@ -23,7 +23,7 @@ enum option_id {
     OPT_HEADLESS, OPT_OUTPUT, OPT_SPP, OPT_SPPPP, OPT_SAMPLING, OPT_AA, OPT_NO_AA, OPT_SIZE,
     OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
     OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR, OPT_SAVE_FORMAT, OPT_TIME,
-    OPT_VIEW, OPT_SHADING, OPT_COMPARE, OPT_PIXEL_SIZE, OPT_SCENE_BUDGET, OPT_GROUND,
+    OPT_VIEW, OPT_SHADING, OPT_COMPARE, OPT_PIXEL_SIZE, OPT_SCENE_BUDGET, OPT_GROUND, OPT_BVH,
 };
 
 /* The longest --time: a year, far beyond any render, short of overflowing anything. */
@@ -43,6 +43,8 @@ static const char *const save_formats[] = {"pfm", "exr", NULL};
 static const char *const views[] = {[AO_VIEW_MODE_AO] = "ao", [AO_VIEW_MODE_NORMALS] = "normals",
                                     [AO_VIEW_MODE_DIFFERENCE] = "difference", NULL};
 static const char *const shadings[] = {[AO_SHADING_PHONG] = "phong", [AO_SHADING_FLAT] = "flat", NULL};
+static const char *const bvhs[] = {[AO_BVH_AUTO] = "auto", [AO_BVH_MEDIUM] = "medium",
+                                   [AO_BVH_COMPACT] = "compact", [AO_BVH_LOW] = "low", NULL};
 /* Names of the --pixel-size values: auto, then the pixel sizes 1, 2, 4, 8 (choice k is 2^(k-1)). */
 static const char *const pixel_sizes[] = {"auto", "1", "2", "4", "8", NULL};
 
@@ -83,6 +85,7 @@ static const struct option_spec specs[] = {
     {"--compare", 0, true, OPT_COMPARE},
     {"--scene-budget", 0, true, OPT_SCENE_BUDGET},
     {"--ground", 0, true, OPT_GROUND},
+    {"--bvh", 0, true, OPT_BVH},
 };
 
 static const char usage[] =
@@ -135,6 +138,10 @@ static const char usage[] =
     "                        they are loaded (default 1G)\n"
     "  --ground on|off       the ground quad under a bare mesh (default on; a .scene\n"
     "                        file has the quads it lists)\n"
+    "  --bvh B               medium (fastest rays) | compact (half the memory,\n"
+    "                        slower rays) | low (built 3x sooner, slower rays) |\n"
+    "                        auto: medium, or compact if only that fits the scene\n"
+    "                        budget (default auto)\n"
     "  -q, --quiet           print nothing but errors\n"
     "  -h, --help            show this help\n"
     "  --version             show the version\n"
@@ -435,6 +442,11 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
         if (!parse_choice(name, value, switches, &choice, msg, msg_size))
             return false;
         opts->ground = choice;
+        return true;
+    case OPT_BVH:
+        if (!parse_choice(name, value, bvhs, &choice, msg, msg_size))
+            return false;
+        opts->bvh = (enum ao_bvh)choice;
         return true;
     }
     return false;

@@ -54,6 +54,7 @@ struct ao_options {
     bool save_exr;            /* --save-format exr: S saves EXR beside the PNG, not PFM */
     uint64_t scene_budget;    /* --scene-budget: bytes a scene may take to load (budget.h) */
     bool ground;              /* --ground: the ground quad under a bare mesh, default on */
+    enum ao_bvh bvh;          /* --bvh: default auto (budget.h) */
     bool quiet, help, version;
 };
 

@@ -298,7 +298,7 @@ bool ao_mesh_is_mesh_path(const char *path)
 
 bool ao_mesh_load(struct ao_mesh *mesh, const char *path)
 {
-    struct ao_budget budget = {AO_BUDGET_DEFAULT, 0};
+    struct ao_budget budget = {.limit = AO_BUDGET_DEFAULT};
     return ao_mesh_load_budget(mesh, path, &budget);
 }
 

@@ -62,7 +62,7 @@ bool ao_mesh_is_mesh_path(const char *path);
 bool ao_mesh_load(struct ao_mesh *mesh, const char *path);
 
 /* ao_mesh_load within budget (ao_mesh_load's is AO_BUDGET_DEFAULT): the file is charged while it is
- * read and parsed, and a mesh whose ao_budget_mesh charge does not fit what is left is refused
+ * read and parsed, and a mesh whose ao_budget_charge does not fit what is left is refused
  * before its arrays are allocated. Nothing stays charged: the caller charges the mesh it keeps. */
 bool ao_mesh_load_budget(struct ao_mesh *mesh, const char *path, struct ao_budget *budget);
 

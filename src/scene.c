@@ -277,8 +277,8 @@ struct world {
  * false after reporting at the cursor's line. */
 static bool charge(struct cursor *c, struct world *w, uint64_t triangles, uint64_t vertices, const char *what)
 {
-    uint64_t bytes = ao_budget_mesh(triangles, vertices);
-    if (ao_budget_take(w->budget, bytes))
+    uint64_t bytes;
+    if (ao_budget_take_mesh(w->budget, triangles, vertices, &bytes))
         return true;
     char why[200];
     ao_budget_explain(w->budget, bytes, why, sizeof why);
@@ -741,7 +741,7 @@ static bool survey(struct ao_scene *s, struct world *w)
         box_of(mesh, &info->lo, &info->hi);
         info->left = info->placements;
         size_t placed = info->placements * mesh->triangle_count;
-        uint64_t copy = ao_budget_mesh(mesh->triangle_count, mesh->vertex_count), copies = UINT64_MAX;
+        uint64_t copy = ao_budget_charge(w->budget, mesh->triangle_count, mesh->vertex_count, 0), copies = UINT64_MAX;
         if (info->placements > 1 && copy <= (UINT64_MAX - reserved) / (info->placements - 1))
             copies = copy * (info->placements - 1);
         bool flat = info->placements < 2 || (placed / info->placements == mesh->triangle_count &&
@@ -1096,17 +1096,31 @@ static bool parse_text(struct ao_scene *scene, const char *text, const char *pat
     return ok;
 }
 
+/* Records in a loaded scene (ok) the BVH its budget gives it (ao_budget_bvh), with a note when AUTO
+ * gave COMPACT; returns ok. */
+static bool settle_bvh(struct ao_scene *s, const struct ao_budget *budget, bool ok)
+{
+    if (!ok)
+        return false;
+    s->bvh = ao_budget_bvh(budget);
+    if (budget->bvh == AO_BVH_AUTO && s->bvh == AO_BVH_COMPACT)
+        add_note(s, s->name, "BVH built compact to fit the scene budget (rays 15-25 % slower; a larger "
+                          "--scene-budget gets the faster one)");
+    return true;
+}
+
 bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
 {
-    struct ao_budget budget = {AO_BUDGET_DEFAULT, 0};
+    struct ao_budget budget = {.limit = AO_BUDGET_DEFAULT};
     return parse_text(scene, text, path, &budget, AO_INSTANCING_AUTO);
 }
 
 bool ao_scene_parse_with(struct ao_scene *scene, const char *text, const char *path,
                          const struct ao_scene_options *options)
 {
-    struct ao_budget budget = {options->budget, 0};
-    return parse_text(scene, text, path, &budget, options->instancing);
+    struct ao_budget budget = {.limit = options->budget, .bvh = options->bvh};
+    return settle_bvh(scene, &budget,
+                      parse_text(scene, text, path, &budget, options->instancing));
 }
 
 /* The ground quad added under a bare mesh whose box is lo..hi: 50 times as wide as the mesh's
@@ -1174,10 +1188,11 @@ bool ao_scene_load_budget(struct ao_scene *scene, const char *path, uint64_t bud
 
 bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct ao_scene_options *options)
 {
-    struct ao_budget budget = {options->budget, 0};
+    struct ao_budget budget = {.limit = options->budget, .bvh = options->bvh};
     memset(scene, 0, sizeof *scene);
     if (ao_mesh_is_mesh_path(path))
-        return load_bare_mesh(scene, path, &budget, options->ground, options->instancing);
+        return settle_bvh(scene, &budget,
+                          load_bare_mesh(scene, path, &budget, options->ground, options->instancing));
     char *text;
     size_t got;
     if (!ao_file_read_budget(path, &budget, &text, &got))
@@ -1187,7 +1202,7 @@ bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct a
         ao_file_report("%s: not a text file (it contains a NUL byte)", path);
     ok = ok && parse_text(scene, text, path, &budget, options->instancing);
     free(text);
-    return ok;
+    return settle_bvh(scene, &budget, ok);
 }
 
 void ao_scene_finish(struct ao_scene *scene)

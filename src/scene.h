@@ -67,6 +67,7 @@ struct ao_scene {
     size_t point_primitives;      /* glTF primitives of points skipped (mesh.h) */
     size_t line_primitives;       /* glTF primitives of lines skipped */
     char notes[512];              /* the meshes' notes (mesh.h), "name: note; name: note", or "" */
+    enum ao_bvh bvh;              /* how the tracer builds its BVHs (budget.h); AUTO counts as MEDIUM */
 };
 
 /* Loads a .scene file, or a mesh file placed on a ground quad with a framing camera.
@@ -93,11 +94,12 @@ enum ao_instancing { AO_INSTANCING_AUTO, AO_INSTANCING_ALWAYS, AO_INSTANCING_NEV
 
 /* How ao_scene_load_with loads: the scene budget in bytes (budget.h); for a bare mesh, whether the
  * ground quad is added under it (a .scene file has only the quads it lists); which meshes it
- * instances. */
+ * instances; the BVH to build (AUTO: MEDIUM, or COMPACT where only that fits the budget). */
 struct ao_scene_options {
     uint64_t budget;
     bool ground;
     enum ao_instancing instancing;
+    enum ao_bvh bvh;
 };
 
 /* The gap between a bare mesh's lowest point and the ground quad added under it, as a fraction

@@ -45,9 +45,19 @@ static bool embree_memory_monitor(void *user, ssize_t bytes, bool post)
     return true;
 }
 
+/* Sets how Embree builds a scene's BVH (budget.h's enum ao_bvh): always robust traversal, which
+ * keeps shared edges watertight so that closed meshes stay closed; compact leaves or Morton's build
+ * where asked. */
+static void set_build(RTCScene scene, enum ao_bvh bvh)
+{
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST | (bvh == AO_BVH_COMPACT ? RTC_SCENE_FLAG_COMPACT : 0));
+    if (bvh == AO_BVH_LOW)
+        rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
+}
+
 /* A triangle geometry over the mesh's own vertex and index arrays, shared, not copied (scene.h:
  * the positions are padded as Embree needs). */
-static RTCGeometry triangles_of(struct ao_tracer *t, const struct ao_mesh *m)
+static RTCGeometry triangles_of(struct ao_tracer *t, const struct ao_mesh *m, enum ao_bvh bvh)
 {
     RTCGeometry g = rtcNewGeometry(t->device, RTC_GEOMETRY_TYPE_TRIANGLE);
     if (!g)
@@ -56,6 +66,8 @@ static RTCGeometry triangles_of(struct ao_tracer *t, const struct ao_mesh *m)
                                sizeof *m->positions, m->vertex_count);
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m->indices, 0, 3 * sizeof *m->indices,
                                m->triangle_count);
+    if (bvh == AO_BVH_LOW)
+        rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_LOW);
     rtcCommitGeometry(g);
     return g;
 }
@@ -66,13 +78,13 @@ static RTCScene mesh_scene(struct ao_tracer *t, const struct ao_scene *s, uint32
     if (t->meshes[m])
         return t->meshes[m];
     RTCScene scene = rtcNewScene(t->device);
-    RTCGeometry g = scene ? triangles_of(t, &s->meshes[m]) : NULL;
+    RTCGeometry g = scene ? triangles_of(t, &s->meshes[m], s->bvh) : NULL;
     if (!g) {
         if (scene)
             rtcReleaseScene(scene);
         return NULL;
     }
-    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+    set_build(scene, s->bvh);
     rtcAttachGeometry(scene, g);
     rtcReleaseGeometry(g);
     rtcCommitScene(scene);
@@ -87,7 +99,7 @@ static bool add_instance(struct ao_tracer *t, const struct ao_scene *s, size_t i
     const struct ao_instance *in = &s->instances[i];
     RTCGeometry g;
     if (in->flat) {
-        if (!(g = triangles_of(t, &s->meshes[in->mesh])))
+        if (!(g = triangles_of(t, &s->meshes[in->mesh], s->bvh)))
             return false;
         t->stats.triangle_geometries++;
     } else {
@@ -159,9 +171,8 @@ struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_ba
     t->mesh_count = scene->mesh_count;
     t->meshes = calloc(scene->mesh_count ? scene->mesh_count : 1, sizeof *t->meshes);
     t->scene = t->meshes ? rtcNewScene(t->device) : NULL;
-    /* Robust traversal keeps shared edges watertight, so closed meshes stay closed. */
     if (t->scene) {
-        rtcSetSceneFlags(t->scene, RTC_SCENE_FLAG_ROBUST);
+        set_build(t->scene, scene->bvh);
         t->stats.bvhs = 1;
     }
     bool ok = t->scene != NULL;

@@ -30,7 +30,7 @@ int main(int argc, char **argv)
     for (int r = 0; r < rounds; r++) {
         for (int f = 0; f < files; f++) {
             struct ao_model model;
-            struct ao_budget budget = {UINT64_MAX / 2, 0};
+            struct ao_budget budget = {.limit = UINT64_MAX / 2};
             double start = bench_now();
             if (!ao_model_load_budget(&model, argv[first + f], &budget))
                 return 1;

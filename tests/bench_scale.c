@@ -7,9 +7,9 @@
  * pixel (2 threads, cosine, AA), their sum (time to first image), AO Mrays/s over 4 more passes of
  * 4 samples, peak RSS (getrusage) and peak RSS per triangle. Asserts nothing; docs/formats.md has
  * the figures.
- * Run: build/tests/bench_scale [--rounds N] [--reuse] DIR   (writes about 1 GB into DIR; --reuse
- *      keeps files written by an earlier run)
- *      build/tests/bench_scale --one FILE   (one measurement, one line: what each round runs) */
+ * Run: build/tests/bench_scale [--rounds N] [--reuse] [--bvh B] DIR   (writes about 1 GB into DIR;
+ *      --reuse keeps files written by an earlier run; --bvh as aoview's, default medium)
+ *      build/tests/bench_scale [--bvh B] --one FILE   (one measurement, one line: what each round runs) */
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
@@ -31,6 +31,10 @@ enum { RINGS = 1581 };
 enum { WIDTH = 640, HEIGHT = 480, RATE_SPPPP = 4, RATE_PASSES = 4, MAX_ROUNDS = 21, FILES = 4, PHASES = 8 };
 
 static const char *const names[FILES] = {"sphere.ply", "sphere_ascii.ply", "sphere.obj", "sphere.glb"};
+/* --bvh's names, in budget.h's order, and the one asked for. */
+static const char *const bvh_names[] = {"auto", "medium", "compact", "low"};
+static int bvh = AO_BVH_MEDIUM;
+
 static const char *const phase_names[PHASES] = {"load s", "normals s", "build s", "first s", "total s",
                                                 "Mrays/s", "peak MB", "B/tri"};
 
@@ -95,7 +99,7 @@ static void write_files(const char *dir, const struct bench_mesh *m)
 static int measure(const char *path)
 {
     struct ao_scene scene;
-    struct ao_scene_options options = {.budget = (uint64_t)1 << 40, .ground = true};
+    struct ao_scene_options options = {.budget = (uint64_t)1 << 40, .ground = true, .bvh = (enum ao_bvh)bvh};
     double start = bench_now();
     if (!ao_scene_load_with(&scene, path, &options))
         return 1;
@@ -137,7 +141,7 @@ static void run_child(const char *path, double out[PHASES])
         dup2(fds[1], 1);
         close(fds[0]);
         close(fds[1]);
-        execl("/proc/self/exe", "bench_scale", "--one", path, (char *)NULL);
+        execl("/proc/self/exe", "bench_scale", "--bvh", bvh_names[bvh], "--one", path, (char *)NULL);
         _exit(127);
     }
     close(fds[1]);
@@ -154,24 +158,38 @@ static void run_child(const char *path, double out[PHASES])
     }
 }
 
+/* The index of --bvh's name, or -1. */
+static int bvh_of(const char *name)
+{
+    for (int k = 0; k < (int)(sizeof bvh_names / sizeof bvh_names[0]); k++)
+        if (strcmp(name, bvh_names[k]) == 0)
+            return k;
+    return -1;
+}
+
 int main(int argc, char **argv)
 {
-    if (argc == 3 && strcmp(argv[1], "--one") == 0)
-        return measure(argv[2]);
     int first = 1, rounds = 5;
-    bool reuse = false;
+    bool reuse = false, one = false;
     for (; first < argc - 1; first++) {
         if (strcmp(argv[first], "--rounds") == 0 && first + 2 < argc)
             rounds = atoi(argv[++first]);
         else if (strcmp(argv[first], "--reuse") == 0)
             reuse = true;
+        else if (strcmp(argv[first], "--bvh") == 0 && first + 2 < argc)
+            bvh = bvh_of(argv[++first]);
+        else if (strcmp(argv[first], "--one") == 0)
+            one = true;
         else
             break;
     }
-    if (first != argc - 1 || rounds < 1 || rounds > MAX_ROUNDS) {
-        fprintf(stderr, "usage: bench_scale [--rounds 1..%d] [--reuse] DIR | bench_scale --one FILE\n", MAX_ROUNDS);
+    if (first != argc - 1 || rounds < 1 || rounds > MAX_ROUNDS || bvh < 0) {
+        fprintf(stderr, "usage: bench_scale [--rounds 1..%d] [--reuse] [--bvh auto|medium|compact|low] DIR | "
+                        "bench_scale [--bvh B] --one FILE\n", MAX_ROUNDS);
         return 2;
     }
+    if (one)
+        return measure(argv[first]);
     const char *dir = argv[first];
     if (!reuse) {
         double start = bench_now();

@@ -61,6 +61,7 @@ static void test_defaults(void **state)
     assert_false(o.quiet || o.help || o.version);
     assert_true(o.scene_budget == AO_BUDGET_DEFAULT);
     assert_true(o.ground);
+    assert_int_equal(o.bvh, AO_BVH_AUTO);
 }
 
 static void test_every_option(void **state)
@@ -350,6 +351,21 @@ static void test_ground(void **state)
     REJECT("--ground", "missing value", "--ground");
 }
 
+/* --bvh auto|medium|compact|low: how the tracer builds its BVHs (budget.h). */
+static void test_bvh(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE(&o, "--bvh", "compact", "model.obj"));
+    assert_int_equal(o.bvh, AO_BVH_COMPACT);
+    assert_true(PARSE(&o, "--bvh=low"));
+    assert_int_equal(o.bvh, AO_BVH_LOW);
+    assert_true(PARSE(&o, "--bvh=low", "--bvh=medium"));
+    assert_int_equal(o.bvh, AO_BVH_MEDIUM);
+    REJECT("--bvh: expected auto, medium, compact or low", "'fast'", "--bvh", "fast");
+    REJECT("--bvh", "missing value", "--bvh");
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -381,6 +397,7 @@ int main(void)
         cmocka_unit_test(test_compare_options),
         cmocka_unit_test(test_scene_budget),
         cmocka_unit_test(test_ground),
+        cmocka_unit_test(test_bvh),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

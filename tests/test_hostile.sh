@@ -264,7 +264,7 @@ with open('string.gltf', 'w') as f:
 PY
 truncate -s 3G sparse.gltf
 loads "instanced.gltf (65536 placements of 512 triangles)" instanced.gltf
-refuse 1 "instanced.gltf: 512 triangles and 289 vertices placed 65536 times need about 32.1 MiB, more than the" --scene-budget 140M instanced.gltf
+refuse 1 "instanced.gltf: 512 triangles and 289 vertices placed 65536 times need about 32.0 MiB, more than the" --scene-budget 140M instanced.gltf
 loads "three.scene (grid.gltf's 256 placements, three times: the file loaded once) under --scene-budget 1M" --scene-budget 1M three.scene
 refuse 1 "million.gltf: parsing its JSON would need about 1.1 GiB, more than the 1011.6 MiB left of the scene budget (raise it with --scene-budget)" million.gltf
 refuse 1 "string.gltf: parsing its JSON would need about 192.0 MiB, more than the 64.0 MiB left" --scene-budget 128M string.gltf

@@ -203,13 +203,20 @@ struct fixture {
     struct ao_tracer *tracer;
 };
 
-static void setup(struct fixture *f, const char *name, enum ao_instancing instancing, bool ground)
+/* Loads name with that BVH and builds its Embree tracer. */
+static void setup_bvh(struct fixture *f, const char *name, enum ao_instancing instancing, bool ground, enum ao_bvh bvh)
 {
     char path[128];
-    struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT, .ground = ground, .instancing = instancing};
+    struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT, .ground = ground, .instancing = instancing,
+                                       .bvh = bvh};
     assert_true(ao_scene_load_with(&f->scene, in_dir(name, path, sizeof path), &options));
     f->tracer = ao_tracer_create_with(&f->scene, AO_BACKEND_EMBREE);
     assert_non_null(f->tracer);
+}
+
+static void setup(struct fixture *f, const char *name, enum ao_instancing instancing, bool ground)
+{
+    setup_bvh(f, name, instancing, ground, AO_BVH_AUTO);
 }
 
 static void teardown(struct fixture *f)
@@ -460,6 +467,39 @@ static void test_instanced_image_matches_flattened(void **state)
     free(b);
     teardown(&inst);
     teardown(&flat);
+}
+
+/* The three BVHs (budget.h) trace the same rays to the same hits, so the bunnies, instanced and
+ * flattened, render the same image bit for bit with each: Embree's robust triangle test is the
+ * same arithmetic on the same vertices whatever the tree and its leaves (measured on four scenes
+ * in docs/formats.md). */
+static void test_every_bvh_renders_the_same_image(void **state)
+{
+    (void)state;
+    write_bunnies();
+    enum { W = 96, H = 72, N = 8 };
+    for (int instanced = 0; instanced < 2; instanced++) {
+        enum ao_instancing how = instanced ? AO_INSTANCING_ALWAYS : AO_INSTANCING_NEVER;
+        struct fixture medium;
+        setup_bvh(&medium, "bunnies.scene", how, false, AO_BVH_MEDIUM);
+        float *want = render(&medium, W, H, N, AO_OUTPUT_AO, true);
+        for (enum ao_bvh bvh = AO_BVH_COMPACT; bvh <= AO_BVH_LOW; bvh++) {
+            struct fixture other;
+            setup_bvh(&other, "bunnies.scene", how, false, bvh);
+            assert_int_equal(other.scene.bvh, bvh);
+            float *got = render(&other, W, H, N, AO_OUTPUT_AO, true);
+            int differ = 0;
+            for (int p = 0; p < 3 * W * H; p++)
+                differ += got[p] != want[p];
+            print_message("%s, BVH %d against MEDIUM: %d of %d values differ\n", instanced ? "instanced" : "flattened",
+                          (int)bvh, differ, 3 * W * H);
+            assert_int_equal(differ, 0);
+            free(got);
+            teardown(&other);
+        }
+        free(want);
+        teardown(&medium);
+    }
 }
 
 /* A unit sphere mesh with radial file normals, mirrored three ways: a glTF node scaling x by -1,
@@ -774,6 +814,7 @@ int main(void)
         cmocka_unit_test(test_one_mesh_under_many_nodes_is_built_once),
         cmocka_unit_test(test_instances_shade_as_flattened),
         cmocka_unit_test(test_instanced_image_matches_flattened),
+        cmocka_unit_test(test_every_bvh_renders_the_same_image),
         cmocka_unit_test(test_mirrored_placements_shade_outward),
         cmocka_unit_test(test_three_mesh_lines_load_one_mesh),
         cmocka_unit_test(test_a_mesh_placed_100000_times_loads),

@@ -99,11 +99,22 @@ static bool load_captured(struct ao_mesh *mesh, const char *path, char *err, siz
     return ok;
 }
 
-/* Runs ao_mesh_load_budget within a budget of `limit` bytes, stderr captured in err; the budget must
+/* The budget's charges at the MEDIUM BVH's rates: a mesh, and meshes with their placements. */
+static uint64_t medium_model(uint64_t triangles, uint64_t vertices, uint64_t placements)
+{
+    return ao_budget_charge(&(struct ao_budget){.bvh = AO_BVH_MEDIUM}, triangles, vertices, placements);
+}
+
+static uint64_t medium_charge(uint64_t triangles, uint64_t vertices)
+{
+    return medium_model(triangles, vertices, 0);
+}
+
+/* Runs ao_mesh_load_budget within a budget of `limit` bytes at the MEDIUM BVH's rates, stderr captured in err; the budget must
  * come back empty, whatever happened. */
 static bool load_within(struct ao_mesh *mesh, const char *path, uint64_t limit, char *err, size_t err_size)
 {
-    struct ao_budget budget = {limit, 0};
+    struct ao_budget budget = {.limit = limit, .bvh = AO_BVH_MEDIUM};
     FILE *capture = tmpfile();
     assert_non_null(capture);
     fflush(stderr);
@@ -1059,7 +1070,7 @@ static void test_gltf_meshes_load_once(void **state)
     (void)state;
     const char *path = placed_gltf("placed.gltf", 1000);
     struct ao_model model;
-    struct ao_budget budget = {UINT64_MAX / 2, 0};
+    struct ao_budget budget = {.limit = UINT64_MAX / 2};
     assert_true(ao_model_load_budget(&model, path, &budget));
     assert_int_equal(budget.used, 0);
     assert_int_equal(model.mesh_count, 2);
@@ -1082,9 +1093,9 @@ static void test_gltf_meshes_load_once(void **state)
 
     /* The budget: the file, its JSON (4 MiB hold both), 400 triangles, 404 vertices and 1001 placements fit; the
      * 200,200 triangles and 202,202 vertices flattened would need more. */
-    uint64_t unique = ao_budget_model(400, 404, 1001), flat = ao_budget_mesh(200200, 202202);
+    uint64_t unique = medium_model(400, 404, 1001), flat = medium_charge(200200, 202202);
     assert_true(flat > unique + (4 << 20));
-    budget = (struct ao_budget){unique + (4 << 20), 0};
+    budget = (struct ao_budget){.limit = unique + (4 << 20), .bvh = AO_BVH_MEDIUM};
     assert_true(ao_model_load_budget(&model, path, &budget));
     ao_model_finish(&model);
     char err[1024];
@@ -1564,12 +1575,12 @@ static void test_loaders_keep_to_the_budget(void **state)
     static const char obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nv 0 0 1\n";
     const char *path = temp_file("budget.obj", obj, sizeof obj - 1);
     uint64_t file = file_size(path) + 1;
-    assert_false(load_within(&mesh, path, file + ao_budget_mesh(1, 3), err, sizeof err));
+    assert_false(load_within(&mesh, path, file + medium_charge(1, 3), err, sizeof err));
     assert_non_null(strstr(err, "budget.obj:5: 1 triangles and 4 vertices need 360 bytes, more than the "
                                 "300 bytes left of the scene budget (raise it with --scene-budget)"));
     path = temp_file("budget.obj", obj, sizeof obj - 9);   /* without the last line */
     file = file_size(path) + 1;
-    assert_true(load_within(&mesh, path, file + ao_budget_mesh(1, 3), err, sizeof err));
+    assert_true(load_within(&mesh, path, file + medium_charge(1, 3), err, sizeof err));
     assert_int_equal(mesh.triangle_count, 1);
     ao_mesh_finish(&mesh);
     /* A file larger than the budget is not read. */
@@ -1580,17 +1591,17 @@ static void test_loaders_keep_to_the_budget(void **state)
     struct bytes b = binary_square();
     path = temp_file("budget.ply", b.data, b.size);
     file = file_size(path) + 1;
-    assert_false(load_within(&mesh, path, file + ao_budget_mesh(2, 4) - 1, err, sizeof err));
+    assert_false(load_within(&mesh, path, file + medium_charge(2, 4) - 1, err, sizeof err));
     assert_non_null(strstr(err, "budget.ply: 2 triangles and 4 vertices need 480 bytes"));
-    assert_false(load_within(&mesh, path, file + ao_budget_mesh(3, 4) - 1, err, sizeof err));
+    assert_false(load_within(&mesh, path, file + medium_charge(3, 4) - 1, err, sizeof err));
     assert_non_null(strstr(err, "budget.ply: face 1: 3 triangles and 4 vertices need 600 bytes"));
-    assert_true(load_within(&mesh, path, file + ao_budget_mesh(3, 4), err, sizeof err));
+    assert_true(load_within(&mesh, path, file + medium_charge(3, 4), err, sizeof err));
     ao_mesh_finish(&mesh);
     /* Binary STL: the header's 1000 triangles, before any is read. */
     static unsigned char stl[84 + 50 * 1000];
     stl[80] = 1000 & 0xff, stl[81] = 1000 >> 8;
     path = temp_file("budget.stl", stl, sizeof stl);
-    assert_false(load_within(&mesh, path, sizeof stl + 1 + ao_budget_mesh(999, 0), err, sizeof err));
+    assert_false(load_within(&mesh, path, sizeof stl + 1 + medium_charge(999, 0), err, sizeof err));
     assert_non_null(strstr(err, "budget.stl: 1000 triangles and 0 vertices need about 117.2 KiB"));
     /* glTF: its JSON tree, estimated before parsing. */
     assert_false(load_within(&mesh, fixture("nodes.gltf"), file_size(fixture("nodes.gltf")) + 1000, err, sizeof err));
@@ -1611,24 +1622,69 @@ static void test_scene_budget_covers_every_mesh_line(void **state)
     static const char text[] = "camera eye 0 1 4 target 0 0 0\nmesh tri.obj\nmesh tri.obj translate 1 0 0\n"
                                "mesh tri.obj translate 2 0 0\n";
     const char *path = temp_file("three.scene", text, sizeof text - 1);
-    /* The scene's text, the mesh, three placements and two copies. */
-    uint64_t need = sizeof text + 3 * ao_budget_mesh(1, 3) + 3 * AO_BUDGET_INSTANCE;
+    /* The scene's text, the mesh, three placements and two copies, at the MEDIUM BVH's rates. */
+    uint64_t need = sizeof text + 3 * medium_charge(1, 3) + 3 * AO_BUDGET_INSTANCE;
+    struct ao_scene_options medium = {.budget = need, .ground = true, .bvh = AO_BVH_MEDIUM};
     struct ao_scene scene;
-    assert_true(ao_scene_load_budget(&scene, path, need));
+    assert_true(ao_scene_load_with(&scene, path, &medium));
     assert_int_equal(scene.triangle_count, 3);
     assert_int_equal(scene.mesh_count, 3);
     assert_int_equal(scene.instance_count, 3);
     ao_scene_finish(&scene);
     /* One byte less: the copies do not fit, so the mesh is instanced instead (scene.h's AUTO). */
-    assert_true(ao_scene_load_budget(&scene, path, need - 1));
+    medium.budget = need - 1;
+    assert_true(ao_scene_load_with(&scene, path, &medium));
     assert_int_equal(scene.mesh_count, 1);
     assert_false(scene.instances[0].flat);
     ao_scene_finish(&scene);
     /* Without room for the copies' rule, the mesh and its placements alone: one byte less refused. */
-    uint64_t least = sizeof text + ao_budget_mesh(1, 3) + 3 * AO_BUDGET_INSTANCE;
-    assert_true(ao_scene_load_budget(&scene, path, least));
+    uint64_t least = sizeof text + medium_charge(1, 3) + 3 * AO_BUDGET_INSTANCE;
+    medium.budget = least;
+    assert_true(ao_scene_load_with(&scene, path, &medium));
+    assert_int_equal(scene.bvh, AO_BVH_MEDIUM);
     ao_scene_finish(&scene);
-    assert_false(ao_scene_load_budget(&scene, path, least - 1));
+    medium.budget = least - 1;
+    assert_false(ao_scene_load_with(&scene, path, &medium));
+}
+
+/* An AUTO budget charges the compact rates and builds the MEDIUM BVH when MEDIUM's charges would
+ * fit too, else COMPACT with a note; below the compact charges the scene is refused. The budget
+ * decides for the whole scene: the placement charged after the mesh counts alike. */
+static void test_budget_builds_compact_where_only_that_fits(void **state)
+{
+    (void)state;
+    static const char obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+    temp_file("tri.obj", obj, sizeof obj - 1);
+    static const char text[] = "camera eye 0 1 4 target 0 0 0\nmesh tri.obj\n";
+    const char *path = temp_file("one.scene", text, sizeof text - 1);
+    uint64_t medium = sizeof text + medium_charge(1, 3) + AO_BUDGET_INSTANCE;
+    uint64_t compact = medium - (AO_BUDGET_TRIANGLE - AO_BUDGET_TRIANGLE_COMPACT);
+    struct ao_scene scene;
+    assert_true(ao_scene_load_budget(&scene, path, medium));
+    assert_int_equal(scene.bvh, AO_BVH_MEDIUM);
+    assert_string_equal(scene.notes, "");
+    ao_scene_finish(&scene);
+    assert_true(ao_scene_load_budget(&scene, path, medium - 1));
+    assert_int_equal(scene.bvh, AO_BVH_COMPACT);
+    assert_string_equal(scene.notes, "one.scene: BVH built compact to fit the scene budget (rays 15-25 % slower; "
+                                     "a larger --scene-budget gets the faster one)");
+    ao_scene_finish(&scene);
+    assert_true(ao_scene_load_budget(&scene, path, compact));
+    assert_int_equal(scene.bvh, AO_BVH_COMPACT);
+    ao_scene_finish(&scene);
+    assert_false(ao_scene_load_budget(&scene, path, compact - 1));
+    /* Asked for, each is charged at its own rates, without a note. */
+    struct ao_scene_options asked = {.budget = compact, .ground = true, .bvh = AO_BVH_COMPACT};
+    assert_true(ao_scene_load_with(&scene, path, &asked));
+    assert_int_equal(scene.bvh, AO_BVH_COMPACT);
+    assert_string_equal(scene.notes, "");
+    ao_scene_finish(&scene);
+    asked.bvh = AO_BVH_LOW;
+    assert_false(ao_scene_load_with(&scene, path, &asked));
+    asked.budget = medium;
+    assert_true(ao_scene_load_with(&scene, path, &asked));
+    assert_int_equal(scene.bvh, AO_BVH_LOW);
+    ao_scene_finish(&scene);
 }
 
 /* ------------------------------------------------------------------ bad input */
@@ -2033,6 +2089,7 @@ int main(void)
         cmocka_unit_test(test_gltf_meshopt),
         cmocka_unit_test(test_loaders_keep_to_the_budget),
         cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
+        cmocka_unit_test(test_budget_builds_compact_where_only_that_fits),
         cmocka_unit_test(test_bad_inputs),
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_unreadable_file),

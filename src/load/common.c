@@ -77,7 +77,7 @@ void ao_load_report(const char *path, size_t line, const char *format, ...)
 bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, const char *path,
                   size_t line)
 {
-    uint64_t charge = ao_budget_mesh(triangles, vertices);
+    uint64_t charge = ao_budget_charge(budget, triangles, vertices, 0);
     if (ao_budget_fits(budget, charge))
         return true;
     char why[200];
@@ -90,7 +90,7 @@ bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t v
 bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements,
                         const char *path)
 {
-    uint64_t charge = ao_budget_model(triangles, vertices, placements);
+    uint64_t charge = ao_budget_charge(budget, triangles, vertices, placements);
     if (ao_budget_fits(budget, charge))
         return true;
     char why[200], placed[48] = "";

@@ -75,13 +75,13 @@ void ao_load_free(struct ao_load_array *a);
 /* Prints the load's one error line: "path:line: message", or "path: message" when line is 0. */
 void ao_load_report(const char *path, size_t line, const char *format, ...);
 
-/* True when a mesh of so many triangles and vertices fits in what budget has left (ao_budget_mesh);
+/* True when a mesh of so many triangles and vertices fits in what budget has left (ao_budget_charge);
  * else reports "path:line: T triangles and V vertices need about ..." and returns false. */
 bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, const char *path,
                   size_t line);
 
 /* ao_load_fits for unique meshes of so many triangles and vertices placed so many times in all
- * (ao_budget_model); the report names the placements too. */
+ * (ao_budget_charge); the report names the placements too. */
 bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements,
                         const char *path);
 

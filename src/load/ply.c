@@ -92,7 +92,7 @@ static bool ply_error(const struct ply_reader *r, const char *format, ...)
 /* True when so many triangles and vertices fit in the budget; else reports where the reader is. */
 static bool within_budget(const struct ply_reader *r, uint64_t triangles, uint64_t vertices)
 {
-    uint64_t charge = ao_budget_mesh(triangles, vertices);
+    uint64_t charge = ao_budget_charge(r->budget, triangles, vertices, 0);
     if (ao_budget_fits(r->budget, charge))
         return true;
     char why[200];

@@ -59,7 +59,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     const char *path = fuzz_temp_path("input" AO_FUZZ_EXT);
     fuzz_write_file(path, data, size);
     struct ao_model model;
-    struct ao_budget budget = {(uint64_t)256 << 20, 0};
+    struct ao_budget budget = {.limit = (uint64_t)256 << 20};
     if (ao_model_load_budget(&model, path, &budget))
         check(&model);
     ao_model_finish(&model);
