@@ -45,10 +45,11 @@ bool ao_budget_take_mesh(struct ao_budget *budget, uint64_t triangles, uint64_t 
     *charge = ao_budget_charge(budget, triangles, vertices, 0);
     if (!ao_budget_take(budget, *charge))
         return false;
-    const uint64_t more = AO_BUDGET_TRIANGLE - AO_BUDGET_TRIANGLE_COMPACT;
-    if (budget->bvh == AO_BVH_AUTO)
-        budget->surplus += triangles < (UINT64_MAX - budget->surplus) / more ? triangles * more
-                                                                             : UINT64_MAX - budget->surplus;
+    if (budget->bvh == AO_BVH_AUTO) {   /* saturating: past UINT64_MAX, MEDIUM fits no budget anyway */
+        const uint64_t per_triangle = AO_BUDGET_TRIANGLE - AO_BUDGET_TRIANGLE_COMPACT;
+        uint64_t more = triangles <= UINT64_MAX / per_triangle ? triangles * per_triangle : UINT64_MAX;
+        budget->surplus = more <= UINT64_MAX - budget->surplus ? budget->surplus + more : UINT64_MAX;
+    }
     return true;
 }
 
