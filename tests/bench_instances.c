@@ -7,7 +7,9 @@
  *                                       once), DIR/thousand.glb (the same placed 1000 times, framed
  *                                       on the whole) and once.scene, thousand.scene (the same two
  *                                       seen from beside the first sphere)
- *   bench_instances [--rounds N] [--instancing auto|always|never] SCENE...   measures */
+ *   bench_instances [--rounds N] [--instancing auto|always|never] [--ao-distance D] SCENE...
+ *                                       measures (--ao-distance: the occlusion range, default the
+ *                                       scene's) */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -85,6 +87,7 @@ int main(int argc, char **argv)
     if (argc == 3 && strcmp(argv[1], "--generate") == 0)
         return generate(argv[2]);
     int first = 1, rounds = 5;
+    double ao_distance = 0.0;   /* 0: the scene's */
     enum ao_instancing mode = AO_INSTANCING_AUTO;
     while (first + 1 < argc && strncmp(argv[first], "--", 2) == 0) {
         if (strcmp(argv[first], "--rounds") == 0)
@@ -93,14 +96,16 @@ int main(int argc, char **argv)
             mode = strcmp(argv[first + 1], "always") == 0  ? AO_INSTANCING_ALWAYS
                    : strcmp(argv[first + 1], "never") == 0 ? AO_INSTANCING_NEVER
                                                             : AO_INSTANCING_AUTO;
+        else if (strcmp(argv[first], "--ao-distance") == 0)
+            ao_distance = atof(argv[first + 1]);
         else
             break;
         first += 2;
     }
     int files = argc - first;
-    if (files < 1 || files > MAX_FILES || rounds < 1 || rounds > MAX_ROUNDS) {
+    if (files < 1 || files > MAX_FILES || rounds < 1 || rounds > MAX_ROUNDS || !(ao_distance >= 0.0)) {
         fprintf(stderr, "usage: bench_instances --generate DIR | [--rounds 1..%d] [--instancing auto|always|never] "
-                        "SCENE... (at most %d)\n", MAX_ROUNDS, MAX_FILES);
+                        "[--ao-distance D] SCENE... (at most %d)\n", MAX_ROUNDS, MAX_FILES);
         return 2;
     }
     static double load[MAX_FILES][MAX_ROUNDS], build[MAX_FILES][MAX_ROUNDS], pass[MAX_FILES][MAX_ROUNDS],
@@ -113,6 +118,8 @@ int main(int argc, char **argv)
             double start = bench_now();
             if (!ao_scene_load_with(&scene, argv[first + f], &options))
                 return 1;
+            if (ao_distance > 0.0)
+                scene.ao_distance = (float)ao_distance;
             double loaded = bench_now();
             struct ao_tracer *tracer = ao_tracer_create_with(&scene, AO_BACKEND_EMBREE);
             if (!tracer)
