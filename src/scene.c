@@ -1104,8 +1104,8 @@ static bool settle_bvh(struct ao_scene *s, const struct ao_budget *budget, bool 
         return false;
     s->bvh = ao_budget_bvh(budget);
     if (budget->bvh == AO_BVH_AUTO && s->bvh == AO_BVH_COMPACT)
-        add_note(s, s->name, "BVH built compact to fit the scene budget (rays 15-25 % slower; a larger "
-                          "--scene-budget gets the faster one)");
+        add_note(s, s->name, "BVH built compact to fit the scene budget (slower rays; a larger "
+                             "--scene-budget gets the faster BVH)");
     return true;
 }
 
