@@ -84,7 +84,7 @@ import math, struct, sys
 png, pfm, w, h = sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4])
 data = open(png, 'rb').read()
 assert data[:8] == b'\x89PNG\r\n\x1a\n', 'no PNG signature'
-assert data[12:16] == b'IHDR' and struct.unpack('>II', data[16:24]) == (w, h), 'PNG size'
+assert data[12:16] == b'IHDR' and struct.unpack('>II', data[16:24]) == (w, h), ('PNG size', struct.unpack('>II', data[16:24]), w, h)
 data = open(pfm, 'rb').read()
 header = data.split(b'\n', 3)
 assert header[0] == b'PF' and header[1].split() == [str(w).encode(), str(h).encode()], 'PFM header'
@@ -568,11 +568,34 @@ else
     done
     # Release any button a drag above left down; then the viewer must still answer, with a
     # screenshot at the size the title gives once the last resize has taken.
-    # (Resumed if paused: a restart while paused can leave a preview on screen, and S saves full
-    # frames only.)
+    # Every input sent has been handled once a pause toggled after them shows in the title (X
+    # delivers events in order; under TSan the viewer drains the 200 inputs seconds after xdotool
+    # sent them, so a resize could still come between reading the title and saving). It ends
+    # resumed: a restart while paused can leave a preview on screen, and S saves full frames only.
+    # The last resize has then taken once the title's size holds for a second (a resize restarts
+    # 0.15 s after its last event).
     xdotool mouseup 1 mouseup 3 2>/dev/null
-    sleep 0.5
-    [[ $(title) == *" — paused" ]] && press space
+    paused() { [[ $(title) == *" — paused" ]]; }
+    for _ in 1 2; do
+        if paused; then was=0; else was=1; fi
+        press space
+        for _ in $(seq 400); do
+            if paused; then now=0; else now=1; fi
+            [ "$now" != "$was" ] && break
+            sleep 0.05
+        done
+        [ "$now" != "$was" ] || fail "Space never toggled the pause in the title"
+        paused || break
+    done
+    size="" held=0
+    for _ in $(seq 100); do
+        now=""
+        [[ $(title) =~ spheres.scene\ —\ ([0-9]+x[0-9]+)\ — ]] && now=${BASH_REMATCH[1]}
+        if [ -n "$now" ] && [ "$now" = "$size" ]; then held=$((held + 1)); else held=0 size=$now; fi
+        [ "$held" -ge 5 ] && break
+        sleep 0.2
+    done
+    [ "$held" -ge 5 ] || fail "the size in the title never held for a second"
     wait_title "spheres.scene — [0-9]+x[0-9]+ — "
     [[ $(title) =~ spheres.scene\ —\ ([0-9]+)x([0-9]+)\ — ]] || fail "no size in the title"
     press s
