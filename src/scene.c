@@ -1046,6 +1046,16 @@ static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
     return true;
 }
 
+/* Records in a placed scene the BVH its budget gives it (ao_budget_bvh: every charge is made by
+ * now), with a note when AUTO gave COMPACT. */
+static void settle_bvh(struct ao_scene *s, const struct ao_budget *budget)
+{
+    s->bvh = ao_budget_bvh(budget);
+    if (budget->bvh == AO_BVH_AUTO && s->bvh == AO_BVH_COMPACT)
+        add_note(s, s->name, "BVH built compact to fit the scene budget (slower rays; a larger "
+                             "--scene-budget gets the faster BVH)");
+}
+
 /* Frees what the world holds while a scene is read. */
 static void world_finish(struct world *w)
 {
@@ -1090,23 +1100,12 @@ static bool parse_text(struct ao_scene *scene, const char *text, const char *pat
         ok = tokenize(&c, line) && (c.count == 0 || parse_statement(&c, scene, &w));
     }
     ok = ok && place(scene, &w, &c);
+    if (ok)
+        settle_bvh(scene, budget);
     world_finish(&w);
     if (!ok)
         ao_scene_finish(scene);
     return ok;
-}
-
-/* Records in a loaded scene (ok) the BVH its budget gives it (ao_budget_bvh), with a note when AUTO
- * gave COMPACT; returns ok. */
-static bool settle_bvh(struct ao_scene *s, const struct ao_budget *budget, bool ok)
-{
-    if (!ok)
-        return false;
-    s->bvh = ao_budget_bvh(budget);
-    if (budget->bvh == AO_BVH_AUTO && s->bvh == AO_BVH_COMPACT)
-        add_note(s, s->name, "BVH built compact to fit the scene budget (slower rays; a larger "
-                             "--scene-budget gets the faster BVH)");
-    return true;
 }
 
 bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
@@ -1119,8 +1118,7 @@ bool ao_scene_parse_with(struct ao_scene *scene, const char *text, const char *p
                          const struct ao_scene_options *options)
 {
     struct ao_budget budget = {.limit = options->budget, .bvh = options->bvh};
-    return settle_bvh(scene, &budget,
-                      parse_text(scene, text, path, &budget, options->instancing));
+    return parse_text(scene, text, path, &budget, options->instancing);
 }
 
 /* The ground quad added under a bare mesh whose box is lo..hi: 50 times as wide as the mesh's
@@ -1169,6 +1167,8 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budge
             ok = fail(&c, "out of memory");
     }
     ok = ok && place(s, &w, &c);
+    if (ok)
+        settle_bvh(s, budget);
     world_finish(&w);
     if (!ok)
         ao_scene_finish(s);
@@ -1191,8 +1191,7 @@ bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct a
     struct ao_budget budget = {.limit = options->budget, .bvh = options->bvh};
     memset(scene, 0, sizeof *scene);
     if (ao_mesh_is_mesh_path(path))
-        return settle_bvh(scene, &budget,
-                          load_bare_mesh(scene, path, &budget, options->ground, options->instancing));
+        return load_bare_mesh(scene, path, &budget, options->ground, options->instancing);
     char *text;
     size_t got;
     if (!ao_file_read_budget(path, &budget, &text, &got))
@@ -1202,7 +1201,7 @@ bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct a
         ao_file_report("%s: not a text file (it contains a NUL byte)", path);
     ok = ok && parse_text(scene, text, path, &budget, options->instancing);
     free(text);
-    return settle_bvh(scene, &budget, ok);
+    return ok;
 }
 
 void ao_scene_finish(struct ao_scene *scene)
