@@ -17,6 +17,9 @@ enum { MAX_TOKENS = 64, MAX_LINE = 4096, MAX_VALUES = 3 };
 
 static const double PI = 3.14159265358979323846;
 static const float DEFAULT_ALBEDO = 0.8f;
+/* The value of eye rays that miss when the file says nothing: a white sky, as the shipped scenes
+ * have it (a bare mesh against black read as a silhouette cut out of the night). */
+static const float DEFAULT_BACKGROUND = 1.0f;
 
 /* Where the parser is, for "file:line: message" reports. */
 struct cursor {
@@ -170,13 +173,21 @@ static bool colour(struct cursor *c, const char *key, struct ao_vec3 *out)
     return true;
 }
 
-static bool albedo(struct cursor *c, struct ao_vec3 *out)
+/* A colour whose values must lie in [0, 1]: an albedo, or the background (brighter than an open
+ * white surface it would be no sky, and it would scale the relative error that --target-error stops
+ * at, e.g. 3e38 meets 1 % at once; below 0, an error column of inf). */
+static bool unit_colour(struct cursor *c, const char *key, struct ao_vec3 *out)
 {
-    if (!colour(c, "albedo", out))
+    if (!colour(c, key, out))
         return false;
     if (out->x < 0 || out->x > 1 || out->y < 0 || out->y > 1 || out->z < 0 || out->z > 1)
-        return fail(c, "'albedo': values must lie in [0, 1]");
+        return fail(c, "'%s': values must lie in [0, 1]", key);
     return true;
+}
+
+static bool albedo(struct cursor *c, struct ao_vec3 *out)
+{
+    return unit_colour(c, "albedo", out);
 }
 
 /* Takes the next key of a statement; reports duplicates through the seen mask. */
@@ -619,7 +630,8 @@ static bool parse_statement(struct cursor *c, struct ao_scene *s, struct world *
     if (strcmp(word, "mesh") == 0)
         return parse_mesh(c, s, w);
     if (strcmp(word, "background") == 0)
-        return colour(c, word, &s->background) && (c->next == c->count || fail(c, "'background': expected 1 or 3 numbers"));
+        return unit_colour(c, word, &s->background) &&
+               (c->next == c->count || fail(c, "'background': expected 1 or 3 numbers"));
     if (strcmp(word, "ao-distance") == 0) {
         double d;
         if (!scalar(c, word, &d))
@@ -1076,6 +1088,7 @@ static void begin(struct ao_scene *s, const char *path)
     const char *slash = strrchr(path, '/');
     snprintf(s->name, sizeof s->name, "%s", slash ? slash + 1 : path);
     s->ao_distance = INFINITY;
+    s->background = ao_vec3_make(DEFAULT_BACKGROUND, DEFAULT_BACKGROUND, DEFAULT_BACKGROUND);
 }
 
 /* ao_scene_parse charging budget. */

@@ -49,7 +49,7 @@ struct ao_scene {
     double origin[3];             /* world position of the local frame's (0, 0, 0) */
     struct ao_camera camera;      /* local frame */
     int width, height;            /* the file's `image` size, 0 when not given */
-    struct ao_vec3 background;    /* value of eye rays that miss */
+    struct ao_vec3 background;    /* value of eye rays that miss, in [0, 1]; 1 unless the file says */
     float ao_distance;            /* occlusion range; INFINITY when not given */
     struct ao_sphere *spheres;    /* centres in the local frame */
     size_t sphere_count;

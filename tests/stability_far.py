@@ -8,7 +8,7 @@ A sphere of radius 1 resting on a ground quad of +-2e4 at (s, s, s); cosine samp
 no AA, 96x72. Without AA a pixel's value is rho K / N, K ~ binomial(N, q), q = exact / rho; the
 worst pixel's one-sided binomial tail is given as the z of a normal tail of the same probability,
 and the mean error over the pixels as a t statistic (standard error sqrt(sum rho^2 q (1-q) / N) /
-pixels). Pixels that miss (background -1) are left out."""
+pixels). Pixels that miss (background 1, more than any point of albedo 0.8 can give) are left out."""
 import math
 import os
 import struct
@@ -56,7 +56,7 @@ def measure(aoview, exact, shift, work):
     s = shift
     scene = os.path.join(work, 'far.scene')
     with open(scene, 'w') as f:
-        f.write('camera eye %r %r %r target %r %r %r fov 40\nbackground -1\n' % (s, s + 3.2, s + 6.4, s, s + 0.7, s))
+        f.write('camera eye %r %r %r target %r %r %r fov 40\nbackground 1\n' % (s, s + 3.2, s + 6.4, s, s + 0.7, s))
         f.write('quad corner %r %r %r edge1 0 0 4e4 edge2 4e4 0 0 albedo 0.8\n' % (s - 2e4, s, s - 2e4))
         f.write('sphere center %r %r %r radius 1 albedo 0.8\n' % (s, s + 1, s))
     common = ['--no-aa', '--size', '%dx%d' % (W, H), '-q']
@@ -66,7 +66,7 @@ def measure(aoview, exact, shift, work):
     ref, img = read_pfm(os.path.join(work, 'exact.pfm')), read_pfm(os.path.join(work, 'ao.pfm'))
     worst, where, err, var, count = 0.0, None, 0.0, 0.0, 0
     for i, (e, v) in enumerate(zip(ref, img)):
-        if e < 0:
+        if e > RHO:
             continue
         q = min(1.0, max(0.0, e / RHO))
         k = round(v * N / RHO)

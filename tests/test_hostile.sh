@@ -444,6 +444,14 @@ for size in 65536x65536 46341x46341 16384x16384 4294967297x1 1844674407370955161
   refuse 2 "--size: expected WxH" --size "$size" "$root/assets/scenes/spheres.scene"
 done
 
+# ---- background outside [0, 1], checked as albedo is: -1 made the error column inf, 3e38 met
+# --target-error 0.01 at 25 spp (the error is relative to the image's mean)
+for value in -1 3e38 "0.5 1.5 0.5"; do
+  printf 'background %s\nsphere center 0 0 0 radius 1\n' "$value" > background.scene
+  refuse 1 "background.scene:1: 'background': values must lie in [0, 1]" background.scene
+done
+rm -f background.scene
+
 # ---- counts near INT_MAX and beyond
 for spp in 2147483647 2147483648 4294967297 1073741825 18446744073709551617; do
   refuse 2 "--spp: expected a whole number from 1 to 1073741824" --spp "$spp"
