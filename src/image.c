@@ -318,8 +318,9 @@ bool ao_image_write_linear(const char *path, const float *rgb, int width, int he
 }
 
 /* Reads one whitespace-delimited header token into buf and consumes the one whitespace
- * character after it; false when the token is missing, too long or not followed by whitespace. */
-static bool read_token(FILE *f, char *buf, size_t size)
+ * character after it, which *delimiter gets; false when the token is missing, too long or not
+ * followed by whitespace. */
+static bool read_token(FILE *f, char *buf, size_t size, int *delimiter)
 {
     int c;
     while ((c = getc(f)) != EOF && isspace(c)) {
@@ -331,6 +332,7 @@ static bool read_token(FILE *f, char *buf, size_t size)
         buf[n++] = (char)c;
     }
     buf[n] = '\0';
+    *delimiter = c;
     return n > 0 && c != EOF;
 }
 
@@ -345,20 +347,23 @@ static bool parse_side(const char *s, int *out)
     return true;
 }
 
-/* Parses "PF w h scale"; the scale's sign gives the byte order, its magnitude is ignored. */
-static bool read_header(FILE *f, int *width, int *height, bool *little_endian,
+/* Parses "PF w h scale"; the scale's sign gives the byte order, its magnitude is ignored. *cr:
+ * the scale ended at a carriage return, which may be the first half of a CRLF line end. */
+static bool read_header(FILE *f, int *width, int *height, bool *little_endian, bool *cr,
                         struct failure *why)
 {
     char magic[8], w[16], h[16], scale[64];
-    if (!read_token(f, magic, sizeof magic))
+    int delimiter;
+    if (!read_token(f, magic, sizeof magic, &delimiter))
         return fail(why, "not a PFM file", 0);
     if (strcmp(magic, "Pf") == 0)
         return fail(why, "greyscale PFM (Pf) is not supported, expected colour (PF)", 0);
     if (strcmp(magic, "PF") != 0)
         return fail(why, "not a PFM file", 0);
-    if (!read_token(f, w, sizeof w) || !read_token(f, h, sizeof h) ||
-        !read_token(f, scale, sizeof scale))
+    if (!read_token(f, w, sizeof w, &delimiter) || !read_token(f, h, sizeof h, &delimiter) ||
+        !read_token(f, scale, sizeof scale, &delimiter))
         return fail(why, "malformed header", 0);
+    *cr = delimiter == '\r';
     if (!parse_side(w, width) || !parse_side(h, height) ||
         (int64_t)*width * *height > AO_IMAGE_MAX_PIXELS)
         return fail(why, "bad or too large width and height in header", 0);
@@ -370,14 +375,23 @@ static bool read_header(FILE *f, int *width, int *height, bool *little_endian,
     return true;
 }
 
-/* Checks that exactly need bytes remain in f after the header. */
-static bool check_payload_size(FILE *f, uint64_t need, struct failure *why)
+/* Checks that exactly need bytes remain in f after the header. After a carriage return (cr), one
+ * more byte that is a line feed ends a CRLF header line (files written on Windows) and is skipped:
+ * the size decides, since a line feed may as well be a pixel's first byte after a lone CR. */
+static bool check_payload_size(FILE *f, uint64_t need, bool cr, struct failure *why)
 {
     struct stat st;
     long pos = ftell(f);
     if (pos < 0 || fstat(fileno(f), &st) != 0)
         return fail(why, "cannot read", errno);
     uint64_t left = st.st_size > pos ? (uint64_t)(st.st_size - pos) : 0;
+    if (cr && left == need + 1) {
+        int c = getc(f);
+        if (c == '\n')
+            left--;
+        else if (c != EOF)
+            ungetc(c, f);
+    }
     if (left < need)
         return fail(why, "truncated pixel data", 0);
     if (left > need)
@@ -386,10 +400,10 @@ static bool check_payload_size(FILE *f, uint64_t need, struct failure *why)
 }
 
 /* Reads the rows (stored bottom to top) into a malloc'd top-to-bottom buffer of finite floats. */
-static float *read_pixels(FILE *f, int width, int height, bool little_endian, struct failure *why)
+static float *read_pixels(FILE *f, int width, int height, bool little_endian, bool cr, struct failure *why)
 {
     size_t row_floats = (size_t)width * 3, count = row_floats * (size_t)height;
-    if (!check_payload_size(f, (uint64_t)count * 4, why))
+    if (!check_payload_size(f, (uint64_t)count * 4, cr, why))
         return NULL;
     float *rgb = malloc(count * sizeof *rgb);
     if (!rgb) {
@@ -437,17 +451,17 @@ static bool read_pfm(const char *path, int want_width, int want_height, float **
         return false;
     }
     struct failure why = {NULL, 0};
-    bool little_endian;
+    bool little_endian, cr;
     int w, h;
     float *pixels = NULL;
-    if (read_header(f, &w, &h, &little_endian, &why)) {
+    if (read_header(f, &w, &h, &little_endian, &cr, &why)) {
         if (want_width && (w != want_width || h != want_height)) {
             fclose(f);
             fprintf(stderr, "%s: the image is %dx%d, not the %dx%d needed\n", path, w, h,
                     want_width, want_height);
             return false;
         }
-        pixels = read_pixels(f, w, h, little_endian, &why);
+        pixels = read_pixels(f, w, h, little_endian, cr, &why);
     }
     fclose(f);
     if (!pixels) {

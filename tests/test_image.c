@@ -252,6 +252,33 @@ static void test_pfm_big_endian_and_loose_header(void **state)
     free(rgb);
 }
 
+/* Header lines ended by CR LF, as a tool writing in Windows' text mode makes them: read as the
+ * same image (the LF after the scale's CR was taken for the first pixel byte, so the file was
+ * refused as holding data after its pixels); a lone CR before a pixel whose first byte is an LF
+ * stays a pixel byte. */
+static void test_pfm_crlf_header(void **state)
+{
+    struct fixture *fx = *state;
+    unsigned char payload[24];
+    for (int i = 0; i < 6; i++)
+        put_be(payload + 4 * i, (float)(i + 1));
+    write_pfm_raw(in_dir(fx, "crlf.pfm"), "PF\r\n2 1\r\n1.0\r\n", payload, sizeof payload);
+    float *rgb = NULL;
+    int w = 0, h = 0;
+    assert_true(ao_image_read_pfm(fx->path, &rgb, &w, &h));
+    assert_int_equal(w, 2);
+    assert_int_equal(h, 1);
+    for (int i = 0; i < 6; i++)
+        assert_float_equal(rgb[i], (float)(i + 1), 0.0f);
+    free(rgb);
+    unsigned char lf_first[12] = {0x0a, 0, 0x80, 0x3f, 0, 0, 0, 0x40, 0, 0, 0x40, 0x40}; /* 1.0000012, 2, 3 LE */
+    write_pfm_raw(in_dir(fx, "cr.pfm"), "PF\r1 1\r-1.0\r", lf_first, sizeof lf_first);
+    assert_true(ao_image_read_pfm(fx->path, &rgb, &w, &h));
+    assert_float_equal(rgb[1], 2.0f, 0.0f);
+    assert_true(rgb[0] > 1.0f && rgb[0] < 1.00001f);
+    free(rgb);
+}
+
 static void test_pfm_malformed_rejected(void **state)
 {
     struct fixture *fx = *state;
@@ -373,6 +400,7 @@ int main(void)
         cmocka_unit_test_setup_teardown(test_pfm_round_trip, setup, teardown),
         cmocka_unit_test_setup_teardown(test_pfm_layout, setup, teardown),
         cmocka_unit_test_setup_teardown(test_pfm_big_endian_and_loose_header, setup, teardown),
+        cmocka_unit_test_setup_teardown(test_pfm_crlf_header, setup, teardown),
         cmocka_unit_test_setup_teardown(test_pfm_malformed_rejected, setup, teardown),
         cmocka_unit_test_setup_teardown(test_png_round_trip, setup, teardown),
         cmocka_unit_test_setup_teardown(test_png_read_rejects_garbage, setup, teardown),
