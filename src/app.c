@@ -173,22 +173,34 @@ const char *ao_app_signal_name(int sig)
     return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : sig == SIGHUP ? "SIGHUP" : "a signal";
 }
 
+/* What a signal that ends the process at once says. */
+enum ending { ENDING_SILENT, ENDING_LOADING, ENDING_NOTHING_WRITTEN, ENDING_SECOND };
+
 /* Ends the process at once with 128 + sig: removes the temporary files of writes in progress and
- * a --stats file this run created and wrote no row into; with `say`, one line first (write(2):
- * the main thread may hold stderr's lock). */
-static void end_at_once(const struct ao_interrupt *in, int sig, bool say)
+ * a --stats file this run created and wrote no row into; then says, in one line, what the ending
+ * left (write(2): the main thread may hold stderr's lock): for a second signal whether -o was
+ * written, which the count of finished writes tells, now that none can begin or end. */
+static void end_at_once(const struct ao_interrupt *in, int sig, enum ending ending)
 {
     ao_image_discard_temporaries();
     const struct ao_stats *st = in->stats;
     if (st && atomic_load(&st->created) && !atomic_load(&st->started))
         unlink(st->path);
-    if (say) {
-        char line[96];
-        int n = snprintf(line, sizeof line, "aoview: interrupted by %s before rendering: nothing written\n",
-                         ao_app_signal_name(sig));
-        if (write(STDERR_FILENO, line, (size_t)n) < 0) {
-            /* nowhere left to say it */
-        }
+    char line[AO_TEXT_SIZE + 128], name[AO_TEXT_SIZE];
+    const char *what = ao_app_signal_name(sig);
+    int n = 0;
+    if (ending == ENDING_LOADING)
+        n = snprintf(line, sizeof line, "aoview: interrupted by %s before rendering: nothing written\n", what);
+    else if (ending == ENDING_NOTHING_WRITTEN)
+        n = snprintf(line, sizeof line, "aoview: interrupted by %s: nothing written\n", what);
+    else if (ending == ENDING_SECOND)
+        n = snprintf(line, sizeof line, atomic_load(&in->writing) && ao_image_written() >
+                                                                           atomic_load(&in->written_before)
+                                            ? "aoview: a second %s ended the run once %s was written\n"
+                                            : "aoview: a second %s ended the run: %s not written\n",
+                     what, ao_text_escape(in->output ? in->output : "aoview.png", name, sizeof name));
+    if (ending != ENDING_SILENT && !in->silent && write(STDERR_FILENO, line, (size_t)n) < 0) {
+        /* nowhere left to say it */
     }
     _exit(128 + sig);
 }
@@ -200,12 +212,16 @@ static void *watch_signals(void *arg)
     if (sigwait(&in->signals, &sig) != 0)
         return NULL;
     struct ao_render *render = atomic_load(&in->render);
-    if (!render || !atomic_load(&in->graceful))
-        end_at_once(in, sig, !atomic_load(&in->rendering) && !in->silent);
+    if (!atomic_load(&in->rendering))
+        end_at_once(in, sig, ENDING_LOADING);
+    if (!render)
+        end_at_once(in, sig, ENDING_NOTHING_WRITTEN);
+    if (!atomic_load(&in->graceful))
+        end_at_once(in, sig, ENDING_SILENT);
     atomic_store(&in->caught, sig);
     ao_render_stop(render);
     if (sigwait(&in->signals, &sig) == 0)
-        end_at_once(in, sig, false);
+        end_at_once(in, sig, ENDING_SECOND);
     return NULL;
 }
 
@@ -286,6 +302,7 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     }
 
     /* Scene, size, tracer. */
+    app->interrupt.output = opts->output ? opts->output : "aoview.png";
     char name[AO_TEXT_SIZE];
     struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh};
     if (!ao_scene_load_with(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, &load))
@@ -368,7 +385,7 @@ int ao_app_write(struct ao_app *app, const struct ao_options *opts, const struct
 {
     const char *output = opts->output ? opts->output : "aoview.png";
     const char *bar = app->reporter.drawn_at > 0.0 ? "\n" : ""; /* ends the progress bar's line */
-    if (why && frame && frame->info.spp == 0) {
+    if (why && frame && frame->info.pass == 0) {
         fprintf(stderr, "%saoview: %s before the first pass ended: nothing written\n", bar, why);
         return status;
     }
@@ -378,6 +395,8 @@ int ao_app_write(struct ao_app *app, const struct ao_options *opts, const struct
             ao_app_on_pass(&frame->info, &app->reporter);
     }
     const float *difference = opts->view == AO_VIEW_MODE_DIFFERENCE ? app->reference : NULL;
+    atomic_store(&app->interrupt.written_before, ao_image_written());
+    atomic_store(&app->interrupt.writing, true);
     if (!frame || !ao_app_write_output(output, frame, app->scene.name, opts->seed, difference))
         return AO_EXIT_RUNTIME;
     char name[AO_TEXT_SIZE];

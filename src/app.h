@@ -47,18 +47,23 @@ struct ao_reporter {
 
 /* SIGINT/SIGTERM/SIGHUP: while loading (before ao_app_watch), the first exits at once with one
  * line; then it stops the renderer at the next tile so that the front end writes what it has
- * (graceful), or exits at once; a second exits at once. Exiting at once removes the temporary
- * files of writes in progress and a --stats file this run created and wrote no row into; the
- * status is 128 + the signal. The signals are blocked in every thread and taken by a watcher
- * thread with sigwait, so nothing runs in a signal handler. */
+ * (graceful), or exits at once (the window: silently, as by default; without a renderer to stop,
+ * --compare's sides: with one line); a second exits at once with one line saying whether the
+ * output was written. Exiting at once removes the temporary files of writes in progress and a
+ * --stats file this run created and wrote no row into; the status is 128 + the signal. The
+ * signals are blocked in every thread and taken by a watcher thread with sigwait, so nothing runs
+ * in a signal handler. */
 struct ao_interrupt {
     sigset_t signals;
     struct ao_render *_Atomic render;  /* the renderer a graceful signal stops */
     atomic_bool rendering;   /* ao_app_watch was called: loading is over */
     atomic_bool graceful;    /* headless: stop and write; in the window: exit as by default */
     atomic_int caught;
-    bool silent;             /* no line when a signal ends loading (aoview-mpi's other ranks) */
+    bool silent;             /* no line when a signal ends the process (aoview-mpi's other ranks) */
     const struct ao_stats *stats;
+    const char *output;      /* -o as the lines name it (ao_app_load sets it) */
+    atomic_bool writing;     /* ao_app_write began writing the output... */
+    atomic_uint written_before;   /* ...when ao_image_written said this */
 };
 
 /* Everything a front end owns around its renderer; zero-initialise, release with ao_app_finish. */
@@ -133,9 +138,10 @@ bool ao_app_wait(struct ao_app *app, int *sig);
 
 /* Writes -o from frame (NULL: none to write, a failure); after an interruption, `why` (what
  * stopped the run) is printed with frame's spp first, and with `last_row` the frame is added as a
- * last --stats row (the render thread must have been joined); a frame of 0 spp (interrupted
- * before its first pass ended) is not written, and existing files are left alone. Returns the
- * exit status, `status` when everything was written (or nothing was to be). Main thread. */
+ * last --stats row (the render thread must have been joined); a frame of no finished pass
+ * (interrupted before its first pass ended: pixels without a sample) is not written, and existing
+ * files are left alone. Returns the exit status, `status` when everything was written (or nothing
+ * was to be). Main thread. */
 int ao_app_write(struct ao_app *app, const struct ao_options *opts, const struct ao_frame *frame, const char *why,
                  bool last_row, int status);
 

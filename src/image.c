@@ -75,6 +75,7 @@ static bool fail(struct failure *out, const char *reason, int err)
 enum { TEMP_SLOTS = 8 };
 static pthread_mutex_t temps_lock = PTHREAD_MUTEX_INITIALIZER;
 static char *temps[TEMP_SLOTS];
+static atomic_uint written;   /* images renamed into place, under temps_lock */
 
 /* The longest file name in the directory of path (NAME_MAX where it cannot be asked). */
 static size_t name_max(const char *path)
@@ -120,6 +121,8 @@ static int finish_temp(int slot, const char *path)
     int err = path && rename(tmp, path) != 0 ? errno : 0;
     if (!path || err)
         unlink(tmp);
+    else
+        atomic_fetch_add(&written, 1);
     temps[slot] = NULL;
     pthread_mutex_unlock(&temps_lock);
     free(tmp);
@@ -162,6 +165,11 @@ static FILE *create_temp(const char *path, int *slot)
         errno = err;
     }
     return f;
+}
+
+unsigned ao_image_written(void)
+{
+    return atomic_load(&written);
 }
 
 void ao_image_discard_temporaries(void)

@@ -23,8 +23,12 @@ void ao_image_encode_srgb8(const float *linear, size_t count, uint8_t *out);
  * false after one line naming path. Any thread. */
 bool ao_image_check_output(const char *path);
 
+/* How many images this process has renamed into place so far (writes finished). Any thread. */
+unsigned ao_image_written(void);
+
 /* Removes the temporary files of the writes in progress (in any thread); for a process about to
- * _exit: no write can begin or end afterwards (they wait for ever). */
+ * _exit: no write can begin or end afterwards (they wait for ever), so ao_image_written stays as
+ * it is from then on. */
 void ao_image_discard_temporaries(void);
 
 /* Writes an RGB8 PNG, rows top to bottom, via a temporary file renamed into place; on failure

@@ -189,6 +189,9 @@ static int run(struct app *app, const struct ao_options *opts)
     }
     if (!(base->render = ao_render_create(&single, &first)))
         return AO_EXIT_RUNTIME;
+    /* Headless, a signal from now on stops the render and writes what it has (or says that there is
+     * nothing yet), also while the PNG's room is checked below. */
+    atomic_store(&base->interrupt.graceful, !window);
     ao_app_watch(base, base->render);
 
     /* Window, or headless output (also where no window can be opened). */

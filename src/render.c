@@ -26,12 +26,13 @@
 enum { AUTO_SAMPLES = 1 << 22, AUTO_PER_RAY = 8 };
 
 /* One tile of the image as a gather moves it (struct ao_render_share's gather): its running average
- * (its pixels row by row, clipped to the image), its error estimate (as struct ao_frame's) and the
- * fewest samples a pixel of it has. */
+ * (its pixels row by row, clipped to the image), its error estimate (as struct ao_frame's), the
+ * most samples a pixel of it has and their sum over its pixels. */
 struct tile_record {
     float rgb[3 * AO_TILE * AO_TILE];
     float error;
-    uint32_t fewest;
+    uint32_t most;
+    uint64_t samples;
 };
 
 /* A thread's share of a pass: the tiles of the pass's work list in tile rows k, k + threads,
@@ -570,7 +571,8 @@ static int pack_records(struct ao_render *r)
         struct ao_tile rect = tile_rect(r, t);
         bool traced = r->tiles[t].passes > 0;
         float *rgb = record->rgb;
-        record->fewest = UINT32_MAX;
+        record->most = 0;
+        record->samples = 0;
         for (int j = rect.y0; j < rect.y1; j++)
             for (int i = rect.x0; i < rect.x1; i++) {
                 size_t p = (size_t)j * (size_t)r->width + (size_t)i;
@@ -578,7 +580,8 @@ static int pack_records(struct ao_render *r)
                 double inv = n ? 1.0 / n : 0.0;
                 for (int c = 0; c < 3; c++)
                     *rgb++ = traced ? (float)(a->sum[3 * p + c] * inv) : 0.0f;
-                record->fewest = n < record->fewest ? n : record->fewest;
+                record->most = n > record->most ? n : record->most;
+                record->samples += n;
             }
         record->error = tile_error(r, t);
     }
@@ -586,9 +589,10 @@ static int pack_records(struct ao_render *r)
 }
 
 /* With a share: gathers every process's tiles; the leader resolves them into the back frame with
- * info, its spp the fewest samples of a pixel when `fewest` (after an interruption). False when the
- * share stops (or, the leader, memory is short). */
-static bool gather(struct ao_render *r, const struct ao_frame_info *info, bool fewest)
+ * info, its spp and mean spp those of the tiles gathered when `counted` (after an interruption,
+ * when the aborted pass's finished tiles hold more than info says). False when the share stops
+ * (or, the leader, memory is short). */
+static bool gather(struct ao_render *r, const struct ao_frame_info *info, bool counted)
 {
     const struct ao_render_share *share = r->config.share;
     int count = pack_records(r);
@@ -603,7 +607,8 @@ static bool gather(struct ao_render *r, const struct ao_frame_info *info, bool f
     struct ao_frame *f = ao_frames_back(&r->frames, r->width, r->height, r->tiles_x * r->tiles_y);
     if (!f)
         return false;
-    uint32_t least = UINT32_MAX;
+    uint32_t most = 0;
+    uint64_t samples = 0;
     for (int t = 0; t < r->tiles_x * r->tiles_y; t++) {
         const struct tile_record *record = &r->all_records[t];
         struct ao_tile rect = tile_rect(r, t);
@@ -612,11 +617,14 @@ static bool gather(struct ao_render *r, const struct ao_frame_info *info, bool f
             memcpy(f->rgb + 3 * ((size_t)j * (size_t)r->width + (size_t)rect.x0),
                    record->rgb + 3 * (size_t)(j - rect.y0) * (size_t)(rect.x1 - rect.x0), row);
         f->tile_error[t] = record->error;
-        least = record->fewest < least ? record->fewest : least;
+        most = record->most > most ? record->most : most;
+        samples += record->samples;
     }
     frame_facts(r, f, info);
-    if (fewest)
-        f->info.spp = least;
+    if (counted) {
+        f->info.spp = most;
+        f->info.mean_spp = (double)samples / ((double)r->width * (double)r->height);
+    }
     r->ungathered = false;
     return true;
 }
@@ -992,10 +1000,14 @@ const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render)
     if (!f)
         return NULL;
     size_t pixels = (size_t)f->width * (size_t)f->height;
-    uint32_t fewest = UINT32_MAX;
-    for (size_t p = 0; p < pixels; p++)
-        fewest = render->accum.count[p] < fewest ? render->accum.count[p] : fewest;
-    f->info.spp = fewest;
+    uint32_t most = 0;
+    uint64_t samples = 0;
+    for (size_t p = 0; p < pixels; p++) {
+        most = render->accum.count[p] > most ? render->accum.count[p] : most;
+        samples += render->accum.count[p];
+    }
+    f->info.spp = most;
+    f->info.mean_spp = (double)samples / (double)pixels;
     f->info.done = false;
     f->info.rmse = has_reference(render) ? rmse(f->rgb, render->config.reference, 3 * pixels) : NAN;
     return f;

@@ -211,8 +211,9 @@ const struct ao_frame *ao_render_take_frame(struct ao_render *render);
 bool ao_render_wait(struct ao_render *render);
 
 /* After an interruption: stops and joins the render thread, then resolves the accumulation as it
- * stands, the aborted pass's finished tiles included, into a frame whose info.spp is the smallest
- * per-pixel sample count. With a share every process calls it: each sends its tiles through the
+ * stands, the aborted pass's finished tiles included, into a frame whose info.spp is the most
+ * samples a pixel has (as after every pass) and info.mean_spp their mean, both counted from the
+ * pixels. With a share every process calls it: each sends its tiles through the
  * share's gather, and the leader gets the frame (NULL elsewhere, and when the gather failed).
  * Main thread, as the frame consumer; call ao_render_destroy afterwards. */
 const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render);

@@ -36,10 +36,32 @@ interrupt_once() {
   local spp
   spp=$(sed -n 's/.*interrupted by SIG[A-Z]* at \([0-9]*\) spp.*/\1/p' err.txt)
   [ "$(tail -n 1 stats.csv | cut -d, -f2)" = "$spp" ] || fail "SIG$sig: last stats row is not at $spp spp"
+  # spp is the most samples a pixel has, after an interruption as after every pass: the last row's
+  # spp and mean_spp are at least the row's before it (it gave the fewest: rows 39,609,... then 39,81,...)
+  python3 - <<'PY' || fail "SIG$sig: the last stats row counts fewer samples than the one before"
+import csv
+rows = list(csv.DictReader(open('stats.csv')))
+last, before = rows[-1], rows[-2]
+assert int(last['spp']) >= int(before['spp']) and float(last['mean_spp']) >= float(before['mean_spp']), (before, last)
+PY
 }
 interrupt_once INT 130
 interrupt_once TERM 143
 interrupt_once HUP 129
+# The EXR's aoview.spp says the same as the line (exrheader: Debian's openexr).
+if command -v exrheader >/dev/null; then
+  rm -f out.exr stats.csv
+  "$bin" --headless --spp 1000000 --size 96x64 --threads 2 -o out.exr --stats stats.csv 2>err.txt &
+  pid=$!
+  for _ in $(seq 100); do [ -f stats.csv ] && [ "$(wc -l < stats.csv)" -ge 4 ] && break; sleep 0.1; done
+  kill -TERM "$pid"
+  wait "$pid"
+  spp=$(sed -n 's/.*interrupted by SIGTERM at \([0-9]*\) spp.*/\1/p' err.txt)
+  exr_spp=$(exrheader out.exr | sed -n 's/^aoview.spp (type string): "\(.*\)"/\1/p')
+  [ -n "$spp" ] && [ "$exr_spp" = "$spp" ] || fail "SIGTERM: the EXR says aoview.spp '$exr_spp', the line $spp spp"
+else
+  echo "(exrheader absent: the EXR's aoview.spp after a SIGTERM not checked)"
+fi
 
 # untouched WHAT: out.pfm and stats.csv still hold what the test put there, new.csv was not left
 # behind, and no temporary file is.
@@ -134,16 +156,32 @@ for case in "INT 130 stats.csv" "TERM 143 new.csv"; do
   untouched "SIG$sig before the first pass"
 done
 
+# --compare headless has no half-compared image to write: a signal ends it at once, saying so
+# (it ended silently).
+echo good > out.pfm
+"$bin" --headless --compare uniform,cosine --time 100 --size 32x24 -o out.pfm "$root/assets/scenes/spheres.scene" \
+  2>err.txt &
+pid=$!
+sleep 1
+kill -INT "$pid"
+wait "$pid"
+status=$?
+[ "$status" = 130 ] || fail "SIGINT during --compare: exit status $status, expected 130"
+[ "$(tail -n 1 err.txt)" = "aoview: interrupted by SIGINT: nothing written" ] ||
+  fail "SIGINT during --compare: $(cat err.txt)"
+cmp -s out.pfm good.txt || fail "SIGINT during --compare: out.pfm was overwritten"
+
 # Two signals: the second one exits at once, whatever the first was doing, here writing the image
 # of a huge render (a 144 MB PFM), once its first pass is done: the second is sent as soon as the
-# temporary file appears, and must remove it. The kernel hands over the lower-numbered SIGINT
+# temporary file appears, and must remove it, saying so (the first's line alone, "interrupted by
+# SIGINT at 2 spp", read as if the image had been written). The kernel hands over the lower-numbered SIGINT
 # first, so SIGTERM is the second and sets the status. The time bound is on exiting "at once"; a
 # run that waits for the write takes seconds every time, while this shared VM now and then stalls a
 # whole process for about 2 s (the same CPU-bound loop measured 1.3 to 1.7 s from one run to the
 # next), so a slow trial is repeated, up to three.
 second_signal() {
   rm -f big.pfm big.pfm.tmp.* big.csv
-  "$bin" --headless --spp 1000000 --size 4000x3000 --threads 2 -o big.pfm --stats big.csv 2>/dev/null &
+  "$bin" --headless --spp 1000000 --size 4000x3000 --threads 2 -o big.pfm --stats big.csv 2>err.txt &
   local pid=$!
   for _ in $(seq 600); do [ "$(cat big.csv 2>/dev/null | wc -l)" -ge 2 ] && break; sleep 0.05; done
   kill -INT "$pid"
@@ -157,6 +195,8 @@ second_signal() {
   elapsed_ms=$(( ($(date +%s%N) - start) / 1000000 ))
   [ "$status" = 143 ] || fail "SIGINT then SIGTERM: exit status $status, expected 143"
   [ -e big.pfm ] && fail "the second signal let the write finish (or left a partial big.pfm)"
+  [ "$(tail -n 1 err.txt)" = "aoview: a second SIGTERM ended the run: big.pfm not written" ] ||
+    fail "the second signal's line: $(cat err.txt)"
   ls big.pfm.tmp.* >/dev/null 2>&1 && fail "the second signal left the temporary file: $(ls big.pfm.tmp.*)"
 }
 times="" in_write=0
