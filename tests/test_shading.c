@@ -21,7 +21,9 @@
 #include "tracer.h"
 
 enum { SIZE = 64, SPP = 64 };
-static const float BACKGROUND = 7.0f; /* no AO value reaches it: marks pixels that miss */
+/* Marks pixels that miss: a background lies in [0, 1], as AO values do, but every AO value here is
+ * a whole number of SPP-ths (albedo 1, cosine sampling, no AA), which 0.1 is not. */
+static const float BACKGROUND = 0.1f;
 
 /* Writes a unit icosphere subdivided once (42 vertices, 80 triangles) with its vertex positions
  * as normals, into path. */
