@@ -304,7 +304,8 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     /* Scene, size, tracer. */
     app->interrupt.output = opts->output ? opts->output : "aoview.png";
     char name[AO_TEXT_SIZE];
-    struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh};
+    struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh,
+                                    .crease = opts->crease, .crease_set = true};
     if (!ao_scene_load_with(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, &load))
         return AO_EXIT_RUNTIME;
     int width = opts->width ? opts->width : app->scene.width ? app->scene.width : 640;

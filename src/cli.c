@@ -3,6 +3,7 @@
 
 #include "budget.h"
 #include "image.h"
+#include "mesh.h"
 #include "text.h"
 
 #include <ctype.h>
@@ -24,6 +25,7 @@ enum option_id {
     OPT_THREADS, OPT_SEED, OPT_AO_DISTANCE, OPT_STATS, OPT_REFERENCE, OPT_QUIET, OPT_HELP,
     OPT_VERSION, OPT_SAMPLER, OPT_BELOW, OPT_ADAPTIVE, OPT_TARGET_ERROR, OPT_SAVE_FORMAT, OPT_TIME,
     OPT_VIEW, OPT_SHADING, OPT_COMPARE, OPT_PIXEL_SIZE, OPT_SCENE_BUDGET, OPT_GROUND, OPT_BVH,
+    OPT_CREASE_ANGLE,
 };
 
 /* The longest --time: a year, far beyond any render, short of overflowing anything. */
@@ -82,6 +84,7 @@ static const struct option_spec specs[] = {
     {"--time", 0, true, OPT_TIME},
     {"--view", 0, true, OPT_VIEW},
     {"--shading", 0, true, OPT_SHADING},
+    {"--crease-angle", 0, true, OPT_CREASE_ANGLE},
     {"--compare", 0, true, OPT_COMPARE},
     {"--scene-budget", 0, true, OPT_SCENE_BUDGET},
     {"--ground", 0, true, OPT_GROUND},
@@ -107,6 +110,8 @@ static const char usage[] =
     "                        difference (|AO - reference|, needs --reference)\n"
     "                        (default ao)\n"
     "  --shading S           phong | flat mesh normals (default phong)\n"
+    "  --crease-angle DEG    OBJ, PLY, STL without normals: smooth across edges\n"
+    "                        flatter than DEG, 0 (flat) to 180 (default 40)\n"
     "  --compare A,B         two configurations for --time seconds each (default\n"
     "                        10): split live in the window, or with --headless side\n"
     "                        by side in one PNG, or FILE-A and FILE-B for .pfm/.exr;\n"
@@ -209,6 +214,19 @@ static bool parse_distance(const char *name, const char *value, float *out, char
         return true;
     }
     snprintf(msg, msg_size, "%s: expected a finite number greater than 0, got '%s'", name, SHOWN(value));
+    return false;
+}
+
+/* --crease-angle: degrees from 0 to 180. */
+static bool parse_degrees(const char *name, const char *value, double *out, char *msg, size_t msg_size)
+{
+    char *end;
+    double d = strtod(value, &end);
+    if (!isspace((unsigned char)*value) && *end == '\0' && d >= 0.0 && d <= 180.0) {
+        *out = d;
+        return true;
+    }
+    snprintf(msg, msg_size, "%s: expected degrees from 0 to 180, got '%s'", name, SHOWN(value));
     return false;
 }
 
@@ -421,6 +439,7 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
         opts->save_exr = choice == 1;
         return true;
     case OPT_TIME: return parse_seconds(name, value, &opts->time_limit, msg, msg_size);
+    case OPT_CREASE_ANGLE: return parse_degrees(name, value, &opts->crease, msg, msg_size);
     case OPT_VIEW:
         if (!parse_choice(name, value, views, &choice, msg, msg_size))
             return false;
@@ -499,7 +518,7 @@ bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, siz
     *opts = (struct ao_options){
         .spp = 0, .spppp = 0, .adaptive = true, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
         .sequence = AO_SEQUENCE_SOBOL, .below = AO_BELOW_REFLECT,
-        .ao_distance = NAN, .scene_budget = AO_BUDGET_DEFAULT, .ground = true,
+        .ao_distance = NAN, .scene_budget = AO_BUDGET_DEFAULT, .ground = true, .crease = AO_MESH_CREASE_DEFAULT,
     };
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];

@@ -40,6 +40,7 @@ struct ao_options {
     struct ao_compare_side sides[2];
     enum ao_view_mode view;   /* --view: default ao */
     enum ao_shading shading;  /* --shading: default phong */
+    double crease;            /* --crease-angle: degrees, default AO_MESH_CREASE_DEFAULT (mesh.h) */
     enum ao_sampling sampling;/* default cosine */
     enum ao_sequence sequence;/* --sampler: default sobol */
     enum ao_below below;      /* --below-surface: default reflect */

@@ -478,7 +478,8 @@ static int run(struct app *app, const struct ao_options *opts)
         fprintf(stderr, "aoview-exact: no SCENE given (try --help)\n");
         return EXIT_USAGE;
     }
-    struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh};
+    struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh,
+                                    .crease = opts->crease, .crease_set = true};
     if (!ao_scene_load_with(&app->scene, opts->scene_path, &load))
         return EXIT_RUNTIME;
 

@@ -282,6 +282,7 @@ struct world {
     const char *extent_note;      /* what makes up the extent, for its message ("" in scene files) */
     struct ao_budget *budget;     /* charged for every element as it is added */
     enum ao_instancing instancing;
+    double crease;                /* mesh files' crease angle, degrees (mesh.h) */
 };
 
 /* Charges an element of so many triangles (a sphere counts as one) and vertices to the budget;
@@ -391,7 +392,7 @@ static const struct loaded *find_loaded(const struct world *w, const char *path)
 static const struct loaded *load_file(struct cursor *c, struct ao_scene *s, struct world *w, const char *path)
 {
     struct ao_model model;
-    if (!ao_model_load_budget(&model, path, w->budget))
+    if (!ao_model_load_budget(&model, path, w->budget, w->crease))
         return NULL;
     uint64_t triangles = 0, vertices = 0;
     for (size_t i = 0; i < model.mesh_count; i++)
@@ -1091,13 +1092,20 @@ static void begin(struct ao_scene *s, const char *path)
     s->background = ao_vec3_make(DEFAULT_BACKGROUND, DEFAULT_BACKGROUND, DEFAULT_BACKGROUND);
 }
 
-/* ao_scene_parse charging budget. */
+/* The crease angle options ask for. */
+static double crease_of(const struct ao_scene_options *options)
+{
+    return options->crease_set ? options->crease : AO_MESH_CREASE_DEFAULT;
+}
+
+/* ao_scene_parse charging budget, with options' instancing and crease angle. */
 static bool parse_text(struct ao_scene *scene, const char *text, const char *path, struct ao_budget *budget,
-                       enum ao_instancing instancing)
+                       const struct ao_scene_options *options)
 {
     begin(scene, path);
     struct cursor c = {.path = path};
-    struct world w = {.extent_note = "", .budget = budget, .instancing = instancing};
+    struct world w = {.extent_note = "", .budget = budget, .instancing = options->instancing,
+                      .crease = crease_of(options)};
     bool ok = true;
     char line[MAX_LINE + 2];
     for (const char *p = text; ok && *p;) {
@@ -1123,15 +1131,15 @@ static bool parse_text(struct ao_scene *scene, const char *text, const char *pat
 
 bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path)
 {
-    struct ao_budget budget = {.limit = AO_BUDGET_DEFAULT};
-    return parse_text(scene, text, path, &budget, AO_INSTANCING_AUTO);
+    struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT};
+    return ao_scene_parse_with(scene, text, path, &options);
 }
 
 bool ao_scene_parse_with(struct ao_scene *scene, const char *text, const char *path,
                          const struct ao_scene_options *options)
 {
     struct ao_budget budget = {.limit = options->budget, .bvh = options->bvh};
-    return parse_text(scene, text, path, &budget, options->instancing);
+    return parse_text(scene, text, path, &budget, options);
 }
 
 /* The ground quad added under a bare mesh whose box is lo..hi: 50 times as wide as the mesh's
@@ -1155,12 +1163,13 @@ static bool add_ground(struct world *w, struct dvec lo, struct dvec hi)
 
 /* A bare mesh: the mesh file's model, with ground a large ground quad under it, a camera framed on
  * it. */
-static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budget *budget, bool ground,
-                           enum ao_instancing instancing)
+static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budget *budget,
+                           const struct ao_scene_options *options)
 {
     begin(s, path);
+    bool ground = options->ground;
     struct world w = {.extent_note = ground ? " (the mesh with its ground quad, 50 times as wide as the mesh)" : "",
-                      .budget = budget, .instancing = instancing};
+                      .budget = budget, .instancing = options->instancing, .crease = crease_of(options)};
     struct cursor c = {.path = path};
     struct ao_affine identity = ao_affine_identity();
     const struct loaded *f = load_file(&c, s, &w, path);
@@ -1204,7 +1213,7 @@ bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct a
     struct ao_budget budget = {.limit = options->budget, .bvh = options->bvh};
     memset(scene, 0, sizeof *scene);
     if (ao_mesh_is_mesh_path(path))
-        return load_bare_mesh(scene, path, &budget, options->ground, options->instancing);
+        return load_bare_mesh(scene, path, &budget, options);
     char *text;
     size_t got;
     if (!ao_file_read_budget(path, &budget, &text, &got))
@@ -1212,7 +1221,7 @@ bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct a
     bool ok = strlen(text) == got;
     if (!ok)
         ao_file_report("%s: not a text file (it contains a NUL byte)", path);
-    ok = ok && parse_text(scene, text, path, &budget, options->instancing);
+    ok = ok && parse_text(scene, text, path, &budget, options);
     free(text);
     return ok;
 }

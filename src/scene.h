@@ -94,12 +94,16 @@ enum ao_instancing { AO_INSTANCING_AUTO, AO_INSTANCING_ALWAYS, AO_INSTANCING_NEV
 
 /* How ao_scene_load_with loads: the scene budget in bytes (budget.h); for a bare mesh, whether the
  * ground quad is added under it (a .scene file has only the quads it lists); which meshes it
- * instances; the BVH to build (AUTO: MEDIUM, or COMPACT where only that fits the budget). */
+ * instances; the BVH to build (AUTO: MEDIUM, or COMPACT where only that fits the budget); the crease
+ * angle in degrees for the normals mesh files lack (mesh.h), when crease_set (else
+ * AO_MESH_CREASE_DEFAULT, so that options set field by field keep the default). */
 struct ao_scene_options {
     uint64_t budget;
     bool ground;
     enum ao_instancing instancing;
     enum ao_bvh bvh;
+    double crease;
+    bool crease_set;
 };
 
 /* The gap between a bare mesh's lowest point and the ground quad added under it, as a fraction

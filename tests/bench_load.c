@@ -32,7 +32,7 @@ int main(int argc, char **argv)
             struct ao_model model;
             struct ao_budget budget = {.limit = UINT64_MAX / 2};
             double start = bench_now();
-            if (!ao_model_load_budget(&model, argv[first + f], &budget))
+            if (!ao_model_load_budget(&model, argv[first + f], &budget, AO_MESH_CREASE_DEFAULT))
                 return 1;
             seconds[f][r] = bench_now() - start;
             triangles[f] = 0;

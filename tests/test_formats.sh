@@ -3,7 +3,10 @@
 # an embedded buffer, and GLB (tests/mesh_convert.py; the glTF files nest two transforms that
 # cancel) renders as the bunny OBJ does, bare and through a scene's mesh line: same seed and
 # settings, so the images differ only where float rounding of the transformed positions moves a
-# hit, and the mean absolute difference must stay within 0.2 % of the mean. Then glTF as exporters
+# hit, and the mean absolute difference must stay within 0.2 % of the mean. None of them gives
+# normals: STL's are made as OBJ's (smooth up to the crease angle), glTF's flat, as its
+# specification says, which the OBJ gives with --crease-angle 0. Then the shapes of
+# tests/shapes.py, flat or smooth by construction, against their exact normals. Then glTF as exporters
 # write it (strips, fans, sparse, quantized, meshopt and Draco; tests/gltf_encode for the last two),
 # exactly or within Monte Carlo noise (below), and what aoview says of such files. EXR output carries the
 # settings in its header (checked with exrheader when installed) and reads back as a --reference
@@ -42,17 +45,19 @@ python3 "$convert" "$obj" binary.stl && python3 "$convert" "$obj" ascii.stl --as
   python3 "$convert" "$obj" external.gltf && python3 "$convert" "$obj" embedded.gltf --embed &&
   python3 "$convert" "$obj" bunny.glb || fail "mesh_convert.py failed"
 cp "$obj" bunny.obj
-render bunny.obj -o obj.pfm || fail "the OBJ did not render"
+render bunny.obj -o obj.pfm && render bunny.obj --crease-angle 0 -o obj-flat.pfm || fail "the OBJ did not render"
 {
   echo 'camera eye 0.5 1 2.5 target 0 0.42 0 up 0 1 0 fov 35'
   echo 'mesh bunny.obj scale 0.1'
   echo 'quad corner -50 0 -50 edge1 0 0 100 edge2 100 0 0'
 } > obj.scene
-render obj.scene -o obj-scene.pfm || fail "the OBJ scene did not render"
+render obj.scene -o obj-scene.pfm && render obj.scene --crease-angle 0 -o obj-flat-scene.pfm ||
+  fail "the OBJ scene did not render"
 for mesh in binary.stl ascii.stl external.gltf embedded.gltf bunny.glb; do
+  like=obj; case $mesh in *.gltf|*.glb) like=obj-flat;; esac
   if ! render "$mesh" -o "$mesh.pfm"; then
     fail "$mesh did not render"
-  elif ! got=$(compare obj.pfm "$mesh.pfm"); then
+  elif ! got=$(compare $like.pfm "$mesh.pfm"); then
     fail "$mesh differs from the OBJ by $got"
   else
     echo "$mesh renders as the OBJ (mean difference $got)"
@@ -60,13 +65,13 @@ for mesh in binary.stl ascii.stl external.gltf embedded.gltf bunny.glb; do
   sed "s/bunny.obj/$mesh/" obj.scene > "$mesh.scene"
   if ! render "$mesh.scene" -o "$mesh-scene.pfm"; then
     fail "$mesh in a scene did not render"
-  elif ! got=$(compare obj-scene.pfm "$mesh-scene.pfm"); then
+  elif ! got=$(compare $like-scene.pfm "$mesh-scene.pfm"); then
     fail "$mesh in a scene differs from the OBJ by $got"
   fi
 done
 
-# glTF as exporters write it. Exactly the OBJ's image where the decoded positions and triangles are
-# exactly the OBJ's (corners in the same order: one strip joined by zero-area triangles, fans, a
+# glTF as exporters write it. Exactly the flat OBJ's image where the decoded positions and triangles
+# are exactly the OBJ's (corners in the same order: one strip joined by zero-area triangles, fans, a
 # sparse accessor, meshopt attributes and index sequence, Draco's sequential coding without
 # quantization): same seed, same samples, same pixels, compared byte for byte.
 encode=${AO_GLTF_ENCODE:-}
@@ -82,7 +87,7 @@ for form in meshopt meshopt-quantized draco draco-sequential; do
 done
 for mesh in strip.gltf fan.gltf sparse.gltf meshopt.glb draco-sequential.glb; do
   if ! render "$mesh" -o "$mesh.pfm"; then fail "$mesh did not render"
-  elif ! cmp -s obj.pfm "$mesh.pfm"; then fail "$mesh does not render exactly as the OBJ: $(compare obj.pfm "$mesh.pfm")"
+  elif ! cmp -s obj-flat.pfm "$mesh.pfm"; then fail "$mesh does not render exactly as the OBJ: $(compare obj-flat.pfm "$mesh.pfm")"
   else echo "$mesh renders exactly as the OBJ"; fi
 done
 # Elsewhere within Monte Carlo noise at the same seed: positions quantized to 16 bits under a node
@@ -95,7 +100,8 @@ done
 # 64 spp: noise 0.0114; Draco 0.00001 (a few pixels), the quantized forms 0 so far (a 16-bit step
 # moves no hit enough to change a sample).
 noisy() { "$bin" --headless -q --size 96x72 --spp 64 --adaptive off --sampler random "$@"; }
-noisy --seed 3 "$obj" -o noise3.pfm && noisy --seed 4 "$obj" -o noise4.pfm || fail "the OBJ did not render"
+noisy --seed 3 --crease-angle 0 "$obj" -o noise3.pfm && noisy --seed 4 --crease-angle 0 "$obj" -o noise4.pfm ||
+  fail "the OBJ did not render"
 for mesh in quantized.gltf meshopt-quantized.glb draco.glb; do
   if ! noisy --seed 3 "$mesh" -o "$mesh-noisy.pfm"; then fail "$mesh did not render"; continue; fi
   python3 - noise3.pfm noise4.pfm "$mesh-noisy.pfm" "$mesh" <<'PY' || fail "$mesh differs from the OBJ by more than Monte Carlo noise"
@@ -112,6 +118,49 @@ print('%s: mean difference from the OBJ %.5f, noise of one render %.5f' % (sys.a
 sys.exit(0 if got <= noise else 1)
 PY
 done
+
+# The normals a file lacks, on shapes flat or smooth by construction (tests/shapes.py). A cube is
+# flat: the OBJ (its 8 corners shared) and the binary STL render byte for byte as --shading flat;
+# so does the glTF cube without NORMAL, welded (indexed, as gltfpack and Draco write it: it rendered
+# rounded with a dark base, mean difference 0.037) and unwelded (every triangle its own vertices).
+shapes=$root/tests/shapes.py
+python3 "$shapes" cube cube.obj && python3 "$shapes" cube cube-unwelded.obj --unwelded &&
+  python3 "$convert" cube.obj cube.stl && python3 "$convert" cube.obj cube.glb &&
+  python3 "$convert" cube-unwelded.obj cube-unwelded.gltf || fail "no cube"
+render cube.obj --shading flat -o cube-flat.pfm || fail "the cube did not render"
+for mesh in cube.obj cube.stl cube.glb cube-unwelded.gltf; do
+  if ! render "$mesh" -o "$mesh.pfm"; then fail "$mesh did not render"
+  elif ! cmp -s cube-flat.pfm "$mesh.pfm"; then fail "$mesh is not flat: $(compare cube-flat.pfm "$mesh.pfm")"
+  else echo "$mesh renders exactly as --shading flat"; fi
+done
+# A coarse sphere (16 x 8 facets, 22.5 degrees apart) stays smooth, and a CAD-like part keeps its
+# 45- and 90-degree edges sharp while its rounded edges (22.5 degrees) and boss (15) stay smooth:
+# their normals, as the normals view shows them, lie as near the exact ones (the --normals files)
+# as the crease angle allows, and far from flat or from smoothing everywhere. Measured at 96x72
+# (normals view, mean |difference| over the pixels): the sphere 0.0003 from its exact normals
+# against 0.0044 flat; the part 0.0004 against 0.0129 smoothed everywhere. Bound: a third of the
+# second.
+python3 "$shapes" sphere sphere.obj && python3 "$shapes" sphere sphere-exact.obj --normals &&
+  python3 "$shapes" part part.obj && python3 "$shapes" part part-exact.obj --normals || fail "no sphere or part"
+view() { render --view normals "$@"; }
+view sphere-exact.obj -o sphere-exact.pfm && view sphere.obj -o sphere.pfm && view sphere.obj --crease-angle 0 \
+  -o sphere-flat.pfm && view part-exact.obj -o part-exact.pfm && view part.obj -o part.pfm &&
+  view part.obj --crease-angle 180 -o part-round.pfm || fail "the sphere or the part did not render"
+python3 - <<'PY' || fail "the sphere or the part: normals not as their shapes are"
+import struct
+def read(path):
+    data = open(path, 'rb').read()
+    head = data.split(b'\n', 3)
+    w, h = map(int, head[1].split())
+    return struct.unpack('<%df' % (3 * w * h), head[3])
+mad = lambda x, y: sum(abs(p - q) for p, q in zip(read(x), read(y))) / len(read(x))
+ok = True
+for shape, wrong in (('sphere', 'sphere-flat'), ('part', 'part-round')):
+    near, far = mad(shape + '-exact.pfm', shape + '.pfm'), mad(shape + '-exact.pfm', wrong + '.pfm')
+    print('%s: normals %.4f from the exact ones, %s %.4f' % (shape, near, wrong, far))
+    ok = ok and near < far / 3
+raise SystemExit(0 if ok else 1)
+PY
 
 # What aoview says of them: the joining triangles of the strip skipped as zero-area (one line with
 # the points and lines it also skipped), a required material extension in one line, and without

@@ -480,6 +480,18 @@ static void test_obj_other_statements(void **state)
     ao_mesh_finish(&mesh);
 }
 
+/* Loads path as one mesh (OBJ, PLY, STL), the normals it lacks made at the crease angle. */
+static void load_at_crease(struct ao_mesh *mesh, const char *path, double crease)
+{
+    struct ao_budget budget = {.limit = AO_BUDGET_DEFAULT};
+    struct ao_model model;
+    assert_true(ao_model_load_budget(&model, path, &budget, crease));
+    assert_int_equal(model.mesh_count, 1);
+    *mesh = model.meshes[0];
+    model.meshes[0] = (struct ao_mesh){0};
+    ao_model_finish(&model);
+}
+
 /* Two faces sharing an edge with different normals: the edge's positions split in two. */
 static void test_obj_split_vertices(void **state)
 {
@@ -500,13 +512,24 @@ static void test_obj_split_vertices(void **state)
 }
 
 /* Corners without a normal share one vertex per position, whose normal is computed from the
- * triangles using it; the angle weighting shows at (0,1,0): 90 degrees of a +z triangle and 45
- * of a +x one give (1,0,2)/sqrt 5 (area or uniform weights would give (1,0,1)/sqrt 2). */
+ * triangles using it; the angle weighting shows at (0,1,0), smoothed across every edge (crease
+ * 180): 90 degrees of a +z triangle and 45 of a +x one give (1,0,2)/sqrt 5 (area or uniform weights
+ * would give (1,0,1)/sqrt 2). At the default crease angle the two triangles, 90 degrees apart, each
+ * keep their own normal there, (0,1,0) split in two. */
 static void test_obj_mixed_normals(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
-    load_ok(&mesh, fixture("mixed.obj"));
+    load_at_crease(&mesh, fixture("mixed.obj"), AO_MESH_CREASE_DEFAULT);
+    assert_int_equal(mesh.vertex_count, 8);
+    size_t plus_z = mesh.indices[5], plus_x = mesh.indices[7];   /* (0,1,0) in the 2nd and 3rd triangles */
+    assert_true(plus_z != plus_x);
+    assert_vec3_near(mesh.positions[plus_z], 0, 1, 0);
+    assert_vec3_near(mesh.positions[plus_x], 0, 1, 0);
+    assert_vec3_near(mesh.normals[plus_z], 0, 0, 1);
+    assert_vec3_near(mesh.normals[plus_x], 1, 0, 0);
+    ao_mesh_finish(&mesh);
+    load_at_crease(&mesh, fixture("mixed.obj"), 180.0);
     assert_mesh_valid(&mesh);
     assert_int_equal(mesh.vertex_count, 7);
     assert_int_equal(mesh.triangle_count, 3);
@@ -520,15 +543,16 @@ static void test_obj_mixed_normals(void **state)
     ao_mesh_finish(&mesh);
 }
 
-/* A zero-length file normal stays zero (the renderer then uses the geometric normal). */
+/* A zero normal given is made as if none were: computed from the triangle, and counted. */
 static void test_obj_zero_normal(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
     load_ok(&mesh, fixture("zero_normal.obj"));
     assert_mesh_valid(&mesh);
-    for (int i = 0; i < 3; i++)
-        assert_vec3_near(mesh.normals[i], 0, 0, 0);
+    assert_int_equal(mesh.invalid_normals, 1);
+    for (size_t i = 0; i < mesh.vertex_count; i++)
+        assert_vec3_near(mesh.normals[i], 0, 0, 1);
     ao_mesh_finish(&mesh);
 }
 
@@ -577,8 +601,21 @@ static void test_ply_ascii_cube(void **state)
     struct ao_mesh mesh;
     load_ok(&mesh, fixture("cube.ply"));
     assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.vertex_count, 8);
+    /* At the default crease angle every corner splits in three, one per face, each face flat. */
+    assert_int_equal(mesh.vertex_count, 24);
     assert_int_equal(mesh.triangle_count, 12);
+    for (size_t t = 0; t < 12; t++) {
+        struct ao_vec3 p[3], n = mesh.normals[mesh.indices[3 * t]];
+        for (int k = 0; k < 3; k++)
+            p[k] = mesh.positions[mesh.indices[3 * t + k]];
+        struct ao_vec3 face = ao_vec3_normalize(ao_vec3_cross(ao_vec3_sub(p[1], p[0]), ao_vec3_sub(p[2], p[0])));
+        for (int k = 0; k < 3; k++)
+            assert_vec3_near(mesh.normals[mesh.indices[3 * t + k]], face.x, face.y, face.z);
+        assert_float_equal(fabsf(n.x) + fabsf(n.y) + fabsf(n.z), 1.0f, 0.0f);
+    }
+    ao_mesh_finish(&mesh);
+    load_at_crease(&mesh, fixture("cube.ply"), 180.0);   /* smooth everywhere: 8 vertices */
+    assert_int_equal(mesh.vertex_count, 8);
     assert_triangle(&mesh, 0, 0, 3, 2);
     assert_triangle(&mesh, 1, 0, 2, 1);
     assert_vec3_near(mesh.positions[6], 1, 1, 1);
@@ -591,7 +628,8 @@ static void test_ply_ascii_cube(void **state)
     ao_mesh_finish(&mesh);
 }
 
-/* File normals (mixed types, CRLF, vertex_index) are normalized, zero stays zero. */
+/* File normals (mixed types, CRLF, vertex_index) are normalized; a zero one is made as if not
+ * given (from its two triangles, facing +z) and counted. */
 static void test_ply_ascii_normals(void **state)
 {
     (void)state;
@@ -604,8 +642,9 @@ static void test_ply_ascii_normals(void **state)
     assert_triangle(&mesh, 1, 1, 3, 2);
     assert_vec3_near(mesh.normals[0], 0, 0, 1);
     assert_vec3_near(mesh.normals[1], 0, 0, 1);
-    assert_vec3_near(mesh.normals[2], 0, 0, 0);
+    assert_vec3_near(mesh.normals[2], 0, 0, 1);
     assert_vec3_near(mesh.normals[3], 0, 0, -1);
+    assert_int_equal(mesh.invalid_normals, 1);
     ao_mesh_finish(&mesh);
 }
 
@@ -780,18 +819,28 @@ static void test_ply_binary_truncated(void **state)
 
 /* ------------------------------------------------------------------ STL */
 
-/* The unit cube of cube.stl: 36 corners welded into its 8 corners (-0 and 0 as one), with the
- * angle-weighted normals of a cube corner, (+-1, +-1, +-1) / sqrt(3) pointing outward. */
+/* The unit cube of cube.stl: 36 corners welded into its 8 corners (-0 and 0 as one), then, at the
+ * default crease angle, split again along its 90-degree edges: 24 vertices, each face flat with
+ * its outward normal. */
 static void assert_stl_cube(const struct ao_mesh *mesh)
 {
     assert_mesh_valid(mesh);
-    assert_int_equal(mesh->vertex_count, 8);
+    assert_int_equal(mesh->vertex_count, 24);
     assert_int_equal(mesh->triangle_count, 12);
-    const float k = 0.57735027f;
-    for (int i = 0; i < 8; i++) {
-        float x = (float)(i & 1), y = (float)(i >> 1 & 1), z = (float)(i >> 2);
-        size_t v = vertex_at(mesh, x, y, z);
-        assert_vec3_near(mesh->normals[v], (2 * x - 1) * k, (2 * y - 1) * k, (2 * z - 1) * k);
+    for (size_t t = 0; t < 12; t++) {
+        struct ao_vec3 mid = {0, 0, 0};
+        for (int k = 0; k < 3; k++)
+            mid = ao_vec3_add(mid, ao_vec3_scale(mesh->positions[mesh->indices[3 * t + k]], 1.0f / 3));
+        /* The face's outward normal: the axis along which the triangle's middle is farthest out. */
+        struct ao_vec3 d = ao_vec3_sub(mid, ao_vec3_make(0.5f, 0.5f, 0.5f)), want = {0, 0, 0};
+        if (fabsf(d.x) >= fabsf(d.y) && fabsf(d.x) >= fabsf(d.z))
+            want.x = d.x > 0 ? 1.0f : -1.0f;
+        else if (fabsf(d.y) >= fabsf(d.z))
+            want.y = d.y > 0 ? 1.0f : -1.0f;
+        else
+            want.z = d.z > 0 ? 1.0f : -1.0f;
+        for (int k = 0; k < 3; k++)
+            assert_vec3_near(mesh->normals[mesh->indices[3 * t + k]], want.x, want.y, want.z);
     }
 }
 
@@ -859,8 +908,11 @@ static void test_gltf_nodes(void **state)
     size_t d = vertex_at(&mesh, 0, 0, 5), e = vertex_at(&mesh, -1, 0, 5);
     size_t f = vertex_at(&mesh, 0, 1, 5);
     assert_triangle(&mesh, 1, (uint32_t)d, (uint32_t)f, (uint32_t)e);
-    for (size_t i = 0; i < 6; i++)
-        assert_vec3_near(mesh.normals[i], 0, 0, 1);
+    /* The first mesh has no NORMAL: flat (zero), as glTF says; the mirrored one keeps its +z. */
+    for (size_t i = 0; i < 3; i++) {
+        assert_vec3_near(mesh.normals[(size_t[]){a, b, c}[i]], 0, 0, 0);
+        assert_vec3_near(mesh.normals[(size_t[]){d, e, f}[i]], 0, 0, 1);
+    }
     assert_int_equal(mesh.point_primitives, 1);
     ao_mesh_finish(&mesh);
 }
@@ -885,7 +937,7 @@ static void test_gltf_no_scene(void **state)
     assert_triangle(&mesh, 0, 0, 1, 2);
     assert_vec3_near(mesh.positions[1], 1, 0, 1);
     assert_vec3_near(mesh.positions[2], 0, 1, 1);
-    assert_vec3_near(mesh.normals[0], 0, 0, 1);
+    assert_vec3_near(mesh.normals[0], 0, 0, 0);   /* no NORMAL: flat */
     ao_mesh_finish(&mesh);
 }
 
@@ -1030,10 +1082,10 @@ static void test_gltf_strips_and_fans(void **state)
             else
                 assert_triangle(&mesh, t, want[t][0], want[t][1], want[t][2]);
         }
-        /* The strip faces -z, and so do its computed normals; mirrored too (the mirror alone would
-         * turn it to +z, the turned winding back to -z, as a file's normal would be mapped). */
+        /* Without NORMAL the normals are flat, as glTF says: zero, which shading replaces by the
+         * triangle's own. */
         for (size_t i = 0; i < 5; i++)
-            assert_vec3_near(mesh.normals[i], 0, 0, -1);
+            assert_vec3_near(mesh.normals[i], 0, 0, 0);
         ao_mesh_finish(&mesh);
     }
 }
@@ -1071,7 +1123,7 @@ static void test_gltf_meshes_load_once(void **state)
     const char *path = placed_gltf("placed.gltf", 1000);
     struct ao_model model;
     struct ao_budget budget = {.limit = UINT64_MAX / 2};
-    assert_true(ao_model_load_budget(&model, path, &budget));
+    assert_true(ao_model_load_budget(&model, path, &budget, AO_MESH_CREASE_DEFAULT));
     assert_int_equal(budget.used, 0);
     assert_int_equal(model.mesh_count, 2);
     assert_int_equal(model.placement_count, 1001);
@@ -1079,7 +1131,7 @@ static void test_gltf_meshes_load_once(void **state)
         assert_int_equal(model.meshes[m].triangle_count, 200);
         assert_int_equal(model.meshes[m].vertex_count, 202);
         assert_vec3_near(model.meshes[m].positions[3], 1, 1, 0);   /* untransformed */
-        assert_vec3_near(model.meshes[m].normals[0], 0, 0, -1);
+        assert_vec3_near(model.meshes[m].normals[0], 0, 0, 0);   /* no NORMAL: flat */
     }
     for (size_t k = 0; k < 1000; k++) {
         struct ao_affine want = ao_affine_identity();
@@ -1096,7 +1148,7 @@ static void test_gltf_meshes_load_once(void **state)
     uint64_t unique = medium_model(400, 404, 1001), flat = medium_charge(200200, 202202);
     assert_true(flat > unique + (4 << 20));
     budget = (struct ao_budget){.limit = unique + (4 << 20), .bvh = AO_BVH_MEDIUM};
-    assert_true(ao_model_load_budget(&model, path, &budget));
+    assert_true(ao_model_load_budget(&model, path, &budget, AO_MESH_CREASE_DEFAULT));
     ao_model_finish(&model);
     char err[1024];
     struct ao_mesh mesh;
@@ -1257,8 +1309,8 @@ static void test_gltf_leniency(void **state)
                    "buffer 1 has no 'uri' and is not a GLB's BIN chunk: it has no data");
 }
 
-/* A mesh whose first primitive has no normals and whose second has: the first's vertices get
- * computed normals, the second's keep the file's (kept from the first primitive that has some). */
+/* A mesh whose first primitive has no normals and whose second has: the first's vertices are flat
+ * (zero: glTF's rule), the second's keep the file's (kept from the first primitive that has some). */
 static void test_gltf_normals_from_a_later_primitive(void **state)
 {
     (void)state;
@@ -1278,7 +1330,7 @@ static void test_gltf_normals_from_a_later_primitive(void **state)
     load_ok(&mesh, gltf_file("later_normals.gltf", json, &data, sizeof data));
     assert_int_equal(mesh.vertex_count, 6);
     for (int i = 0; i < 3; i++) {
-        assert_vec3_near(mesh.normals[i], 0, 0, 1);
+        assert_vec3_near(mesh.normals[i], 0, 0, 0);
         assert_vec3_near(mesh.normals[3 + i], 1, 0, 0);
     }
     ao_mesh_finish(&mesh);
@@ -1368,8 +1420,9 @@ static void test_gltf_sparse(void **state)
     assert_vec3_near(mesh.positions[3], 0, 0, 0);
     assert_vec3_near(mesh.positions[4], 1, 0, 0);
     assert_vec3_near(mesh.positions[5], 0, 1, 0);
-    assert_vec3_near(mesh.normals[0], 0, 0, 0);     /* the file's normals: zeros */
-    assert_vec3_near(mesh.normals[3], 0, 0, 1);     /* computed */
+    assert_vec3_near(mesh.normals[0], 0, 0, 0);     /* the file's normals, zeros: as if not given */
+    assert_int_equal(mesh.invalid_normals, 3);
+    assert_vec3_near(mesh.normals[3], 0, 0, 0);     /* none given: flat */
     assert_triangle(&mesh, 1, 3, 4, 5);
     ao_mesh_finish(&mesh);
     data.at[1] = 3;
@@ -1986,15 +2039,20 @@ static void test_normals_any_thread_count(void **state)
     ao_mesh_finish(&mesh);
 }
 
-/* The shipped bunny: its counts, y up, finite unit normals, and outward orientation. */
+/* The shipped bunny: its counts, y up, finite unit normals, and outward orientation. Its file has no
+ * normals: at the default crease angle (40 degrees) the 129 vertices on its sharper edges split,
+ * 1968 vertices for 1839 positions; at 180 every vertex is smooth. */
 static void test_bunny(void **state)
 {
     (void)state;
     char path[4200];
     snprintf(path, sizeof path, "%s/assets/bunny.obj", getenv("AO_SOURCE_ROOT"));
     struct ao_mesh mesh;
-    load_ok(&mesh, path);
+    load_at_crease(&mesh, path, 180.0);
     assert_int_equal(mesh.vertex_count, 1839);
+    ao_mesh_finish(&mesh);
+    load_ok(&mesh, path);
+    assert_int_equal(mesh.vertex_count, 1968);
     assert_int_equal(mesh.triangle_count, 3674);
     assert_int_equal(mesh.degenerate_count, 0);
     struct ao_vec3 lo = mesh.positions[0], hi = lo, sum = {0, 0, 0};

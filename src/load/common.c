@@ -266,6 +266,25 @@ struct ao_vec3 ao_load_unit(double x, double y, double z)
     return ao_vec3_make((float)(x / length), (float)(y / length), (float)(z / length));
 }
 
+struct ao_vec3 ao_load_missing_normal(void)
+{
+    return ao_vec3_make(NAN, NAN, NAN);
+}
+
+bool ao_load_normal_is_missing(struct ao_vec3 n)
+{
+    return isnan(n.x);
+}
+
+struct ao_vec3 ao_load_given_normal(double x, double y, double z, size_t *invalid)
+{
+    struct ao_vec3 n = ao_load_unit(x, y, z);
+    if (n.x != 0.0f || n.y != 0.0f || n.z != 0.0f)
+        return n;
+    ++*invalid;
+    return ao_load_missing_normal();
+}
+
 /* Advises the pages that [data, data + size) touches into transparent huge pages, where the system
  * has them (Linux's "madvise" mode) and the array is big enough to gain. The advice covers all of
  * a big block that malloc mapped by itself (from its page-aligned header to its end), so that its

@@ -173,9 +173,9 @@ static void triangle_corners(uint64_t mode, size_t k, size_t out[3])
 }
 
 /* Appends a primitive's vertices to the mesh being built, in the mesh's own frame: positions as
- * the file gives them, normals made unit, or flagged as lacking when normals is NULL. The normals
- * and flags are kept from the mesh's first primitive with normals on (zero and lacking before it):
- * a mesh without any has none to hold. */
+ * the file gives them, normals made unit, or missing (the marker; flat once the mesh is made) when
+ * normals is NULL or one is zero or not finite (counted). The normals are kept from the mesh's first
+ * primitive with normals on (missing before it): a mesh without any has none to hold. */
 static bool add_vertices(struct ao_gltf *g, const struct ao_gltf_elements *positions,
                          const struct ao_gltf_elements *normals, const char *where)
 {
@@ -185,28 +185,19 @@ static bool add_vertices(struct ao_gltf *g, const struct ao_gltf_elements *posit
     bool keep = normals || g->normals.count > 0;
     struct ao_vec3 *p = ao_load_append(&g->positions, positions->count);
     struct ao_vec3 *n = keep ? ao_load_append(&g->normals, earlier + positions->count) : NULL;
-    bool *lacking = keep ? ao_load_append(&g->lacking, earlier + positions->count) : NULL;
-    if (!p || (keep && (!n || !lacking)))
+    if (!p || (keep && !n))
         return ao_load_out_of_memory(g->path);
     for (size_t i = 0; keep && i < earlier; i++)
-        *n++ = ao_vec3_make(0.0f, 0.0f, 0.0f), *lacking++ = true;
+        *n++ = ao_load_missing_normal();
     for (size_t i = 0; i < positions->count; i++) {
         p[i] = ao_gltf_position(positions, i);
         if (!ao_vec3_is_finite(p[i]))
             return ao_gltf_error(g, "%s: vertex %zu is not a finite float", where, i);
-        if (!keep)
-            continue;
-        lacking[i] = !normals;
-        n[i] = ao_vec3_make(0.0f, 0.0f, 0.0f);
-        if (normals) {
-            double a = ao_gltf_value(normals, i, 0), b = ao_gltf_value(normals, i, 1);
-            double d = ao_gltf_value(normals, i, 2);
-            if (!isfinite(a) || !isfinite(b) || !isfinite(d))
-                return ao_gltf_error(g, "%s: normal %zu is not finite", where, i);
-            n[i] = ao_load_unit(a, b, d);
-        }
+        if (keep)
+            n[i] = normals ? ao_load_given_normal(ao_gltf_value(normals, i, 0), ao_gltf_value(normals, i, 1),
+                                                  ao_gltf_value(normals, i, 2), &g->invalid_normals)
+                           : ao_load_missing_normal();
     }
-    g->lacking_count += normals ? 0 : positions->count;
     return true;
 }
 
@@ -334,7 +325,7 @@ static bool walk_mesh(struct ao_gltf *g, size_t mesh, bool count_only)
  * triangles (all degenerate) is dropped, its placements with it. */
 static bool build_mesh(struct ao_gltf *g, size_t mesh, struct ao_load_array *meshes)
 {
-    g->lacking_count = 0;
+    g->invalid_normals = 0;
     if (!walk_mesh(g, mesh, false))
         return false;
     struct ao_mesh m = {0};
@@ -342,19 +333,12 @@ static bool build_mesh(struct ao_gltf *g, size_t mesh, struct ao_load_array *mes
     m.positions = ao_load_take(&g->positions);
     m.triangle_count = g->indices.count / 3;
     m.indices = ao_load_take(&g->indices);
-    bool all_lacking = g->lacking_count == m.vertex_count;
     m.normals = ao_load_take(&g->normals);
-    if (all_lacking) {
-        free(m.normals);
-        m.normals = NULL;
-    }
-    bool *lacking = ao_load_take(&g->lacking);
-    bool ok = ao_load_finish_mesh(&m, g->path, all_lacking || !g->lacking_count ? NULL : lacking);
-    free(lacking);
+    m.invalid_normals = g->invalid_normals;
+    ao_load_finish_mesh(&m);
     g->degenerate_count += m.degenerate_count;
-    struct ao_mesh *slot = ok && m.triangle_count ? ao_load_append(meshes, 1) : NULL;
-    if (ok && m.triangle_count && !slot)
-        ok = ao_load_out_of_memory(g->path);
+    struct ao_mesh *slot = m.triangle_count ? ao_load_append(meshes, 1) : NULL;
+    bool ok = !m.triangle_count || slot || ao_load_out_of_memory(g->path);
     g->sizes[mesh].model = slot ? meshes->count - 1 : DROPPED;
     if (slot)
         *slot = m;
@@ -699,7 +683,6 @@ bool ao_load_gltf(struct ao_model *model, const char *path, const char *text, si
         .budget = budget,
         .positions = {.size = sizeof(struct ao_vec3)},
         .normals = {.size = sizeof(struct ao_vec3)},
-        .lacking = {.size = sizeof(bool)},
         .indices = {.size = sizeof(uint32_t)},
     };
     const unsigned char *json = (const unsigned char *)text;
@@ -720,7 +703,6 @@ bool ao_load_gltf(struct ao_model *model, const char *path, const char *text, si
     json_object_put(g.root);
     ao_load_free(&g.positions);
     ao_load_free(&g.normals);
-    ao_load_free(&g.lacking);
     ao_load_free(&g.indices);
     ao_budget_give(budget, g.taken);
     return ok;

@@ -86,9 +86,9 @@ struct ao_gltf {
     } *shared;                    /* per accessor */
     uint64_t instance;            /* mesh walks so far (both passes) */
     uint32_t *depth;              /* per node: how many nodes deep it lies (a root is 1) */
-    struct ao_load_array positions, normals, lacking, indices; /* the mesh being built: ao_vec3,
-                                                                   ao_vec3, bool, uint32 */
-    size_t lacking_count;
+    struct ao_load_array positions, normals, indices; /* the mesh being built: ao_vec3, ao_vec3
+                                                          (missing where not given), uint32 */
+    size_t invalid_normals;       /* its normals given as zero or not finite */
     size_t degenerate_count;      /* zero-area triangles dropped, all meshes */
     unsigned modes_found;         /* bit m: a primitive of mode m was found */
     size_t point_primitives, line_primitives;   /* skipped, each time a node placed them */

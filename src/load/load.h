@@ -124,14 +124,38 @@ bool ao_load_uri_decode(const char *uri, char *out, size_t size, char *why, size
  * path leaves that folder or cannot be opened there. */
 bool ao_load_uri_open(const char *model_path, const char *relative, int *fd, char *why, size_t why_size);
 
-/* The end of one mesh of a model: drops its degenerate triangles (counting them in
- * mesh->degenerate_count; a mesh may be left with none, for the caller to drop) and computes the
- * normals the file did not give, as ao_load_finish; false only when memory runs out (reported). */
-bool ao_load_finish_mesh(struct ao_mesh *mesh, const char *path, const bool *lacking);
+/* A normal that a file does not give (or gives as zero or not finite), as the loaders store it
+ * until ao_load_complete_normals makes it: NaN. */
+struct ao_vec3 ao_load_missing_normal(void);
 
-/* Common end of every loader: drops degenerate triangles, refuses a mesh without triangles and
- * computes the normals the file did not give (all when mesh->normals is NULL, else those
- * flagged in lacking, which may be NULL). */
-bool ao_load_finish(struct ao_mesh *mesh, const char *path, const bool *lacking);
+/* True when n is ao_load_missing_normal's marker. */
+bool ao_load_normal_is_missing(struct ao_vec3 n);
+
+/* A normal as a file gives it, as the loaders store it: made unit, or the missing marker when it is
+ * zero or not finite (counted in *invalid). */
+struct ao_vec3 ao_load_given_normal(double x, double y, double z, size_t *invalid);
+
+/* The end of one mesh of a model: drops its degenerate triangles (counting them in
+ * mesh->degenerate_count; a mesh may be left with none, for the caller to drop). */
+void ao_load_finish_mesh(struct ao_mesh *mesh);
+
+/* Common end of the single-mesh loaders: drops degenerate triangles and refuses a mesh without
+ * triangles (reported). The normals the file did not give stay missing (NULL, or the marker) for
+ * ao_load_complete_normals. */
+bool ao_load_finish(struct ao_mesh *mesh, const char *path);
+
+/* Makes the normals a loaded mesh lacks (mesh->normals NULL: all; else those with the missing
+ * marker): with crease 0 or less flat (the zero vector, which shading replaces by the triangle's
+ * own normal); from 180 on angle-weighted over every triangle at the vertex; between, angle-weighted
+ * over the triangles joined to the vertex's through edges flatter than crease degrees, the vertex
+ * split into one per side of the sharper edges (new vertices at the end, charged to budget first).
+ * A mesh without such an edge keeps its vertices and gets the normals 180 gives, bit for bit.
+ * False (reported, naming path) when memory or the budget runs out. Any thread. */
+bool ao_load_complete_normals(struct ao_mesh *mesh, const char *path, double crease, const struct ao_budget *budget);
+
+/* Angle-weighted normals of every vertex into mesh->normals (allocated when NULL), on so many
+ * threads (0: one per core for a big mesh), the same bit for bit on any number; false when memory
+ * runs out (not reported). Any thread. */
+bool ao_load_normals(struct ao_mesh *mesh, int threads);
 
 #endif

@@ -27,6 +27,7 @@ struct obj_reader {
     struct ao_load_array corner_normals;    /* uint32_t, one per corner from the first face
                                                with a normal on (earlier ones backfilled) */
     bool has_normals;         /* some corner references a normal */
+    size_t invalid_normals;   /* vn lines of a zero or non-finite normal */
     const struct ao_budget *budget;
 };
 
@@ -71,13 +72,18 @@ static bool parse_obj_vertex(struct obj_reader *o, struct ao_load_tokens *t)
     return true;
 }
 
-/* "vn x y z", stored normalized (zero stays zero). */
+/* "vn x y z", stored normalized; a zero or non-finite one (nan and inf are numbers here) is
+ * stored missing and counted, its corners then made as those without a normal. */
 static bool parse_obj_normal(struct obj_reader *o, struct ao_load_tokens *t)
 {
-    float f[6];
-    size_t n;
-    if (!read_floats(o, t, f, &n, "'vn x y z'"))
-        return false;
+    double f[3];
+    size_t n = 0;
+    struct ao_load_span s;
+    for (; ao_load_next_token(t, &s); n++)
+        if (n < 3 && !ao_load_parse_number(s, &f[n])) {
+            ao_load_report(o->path, o->line, "bad number '%.*s'", ao_load_span_length(s), s.begin);
+            return false;
+        }
     if (n != 3) {
         ao_load_report(o->path, o->line, "expected 'vn x y z', found %zu numbers", n);
         return false;
@@ -89,7 +95,7 @@ static bool parse_obj_normal(struct obj_reader *o, struct ao_load_tokens *t)
     struct ao_vec3 *normal = ao_load_append(&o->normals, 1);
     if (!normal)
         return ao_load_out_of_memory(o->path);
-    *normal = ao_load_unit(f[0], f[1], f[2]);
+    *normal = ao_load_given_normal(f[0], f[1], f[2], &o->invalid_normals);
     return true;
 }
 
@@ -247,7 +253,7 @@ static bool build_shared_vertices(struct obj_reader *o, struct ao_mesh *mesh)
     mesh->indices = ao_load_take(&o->corner_positions);
     mesh->vertex_count = o->positions.count;
     mesh->positions = ao_load_take(&o->positions);
-    return ao_load_finish(mesh, o->path, NULL);
+    return ao_load_finish(mesh, o->path);
 }
 
 /* Open-addressing hash map from a (position, normal) pair to the vertex made for it. */
@@ -289,14 +295,17 @@ static bool map_reserve(struct vertex_map *map)
 
 /* The output arrays of build_split_vertices. */
 struct split_output {
-    struct ao_load_array positions, normals, lacking;   /* ao_vec3, ao_vec3, bool */
-    size_t lacking_count;
+    struct ao_load_array positions, normals;   /* ao_vec3 */
 };
 
-/* The vertex for corner c, made (with its position and file normal) on first sight. */
+/* The vertex for corner c, made (with its position and file normal, or the missing marker) on
+ * first sight; corners whose normal is missing share one vertex per position. */
 static bool split_vertex(struct obj_reader *o, struct vertex_map *map, struct split_output *out,
                          struct corner c, uint32_t *vertex)
 {
+    const struct ao_vec3 *normals = (const struct ao_vec3 *)o->normals.data;
+    if (c.normal != AO_LOAD_NO_INDEX && ao_load_normal_is_missing(normals[c.normal]))
+        c.normal = AO_LOAD_NO_INDEX;
     uint64_t key = (uint64_t)c.position << 32 | c.normal;
     if (!map_reserve(map))
         return ao_load_out_of_memory(o->path);
@@ -312,14 +321,10 @@ static bool split_vertex(struct obj_reader *o, struct vertex_map *map, struct sp
     if (!ao_load_fits(o->budget, o->corner_positions.count / 3, map->count + 1, o->path, 0))
         return false;
     struct ao_vec3 *p = ao_load_append(&out->positions, 1), *n = ao_load_append(&out->normals, 1);
-    bool *lacking = ao_load_append(&out->lacking, 1);
-    if (!p || !n || !lacking)
+    if (!p || !n)
         return ao_load_out_of_memory(o->path);
     *p = ((const struct ao_vec3 *)o->positions.data)[c.position];
-    *lacking = c.normal == AO_LOAD_NO_INDEX;
-    out->lacking_count += *lacking;
-    *n = *lacking ? ao_vec3_make(0.0f, 0.0f, 0.0f)
-                  : ((const struct ao_vec3 *)o->normals.data)[c.normal];
+    *n = c.normal == AO_LOAD_NO_INDEX ? ao_load_missing_normal() : normals[c.normal];
     slot->key = key;
     slot->vertex = *vertex = (uint32_t)map->count++;
     return true;
@@ -327,14 +332,14 @@ static bool split_vertex(struct obj_reader *o, struct vertex_map *map, struct sp
 
 /* With file normals: one vertex per distinct (position, normal) pair, so the mesh stays indexed
  * with one normal per vertex. Corners without a normal (a face without normals, or one with
- * normals on some corners only) share one vertex per position, whose normal is then computed
- * from the triangles using that vertex; file-normal vertices keep theirs. */
+ * normals on some corners only, or a zero or non-finite one) share one vertex per position, whose
+ * normal is missing, to be made from the triangles using that vertex; file-normal vertices keep
+ * theirs. */
 static bool build_split_vertices(struct obj_reader *o, struct ao_mesh *mesh)
 {
     struct vertex_map map = {0};
     struct split_output out = {.positions = {.size = sizeof(struct ao_vec3)},
-                               .normals = {.size = sizeof(struct ao_vec3)},
-                               .lacking = {.size = sizeof(bool)}};
+                               .normals = {.size = sizeof(struct ao_vec3)}};
     const uint32_t *positions = (const uint32_t *)o->corner_positions.data;
     const uint32_t *normals = (const uint32_t *)o->corner_normals.data;
     size_t count = o->corner_positions.count;
@@ -348,12 +353,10 @@ static bool build_split_vertices(struct obj_reader *o, struct ao_mesh *mesh)
         mesh->vertex_count = out.positions.count;
         mesh->positions = ao_load_take(&out.positions);
         mesh->normals = ao_load_take(&out.normals);
-        ok = ao_load_finish(mesh, o->path,
-                            out.lacking_count ? (const bool *)out.lacking.data : NULL);
+        ok = ao_load_finish(mesh, o->path);
     }
     ao_load_free(&out.positions);
     ao_load_free(&out.normals);
-    ao_load_free(&out.lacking);
     return ok;
 }
 
@@ -381,6 +384,7 @@ bool ao_load_obj(struct ao_mesh *mesh, const char *path, const char *text, size_
     }
     if (ok) {
         mesh->triangle_count = o.corner_positions.count / 3;
+        mesh->invalid_normals = o.invalid_normals;
         ok = o.has_normals ? build_split_vertices(&o, mesh) : build_shared_vertices(&o, mesh);
     }
     ao_load_free(&o.positions);

@@ -62,6 +62,7 @@ struct ply_reader {
     struct ao_load_array properties;   /* struct ply_property */
     size_t vertex_element, face_element;  /* indices into elements, SIZE_MAX when absent */
     bool has_normals;
+    size_t invalid_normals;       /* vertices whose normal is zero or not finite */
     const char *cur, *end;     /* unread data */
     size_t line;               /* header or ascii data line */
     size_t data_line;          /* the end_header line */
@@ -472,7 +473,8 @@ static bool read_row(struct ply_reader *r, const struct ply_element *e, double v
     return end_row(r);
 }
 
-/* Stores a vertex row: a finite position and, when present, a finite normal (normalized). */
+/* Stores a vertex row: a finite position and, when present, a normal (normalized; a zero or
+ * non-finite one stored missing and counted). */
 static bool add_vertex(struct ply_reader *r, const double v[ROLE_COUNT])
 {
     if (!within_budget(r, r->indices.count / 3, r->positions.count + 1))
@@ -486,11 +488,9 @@ static bool add_vertex(struct ply_reader *r, const double v[ROLE_COUNT])
     *slot = p;
     if (!r->has_normals)
         return true;
-    if (!isfinite(v[ROLE_NX]) || !isfinite(v[ROLE_NY]) || !isfinite(v[ROLE_NZ]))
-        return ply_error(r, "vertex normal is not finite");
     if (!(slot = ao_load_append(&r->normals, 1)))
         return ao_load_out_of_memory(r->path);
-    *slot = ao_load_unit(v[ROLE_NX], v[ROLE_NY], v[ROLE_NZ]);
+    *slot = ao_load_given_normal(v[ROLE_NX], v[ROLE_NY], v[ROLE_NZ], &r->invalid_normals);
     return true;
 }
 
@@ -556,9 +556,7 @@ static bool read_vertex_rows(struct ply_reader *r, const size_t offset[ROLE_COUN
             return ply_error(r, "vertex position is not a finite float");
         if (!n)
             continue;
-        if (!isfinite(f[ROLE_NX]) || !isfinite(f[ROLE_NY]) || !isfinite(f[ROLE_NZ]))
-            return ply_error(r, "vertex normal is not finite");
-        n[i] = ao_load_unit(f[ROLE_NX], f[ROLE_NY], f[ROLE_NZ]);
+        n[i] = ao_load_given_normal(f[ROLE_NX], f[ROLE_NY], f[ROLE_NZ], &r->invalid_normals);
     }
     r->cur = (const char *)bytes;
     return true;
@@ -691,7 +689,8 @@ bool ao_load_ply(struct ao_mesh *mesh, const char *path, const char *text, size_
         mesh->normals = ao_load_take(&r.normals);
         mesh->triangle_count = r.indices.count / 3;
         mesh->indices = ao_load_take(&r.indices);
-        ok = ao_load_finish(mesh, path, NULL);
+        mesh->invalid_normals = r.invalid_normals;
+        ok = ao_load_finish(mesh, path);
     }
     ao_load_free(&r.elements);
     ao_load_free(&r.properties);

@@ -296,7 +296,7 @@ bool ao_load_stl(struct ao_mesh *mesh, const char *path, const char *text, size_
         mesh->positions = ao_load_take(&w.positions);
         mesh->triangle_count = indices.count / 3;
         mesh->indices = ao_load_take(&indices);
-        ok = ao_load_finish(mesh, path, NULL);
+        ok = ao_load_finish(mesh, path);
     }
     ao_load_free(&w.positions);
     free(w.slots);

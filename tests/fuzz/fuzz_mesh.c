@@ -60,7 +60,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     fuzz_write_file(path, data, size);
     struct ao_model model;
     struct ao_budget budget = {.limit = (uint64_t)256 << 20};
-    if (ao_model_load_budget(&model, path, &budget))
+    if (ao_model_load_budget(&model, path, &budget, AO_MESH_CREASE_DEFAULT))
         check(&model);
     ao_model_finish(&model);
     return 0;
