@@ -10,6 +10,7 @@
 
 #include "budget.h"
 #include "cli.h"
+#include "mesh.h"
 
 static char msg[256];
 
@@ -366,6 +367,26 @@ static void test_bvh(void **state)
     REJECT("--bvh", "missing value", "--bvh");
 }
 
+/* --crease-angle DEG: degrees from 0 to 180 (mesh.h's default). */
+static void test_crease_angle(void **state)
+{
+    (void)state;
+    struct ao_options o;
+    assert_true(PARSE(&o, "model.obj"));
+    assert_true(o.crease == AO_MESH_CREASE_DEFAULT);
+    assert_true(PARSE(&o, "--crease-angle", "0", "model.obj"));
+    assert_true(o.crease == 0.0);
+    assert_true(PARSE(&o, "--crease-angle=180"));
+    assert_true(o.crease == 180.0);
+    assert_true(PARSE(&o, "--crease-angle=22.5"));
+    assert_true(o.crease == 22.5);
+    REJECT("--crease-angle: expected degrees from 0 to 180", "'181'", "--crease-angle", "181");
+    REJECT("--crease-angle: expected degrees from 0 to 180", "'-1'", "--crease-angle", "-1");
+    REJECT("--crease-angle: expected degrees from 0 to 180", "'nan'", "--crease-angle", "nan");
+    REJECT("--crease-angle: expected degrees from 0 to 180", "'40deg'", "--crease-angle", "40deg");
+    REJECT("--crease-angle", "missing value", "--crease-angle");
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -373,7 +394,7 @@ static void test_usage_lists_every_option(void **state)
     const char *names[] = {"--headless", "-o, --output", "--spp", "--spppp", "--sampling",
                            "--aa", "--no-aa", "--size", "--threads", "--seed", "--ao-distance",
                            "--stats", "--reference", "-q, --quiet", "-h, --help", "--version",
-                           "--time", "--view", "--shading", "--compare A,B", "--scene-budget SIZE", "default 1G", "--ground on|off", "N normals", "F flat/Phong", "D difference",
+                           "--time", "--view", "--shading", "--compare A,B", "--scene-budget SIZE", "default 1G", "--ground on|off", "--crease-angle DEG", "N normals", "F flat/Phong", "D difference",
                            "default 256", "default cosine", "640x480", "Esc"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         assert_non_null(strstr(u, names[i]));
@@ -398,6 +419,7 @@ int main(void)
         cmocka_unit_test(test_scene_budget),
         cmocka_unit_test(test_ground),
         cmocka_unit_test(test_bvh),
+        cmocka_unit_test(test_crease_angle),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

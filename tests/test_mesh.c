@@ -2039,6 +2039,163 @@ static void test_normals_any_thread_count(void **state)
     ao_mesh_finish(&mesh);
 }
 
+/* ------------------------------------------------------------------ normals a file lacks */
+
+/* A unit cube as OBJ text, its 8 corners shared by 12 triangles, no normals. */
+static const char CUBE_OBJ[] = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\n"
+                               "f 1 4 3 2\nf 5 6 7 8\nf 1 2 6 5\nf 4 8 7 3\nf 1 5 8 4\nf 2 3 7 6\n";
+
+/* The crease angle on a cube, whose faces meet at 90 degrees: at 0 every vertex is flat (the zero
+ * normal: shading takes the triangle's own); below 90 each corner splits into one vertex per face,
+ * with that face's normal; from 90 on (the edges no longer sharper) the 8 corners stay, smooth, as
+ * ao_mesh_compute_normals makes them. */
+static void test_crease_cube(void **state)
+{
+    (void)state;
+    const char *path = temp_file("cube.obj", CUBE_OBJ, sizeof CUBE_OBJ - 1);
+    struct ao_mesh mesh;
+    load_at_crease(&mesh, path, 0.0);
+    assert_int_equal(mesh.vertex_count, 8);
+    for (size_t i = 0; i < 8; i++)
+        assert_vec3_near(mesh.normals[i], 0, 0, 0);
+    ao_mesh_finish(&mesh);
+    for (double crease = 1.0; crease < 90.0; crease += 22.0) {
+        load_at_crease(&mesh, path, crease);
+        assert_int_equal(mesh.vertex_count, 24);
+        for (size_t i = 0; i < 24; i++) {
+            struct ao_vec3 n = mesh.normals[i];
+            assert_float_equal(fabsf(n.x) + fabsf(n.y) + fabsf(n.z), 1.0f, 0.0f);   /* an axis, exactly */
+        }
+        ao_mesh_finish(&mesh);
+    }
+    for (double crease = 90.5; crease <= 180.0; crease += 44.75) {
+        load_at_crease(&mesh, path, crease);
+        assert_int_equal(mesh.vertex_count, 8);
+        struct ao_mesh again = mesh;
+        again.normals = NULL;
+        struct ao_vec3 *given = mesh.normals;
+        assert_true(ao_mesh_compute_normals(&again));
+        assert_memory_equal(given, again.normals, 8 * sizeof *given);
+        free(again.normals);
+        ao_mesh_finish(&mesh);
+    }
+}
+
+/* A smooth mesh (a 32 x 16 UV sphere, 11.25 degrees between facets) keeps its vertices at the
+ * default crease angle and gets the normals of smoothing everywhere, bit for bit. */
+static void test_crease_keeps_a_smooth_mesh(void **state)
+{
+    (void)state;
+    char *text = malloc(1 << 16);
+    assert_non_null(text);
+    int n = 0, segments = 32, rings = 16;
+    const double pi = 3.14159265358979323846;
+    n += sprintf(text + n, "v 0 -1 0\nv 0 1 0\n");
+    for (int r = 1; r < rings; r++)
+        for (int k = 0; k < segments; k++) {
+            double lat = pi * ((double)r / rings - 0.5), lon = 2 * pi * k / segments;
+            n += sprintf(text + n, "v %.9f %.9f %.9f\n", cos(lat) * cos(lon), sin(lat), cos(lat) * sin(lon));
+        }
+    for (int r = 0; r < rings; r++)
+        for (int k = 0; k < segments; k++) {
+            int k1 = (k + 1) % segments, a = 3 + (r - 1) * segments + k, b = 3 + (r - 1) * segments + k1;
+            if (r == 0)
+                n += sprintf(text + n, "f 1 %d %d\n", 3 + k1, 3 + k);
+            else if (r == rings - 1)
+                n += sprintf(text + n, "f %d %d 2\n", a, b);
+            else
+                n += sprintf(text + n, "f %d %d %d %d\n", a, b, b + segments, a + segments);
+        }
+    const char *path = temp_file("sphere.obj", text, (size_t)n);
+    free(text);
+    struct ao_mesh smooth, creased;
+    load_at_crease(&smooth, path, 180.0);
+    load_at_crease(&creased, path, AO_MESH_CREASE_DEFAULT);
+    assert_int_equal(creased.vertex_count, smooth.vertex_count);
+    assert_int_equal(creased.vertex_count, 2 + 15 * 32);
+    assert_memory_equal(creased.normals, smooth.normals, smooth.vertex_count * sizeof *smooth.normals);
+    assert_memory_equal(creased.indices, smooth.indices, 3 * smooth.triangle_count * sizeof *smooth.indices);
+    ao_mesh_finish(&smooth);
+    ao_mesh_finish(&creased);
+}
+
+/* A vertex a hundred thousand triangles share, folded back and forth at every edge (a fan whose
+ * rim zigzags up and down): each triangle its own side, split in linear time, and one whose folds
+ * all lie flatter than the crease, one side. */
+static void test_crease_many_triangles_at_a_vertex(void **state)
+{
+    (void)state;
+    enum { FAN = 100000 };
+    for (int folded = 0; folded < 2; folded++) {
+        size_t size = 64 + (size_t)FAN * 80;
+        char *text = malloc(size);
+        assert_non_null(text);
+        int n = sprintf(text, "v 0 0 0\n");
+        for (int k = 0; k <= FAN; k++) {
+            double angle = 6.283185307179586 * k / (FAN + 1);
+            n += sprintf(text + n, "v %.9f %.9f %s\n", cos(angle), sin(angle), folded && k % 2 ? "0.5" : "0");
+        }
+        for (int k = 0; k < FAN; k++)
+            n += sprintf(text + n, "f 1 %d %d\n", k + 2, k + 3);
+        const char *path = temp_file("fan.obj", text, (size_t)n);
+        free(text);
+        struct ao_mesh mesh;
+        load_at_crease(&mesh, path, AO_MESH_CREASE_DEFAULT);
+        assert_int_equal(mesh.triangle_count, FAN);
+        /* Folded: the centre splits into one vertex per triangle (each fold about 90 degrees); the
+         * rim's vertices, each between two triangles, into two. Flat: nothing splits. */
+        assert_int_equal(mesh.vertex_count, folded ? (size_t)FAN + 2 * (FAN + 1) - 2 : (size_t)FAN + 2);
+        for (size_t i = 0; i < mesh.vertex_count; i++)
+            assert_float_equal(ao_vec3_length(mesh.normals[i]), 1.0f, 1e-5f);
+        ao_mesh_finish(&mesh);
+    }
+}
+
+/* Normals given as NaN, infinite or zero are made as if not given (counted, and noted with the
+ * count by the model): an OBJ's from its triangle (smooth up to the crease angle), a glTF's flat. */
+static void test_invalid_normals(void **state)
+{
+    (void)state;
+    static const char obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn nan 0 1\nvn inf 0 0\nvn 0 0 0\nvn 0 0 2\n"
+                              "f 1//1 2//2 3//4\nf 1//3 3//4 2//2\n";
+    struct ao_budget budget = {.limit = AO_BUDGET_DEFAULT};
+    struct ao_model model;
+    assert_true(ao_model_load_budget(&model, temp_file("nan.obj", obj, sizeof obj - 1), &budget, 40.0));
+    assert_int_equal(model.invalid_normals, 3);
+    assert_non_null(strstr(model.note, "3 of its normals are zero or not finite: made as for a file without "
+                                       "normals (smooth up to the crease angle)"));
+    const struct ao_mesh *m = &model.meshes[0];
+    assert_int_equal(m->triangle_count, 2);
+    /* (0,0,0) and (1,0,0), whose normals are missing in both triangles, split between them (the
+     * second winds the other way: 180 degrees apart); (0,1,0) keeps the normal given. */
+    assert_vec3_near(m->normals[m->indices[0]], 0, 0, 1);
+    assert_vec3_near(m->normals[m->indices[1]], 0, 0, 1);
+    assert_vec3_near(m->normals[m->indices[3]], 0, 0, -1);
+    assert_vec3_near(m->normals[m->indices[5]], 0, 0, -1);
+    assert_vec3_near(m->normals[m->indices[2]], 0, 0, 1);
+    assert_int_equal(m->indices[2], m->indices[4]);
+    ao_model_finish(&model);
+
+    struct {
+        float p[3][3], n[3][3];
+    } data = {{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}}, {{NAN, 0, 0}, {0, 0, 1}, {0, 0, 0}}};
+    static const char json[] =
+        "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 0}],\n"
+        " \"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0, \"NORMAL\": 1}}]}],\n"
+        " \"accessors\": [{\"bufferView\": 0, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"},\n"
+        "   {\"bufferView\": 0, \"byteOffset\": 36, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}],\n"
+        " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 72}],\n"
+        " \"buffers\": [{\"byteLength\": %zu, \"uri\": \"%s\"}]}\n";
+    assert_true(ao_model_load_budget(&model, gltf_file("nan.gltf", json, &data, sizeof data), &budget, 40.0));
+    assert_int_equal(model.invalid_normals, 2);
+    assert_non_null(strstr(model.note, "2 of its normals are zero or not finite: made as for a file without "
+                                       "normals (flat)"));
+    assert_vec3_near(model.meshes[0].normals[0], 0, 0, 0);
+    assert_vec3_near(model.meshes[0].normals[1], 0, 0, 1);
+    assert_vec3_near(model.meshes[0].normals[2], 0, 0, 0);
+    ao_model_finish(&model);
+}
+
 /* The shipped bunny: its counts, y up, finite unit normals, and outward orientation. Its file has no
  * normals: at the default crease angle (40 degrees) the 129 vertices on its sharper edges split,
  * 1968 vertices for 1839 positions; at 180 every vertex is smooth. */
@@ -2155,6 +2312,10 @@ int main(void)
         cmocka_unit_test(test_mutations),
         cmocka_unit_test(test_compute_normals),
         cmocka_unit_test(test_normals_any_thread_count),
+        cmocka_unit_test(test_crease_cube),
+        cmocka_unit_test(test_crease_keeps_a_smooth_mesh),
+        cmocka_unit_test(test_crease_many_triangles_at_a_vertex),
+        cmocka_unit_test(test_invalid_normals),
         cmocka_unit_test(test_bunny),
     };
     return cmocka_run_group_tests(tests, make_temp_dir, remove_temp_dir);
