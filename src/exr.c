@@ -450,9 +450,13 @@ bool ao_exr_read(const char *path, int want_width, int want_height, float **rgb,
     exr_context_t ctxt = NULL;
     struct failure f = {"", false};
     int w = 0, h = 0;
-    bool ok = exr_start_read(&ctxt, path, &init) == EXR_ERR_SUCCESS
-                  ? read_part(ctxt, want_width, want_height, rgb, &w, &h, &f)
-                  : failed(&f, true, "not a readable OpenEXR file");
+    /* A header attribute of a value OpenEXR does not define (compression 10 or 255, lineOrder 9) is
+     * reported by the library, which then reads the file with its default in place (chunks stored
+     * raw read as if uncompressed): refused, as OpenEXR's C++ library and exrcheck refuse it. */
+    exr_result_t started = exr_start_read(&ctxt, path, &init);
+    bool ok = started != EXR_ERR_SUCCESS ? failed(&f, true, "not a readable OpenEXR file")
+              : s.message[0]             ? failed(&f, true, "its header holds a value OpenEXR does not define")
+                                         : read_part(ctxt, want_width, want_height, rgb, &w, &h, &f);
     if (ctxt)
         exr_finish(&ctxt);
     free(data);

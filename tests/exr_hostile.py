@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Writes the hostile EXR files of tests/test_hostile.sh into the directory given (default: the
-current one): chunks that store fewer or more bytes than their pixels take. Each is a well-formed
-header and offset table whose chunk sizes lie. The same files are seeds of the EXR fuzz corpus
+current one): chunks that store fewer or more bytes than their pixels take, each a well-formed
+header and offset table whose chunk sizes lie; and headers naming a compression or a line order
+that OpenEXR does not define, over chunks stored raw. The same files are seeds of the EXR fuzz corpus
 (tests/fuzz/exr)."""
 import os
 import struct
@@ -13,7 +14,7 @@ def attribute(name, kind, data):
     return name.encode() + b'\0' + kind.encode() + b'\0' + struct.pack('<i', len(data)) + data
 
 
-def header(width, height, pixel_type, compression, tile=None):
+def header(width, height, pixel_type, compression, tile=None, line_order=0):
     """A single-part header: channels B, G, R of pixel_type (1 half, 2 float), not subsampled."""
     channels = b''.join(name + b'\0' + struct.pack('<iB3xii', pixel_type, 0, 1, 1)
                         for name in (b'B', b'G', b'R')) + b'\0'
@@ -21,7 +22,7 @@ def header(width, height, pixel_type, compression, tile=None):
     attrs = (attribute('channels', 'chlist', channels) +
              attribute('compression', 'compression', bytes([compression])) +
              attribute('dataWindow', 'box2i', box) + attribute('displayWindow', 'box2i', box) +
-             attribute('lineOrder', 'lineOrder', b'\0') +
+             attribute('lineOrder', 'lineOrder', bytes([line_order])) +
              attribute('pixelAspectRatio', 'float', struct.pack('<f', 1)) +
              attribute('screenWindowCenter', 'v2f', struct.pack('<2f', 0, 0)) +
              attribute('screenWindowWidth', 'float', struct.pack('<f', 1)))
@@ -30,9 +31,9 @@ def header(width, height, pixel_type, compression, tile=None):
     return b'\x76\x2f\x31\x01' + struct.pack('<I', 2 | (0x200 if tile else 0)) + attrs + b'\0'
 
 
-def scanline_file(width, height, pixel_type, compression, chunks):
+def scanline_file(width, height, pixel_type, compression, chunks, line_order=0):
     """chunks: (first row, stored bytes) in file order."""
-    head = header(width, height, pixel_type, compression)
+    head = header(width, height, pixel_type, compression, line_order=line_order)
     offset, table, body = len(head) + 8 * len(chunks), b'', b''
     for y, data in chunks:
         table += struct.pack('<Q', offset + len(body))
@@ -70,6 +71,11 @@ FILES = {
     # 8x6 ZIP (one block of 16 rows) storing more bytes than its 576 uncompressed, and none
     'exr_zip_long.exr': scanline_file(8, 6, FLOAT, ZIP, [(0, zlib.compress(grey * 6) + b'\0' * 600)]),
     'exr_zip_empty.exr': scanline_file(8, 6, FLOAT, ZIP, [(0, b'')]),
+    # 8x6 rows stored raw under compressions 10 and 255 and line order 9, none of which OpenEXR
+    # defines: its C library read the raw rows
+    'exr_compression_10.exr': scanline_file(8, 6, FLOAT, 10, [(y, grey) for y in range(6)]),
+    'exr_compression_255.exr': scanline_file(8, 6, FLOAT, 255, [(y, grey) for y in range(6)]),
+    'exr_line_order_9.exr': scanline_file(8, 6, FLOAT, NONE, [(y, grey) for y in range(6)], line_order=9),
 }
 
 if __name__ == '__main__':

@@ -10,13 +10,19 @@
 //                      indices as a triangle list (TRIANGLES, which may rotate corners)
 //   draco              KHR_draco_mesh_compression, Edgebreaker, positions quantized to 14 bits
 //   draco-sequential   KHR_draco_mesh_compression, sequential, positions not quantized
+//   draco-quantized    KHR_draco_mesh_compression over KHR_mesh_quantization: positions as
+//                      normalized shorts (as meshopt-quantized's) that Draco stores as integers,
+//                      the accessor of componentType 5122 saying how to read them
+//   draco-fewer        as draco, the POSITION accessor counting 30 points fewer than decode (as the
+//                      Khronos CesiumMilkTruck glTF-Draco sample: 1856 for 1886)
 //
 // and, for tests/test_hostile.sh, streams that lie:
 //
 //   meshopt-range      as meshopt, the last index one past the vertices
 //   draco-claims       as draco, its header claiming 1431655765 triangles (~34 GB of tables)
 //   draco-range        as draco-sequential, the first corner naming point 65535 of fewer
-//   draco-count        as draco, the POSITION accessor counting one point more than decode
+//   draco-count        as draco, the POSITION accessor counting one point more than decode (read as
+//                      decoded, noted, like draco-fewer)
 //
 #include <cmath>
 #include <cstdint>
@@ -118,6 +124,32 @@ std::string meshopt_view(size_t fallback_offset, size_t count, size_t stride, bo
     return text;
 }
 
+// Positions quantized as KHR_mesh_quantization allows: q = round((p - lo) / size * 32767), as
+// normalized shorts, `stride` of them a vertex (the rest zero), and the node that places them back
+// (translation lo, scale size).
+std::vector<int16_t> quantize(const Obj &obj, size_t stride, std::string *node)
+{
+    size_t n = obj.positions.size() / 3;
+    float lo[3], hi[3];
+    for (int k = 0; k < 3; k++) {
+        lo[k] = hi[k] = obj.positions[k];
+        for (size_t i = 0; i < n; i++) {
+            lo[k] = std::fmin(lo[k], obj.positions[3 * i + k]);
+            hi[k] = std::fmax(hi[k], obj.positions[3 * i + k]);
+        }
+    }
+    double size = std::fmax(hi[0] - lo[0], std::fmax(hi[1] - lo[1], hi[2] - lo[2]));
+    std::vector<int16_t> q(stride * n, 0);
+    for (size_t i = 0; i < n; i++)
+        for (int k = 0; k < 3; k++)
+            q[stride * i + k] = static_cast<int16_t>(std::lround((obj.positions[3 * i + k] - lo[k]) / size * 32767.0));
+    char text[256];
+    std::snprintf(text, sizeof text, "{\"mesh\": 0, \"translation\": [%.9g, %.9g, %.9g], \"scale\": [%.17g, %.17g, %.17g]}",
+                  lo[0], lo[1], lo[2], size, size, size);
+    *node = text;
+    return q;
+}
+
 void meshopt_file(const Obj &obj, const char *path, bool quantized, bool out_of_range)
 {
     size_t n = obj.positions.size() / 3, m = obj.indices.size();
@@ -134,29 +166,12 @@ void meshopt_file(const Obj &obj, const char *path, bool quantized, bool out_of_
         position_accessor = "{\"bufferView\": 0, \"componentType\": 5126, \"count\": " + std::to_string(n) +
                             ", \"type\": \"VEC3\"}";
     } else {
-        // q = round((p - lo) / size * 32767), placed back by the node: translation lo, scale size.
-        float lo[3], hi[3];
-        for (int k = 0; k < 3; k++) {
-            lo[k] = hi[k] = obj.positions[k];
-            for (size_t i = 0; i < n; i++) {
-                lo[k] = std::fmin(lo[k], obj.positions[3 * i + k]);
-                hi[k] = std::fmax(hi[k], obj.positions[3 * i + k]);
-            }
-        }
-        double size = std::fmax(hi[0] - lo[0], std::fmax(hi[1] - lo[1], hi[2] - lo[2]));
-        std::vector<int16_t> q(4 * n, 0);
-        for (size_t i = 0; i < n; i++)
-            for (int k = 0; k < 3; k++)
-                q[4 * i + k] = static_cast<int16_t>(std::lround((obj.positions[3 * i + k] - lo[k]) / size * 32767.0));
+        std::vector<int16_t> q = quantize(obj, 4, &node);
         position_stride = 8;
         encoded.resize(meshopt_encodeVertexBufferBound(n, 8));
         position_size = meshopt_encodeVertexBuffer(encoded.data(), encoded.size(), q.data(), n, 8);
         position_accessor = "{\"bufferView\": 0, \"componentType\": 5122, \"normalized\": true, \"count\": " +
                             std::to_string(n) + ", \"type\": \"VEC3\"}";
-        char text[256];
-        std::snprintf(text, sizeof text, "{\"mesh\": 0, \"translation\": [%.9g, %.9g, %.9g], \"scale\": [%.17g, %.17g, %.17g]}",
-                      lo[0], lo[1], lo[2], size, size, size);
-        node = text;
         extensions += ", \"KHR_mesh_quantization\"";
     }
     if (position_size == 0)
@@ -212,17 +227,24 @@ void draco_file(const Obj &obj, const char *path, bool sequential, const std::st
     draco::Mesh mesh;
     mesh.set_num_points(static_cast<uint32_t>(n));
     draco::GeometryAttribute position;
-    position.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 12, 0);
+    bool quantized = lie == "quantized";
+    std::string node = "{\"mesh\": 0}";
+    std::vector<int16_t> q = quantized ? quantize(obj, 3, &node) : std::vector<int16_t>();
+    if (quantized)
+        position.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_INT16, false, 6, 0);
+    else
+        position.Init(draco::GeometryAttribute::POSITION, nullptr, 3, draco::DT_FLOAT32, false, 12, 0);
     int id = mesh.AddAttribute(position, true, static_cast<uint32_t>(n));
     for (size_t i = 0; i < n; i++)
-        mesh.attribute(id)->SetAttributeValue(draco::AttributeValueIndex(static_cast<uint32_t>(i)), &obj.positions[3 * i]);
+        mesh.attribute(id)->SetAttributeValue(draco::AttributeValueIndex(static_cast<uint32_t>(i)),
+                                              quantized ? static_cast<const void *>(&q[3 * i]) : &obj.positions[3 * i]);
     for (size_t t = 0; t < obj.indices.size(); t += 3)
         mesh.AddFace({draco::PointIndex(obj.indices[t]), draco::PointIndex(obj.indices[t + 1]),
                       draco::PointIndex(obj.indices[t + 2])});
     draco::Encoder encoder;
     if (sequential)
         encoder.SetEncodingMethod(draco::MESH_SEQUENTIAL_ENCODING);
-    else
+    else if (!quantized)
         encoder.SetAttributeQuantization(draco::GeometryAttribute::POSITION, 14);
     draco::EncoderBuffer buffer;
     if (!encoder.EncodeMeshToBuffer(mesh, &buffer).ok())
@@ -259,14 +281,16 @@ void draco_file(const Obj &obj, const char *path, bool sequential, const std::st
     }
     Bin bin;
     size_t offset = bin.add(stream.data(), stream.size());
-    size_t position_count = points + (lie == "count" ? 1 : 0);
+    size_t position_count = points + (lie == "count" ? 1 : 0) - (lie == "fewer" ? 30 : 0);
+    std::string extensions = quantized ? "\"KHR_draco_mesh_compression\", \"KHR_mesh_quantization\"" : "\"KHR_draco_mesh_compression\"";
     std::string json =
         "{\"asset\": {\"version\": \"2.0\", \"generator\": \"aoview tests/gltf_encode\"}, "
-        "\"extensionsUsed\": [\"KHR_draco_mesh_compression\"], \"extensionsRequired\": [\"KHR_draco_mesh_compression\"], "
-        "\"scene\": 0, \"scenes\": [{\"nodes\": [0]}], \"nodes\": [{\"mesh\": 0}], "
+        "\"extensionsUsed\": [" + extensions + "], \"extensionsRequired\": [" + extensions + "], "
+        "\"scene\": 0, \"scenes\": [{\"nodes\": [0]}], \"nodes\": [" + node + "], "
         "\"meshes\": [{\"primitives\": [{\"attributes\": {\"POSITION\": 0}, \"indices\": 1, \"mode\": 4, "
         "\"extensions\": {\"KHR_draco_mesh_compression\": {\"bufferView\": 0, \"attributes\": {\"POSITION\": " +
-        std::to_string(unique_id) + "}}}}]}], \"accessors\": [{\"componentType\": 5126, \"count\": " +
+        std::to_string(unique_id) + "}}}}]}], \"accessors\": [{\"componentType\": " +
+        (quantized ? "5122, \"normalized\": true" : "5126") + ", \"count\": " +
         std::to_string(position_count) + ", \"type\": \"VEC3\"}, {\"componentType\": 5125, \"count\": " +
         std::to_string(3 * faces) + ", \"type\": \"SCALAR\"}], \"bufferViews\": [{\"buffer\": 0, \"byteOffset\": " +
         std::to_string(offset) + ", \"byteLength\": " + std::to_string(stream.size()) + "}], \"buffers\": [{\"byteLength\": " +
@@ -286,7 +310,8 @@ int main(int argc, char **argv)
         die("the OBJ needs triangles");
     if (mode == "meshopt" || mode == "meshopt-quantized" || mode == "meshopt-range")
         meshopt_file(obj, argv[3], mode == "meshopt-quantized", mode == "meshopt-range");
-    else if (mode == "draco" || mode == "draco-claims" || mode == "draco-count")
+    else if (mode == "draco" || mode == "draco-claims" || mode == "draco-count" || mode == "draco-quantized" ||
+             mode == "draco-fewer")
         draco_file(obj, argv[3], false, mode == "draco" ? "" : mode.substr(6));
     else if (mode == "draco-sequential" || mode == "draco-range")
         draco_file(obj, argv[3], true, mode == "draco-range" ? "range" : "");

@@ -82,7 +82,7 @@ fi
 for form in strip fan sparse quantized; do
   python3 "$convert" "$obj" "$form.gltf" "--$form" || fail "mesh_convert.py --$form failed"
 done
-for form in meshopt meshopt-quantized draco draco-sequential; do
+for form in meshopt meshopt-quantized draco draco-sequential draco-quantized draco-fewer; do
   "$encode" "$form" "$obj" "$form.glb" || fail "gltf_encode $form failed"
 done
 for mesh in strip.gltf fan.gltf sparse.gltf meshopt.glb draco-sequential.glb; do
@@ -91,8 +91,10 @@ for mesh in strip.gltf fan.gltf sparse.gltf meshopt.glb draco-sequential.glb; do
   else echo "$mesh renders exactly as the OBJ"; fi
 done
 # Elsewhere within Monte Carlo noise at the same seed: positions quantized to 16 bits under a node
-# (KHR_mesh_quantization, alone and with meshopt's triangle codec, which may rotate corners) and
-# Draco's Edgebreaker (14-bit positions, its own vertex and triangle order). With cosine sampling a
+# (KHR_mesh_quantization, alone, with meshopt's triangle codec, which may rotate corners, and with
+# Draco storing the shorts, which its accessor's componentType 5122 tells how to read; refused
+# before) and Draco's Edgebreaker (14-bit positions, its own vertex and triangle order), also with
+# its POSITION accessor counting 30 points fewer than decode (read as decoded, noted; refused before). With cosine sampling a
 # pixel is rho times the share of its N samples that escape, so its noise is binomial; two renders
 # with different seeds differ by the noise of both, sqrt(2) times that of one (in mean absolute
 # difference too, for errors alike in distribution). Bound: the same-seed difference from the OBJ
@@ -102,7 +104,7 @@ done
 noisy() { "$bin" --headless -q --size 96x72 --spp 64 --adaptive off --sampler random "$@"; }
 noisy --seed 3 --crease-angle 0 "$obj" -o noise3.pfm && noisy --seed 4 --crease-angle 0 "$obj" -o noise4.pfm ||
   fail "the OBJ did not render"
-for mesh in quantized.gltf meshopt-quantized.glb draco.glb; do
+for mesh in quantized.gltf meshopt-quantized.glb draco.glb draco-quantized.glb draco-fewer.glb; do
   if ! noisy --seed 3 "$mesh" -o "$mesh-noisy.pfm"; then fail "$mesh did not render"; continue; fi
   python3 - noise3.pfm noise4.pfm "$mesh-noisy.pfm" "$mesh" <<'PY' || fail "$mesh differs from the OBJ by more than Monte Carlo noise"
 import math, struct, sys
@@ -181,6 +183,9 @@ for line in "aoview: skipped $(cat joins.txt) degenerate triangles, 1 point prim
             "aoview: said.gltf: 3676 triangles, 0 spheres"; do
   grep -q "^$line" said.txt || fail "said.gltf: no line '$line' in: $(cat said.txt)"
 done
+"$bin" --headless --size 32x24 --spp 1 -o fewer.pfm draco-fewer.glb 2>fewer.txt || fail "draco-fewer.glb did not render"
+line="aoview: draco-fewer.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): accessor 0 counts 1809 points where its data decode to 1839: read as decoded"
+grep -qxF "$line" fewer.txt || fail "draco-fewer.glb: no line '$line' in: $(cat fewer.txt)"
 "$bin" --headless --size 32x24 --spp 1 --ground off -o bare.pfm "$obj" 2>bare.txt || fail "--ground off did not render"
 grep -q "bunny.obj: 3674 triangles" bare.txt || fail "--ground off: $(cat bare.txt)"
 

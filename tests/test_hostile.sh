@@ -64,6 +64,20 @@ loads() {
   rm -f out.pfm
 }
 
+# says TEXT ARGS...: aoview --headless ARGS (1x1, 1 sample, not quiet) must load and render, saying
+# TEXT on one of its lines (a file accepted with one line about what it lacks or what was done).
+says() {
+  local text=$1
+  shift
+  rm -f out.pfm err.txt
+  timeout -s KILL 30 "$bin" --headless --spp 1 --size 1x1 -o out.pfm "$@" 2>err.txt >/dev/null
+  local got=$?
+  if [ "$got" != 0 ]; then fail "$*: exited $got: $(head -c 300 err.txt)"
+  elif ! grep -qF -- "$text" err.txt; then fail "$*: no line '$text' in: $(cat err.txt)"
+  else echo "loaded, saying: $(grep -F -- "$text" err.txt)"; fi
+  rm -f out.pfm
+}
+
 # ---- meshes claiming far more than they hold
 refuse 1 "declares 4000000000 rows, found 3" "$data/claims_ascii.ply"
 refuse 1 "declares 3000000000 rows of at least 12 bytes" "$data/claims_binary.ply"
@@ -341,7 +355,8 @@ rm -f quantized_count.gltf quantized_stride.gltf sparse_count.gltf sparse_index.
 # meshopt index past the vertices; a meshopt view claiming a billion 12-byte elements (decoded into
 # memory of its own: charged first) or a count its view's length does not hold; a Draco header
 # claiming 1431655765 triangles (libdraco's own checks refuse it before it allocates), a Draco
-# corner naming point 65535 of 1839, a POSITION accessor counting a point more than Draco decodes;
+# corner naming point 65535 of 1839 (a POSITION accessor counting a point more than Draco decodes
+# loads, read as decoded, as cesium-native reads it);
 # and a real 300 x 300 grid (180,000 triangles in 50 KB of Draco) under a 4 MB budget: every
 # allocation libdraco makes while decoding is counted against what the budget has left.
 encode=${AO_GLTF_ENCODE:?AO_GLTF_ENCODE not set (tests/gltf_encode; run through meson test)}
@@ -376,12 +391,106 @@ refuse 1 "meshopt_billion.glb: bufferView 0 (EXT_meshopt_compression): decoding 
 refuse 1 "meshopt_count.glb: bufferView 0 (EXT_meshopt_compression): the view's byteLength 22068 is not byteStride 12 times count 1840" meshopt_count.glb
 refuse 1 "draco-claims.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): libdraco cannot decode it" draco-claims.glb
 refuse 1 "draco-range.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): triangle 0 names point 65535 of 1839" draco-range.glb
-refuse 1 "draco-count.glb: accessor 0 (POSITION): count 1840, but its KHR_draco_mesh_compression data decodes to 1839" draco-count.glb
+loads "draco-count.glb (its POSITION accessor counting a point more than decodes: read as decoded)" draco-count.glb
 python3 "$root/tests/mesh_convert.py" --grid 300 grid.obj && "$encode" draco grid.obj draco_grid.glb || fail "no Draco grid"
 refuse 1 "draco_grid.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): decoding it would take more than the" \
   --scene-budget 4M draco_grid.glb
 rm -f meshopt.glb meshopt-range.glb meshopt_billion.glb meshopt_count.glb draco-claims.glb draco-range.glb \
   draco-count.glb grid.obj draco_grid.glb
+
+# ---- what validators say of glTF, EXR and STL files (N7 of the third round): what glTF-Validator
+# reports as an error is refused in one line (normalized floats, components or vertex attributes
+# off their alignment, sparse indices that do not increase, 'sparse' on Draco data); what the
+# specifications allow or name as harmless loads with one line (an accessor counting other than
+# its Draco data decode, a shading-only required extension, normals that are NaN or zero; an ASCII
+# STL's 4-vertex facet or missing 'endsolid'). EXR values OpenEXR does not define are refused.
+python3 - <<'PY'
+import base64, json, struct
+def gltf(name, accessors, views, data, primitive=None, extra=None):
+    doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0}],
+           'meshes': [{'primitives': [primitive or {'attributes': {'POSITION': 0}}]}], 'accessors': accessors,
+           'bufferViews': views, 'buffers': [{'byteLength': len(data),
+               'uri': 'data:application/octet-stream;base64,' + base64.b64encode(data).decode()}]}
+    doc.update(extra or {})
+    json.dump(doc, open(name, 'w'))
+tri = struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0)
+shorts = struct.pack('<12h', 0, 0, 0, 0, 32767, 0, 0, 0, 0, 32767, 0, 0)
+gltf('normalized_float.gltf', [{'bufferView': 0, 'componentType': 5126, 'normalized': True, 'count': 3,
+     'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 36}], tri)
+gltf('offset_float.gltf', [{'bufferView': 0, 'byteOffset': 2, 'componentType': 5126, 'count': 2, 'type': 'VEC3'}],
+     [{'buffer': 0, 'byteLength': 36}], tri)
+gltf('offset_quantized.gltf', [{'bufferView': 0, 'byteOffset': 2, 'componentType': 5122, 'normalized': True,
+     'count': 2, 'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 24, 'byteStride': 8}], shorts)
+gltf('stride_quantized.gltf', [{'bufferView': 0, 'componentType': 5122, 'normalized': True, 'count': 3,
+     'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 24, 'byteStride': 6}], shorts)
+gltf('packed_quantized.gltf', [{'bufferView': 0, 'componentType': 5122, 'normalized': True, 'count': 3,
+     'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 18}], struct.pack('<9h', 0, 0, 0, 32767, 0, 0, 0, 32767, 0) + b'\0\0')
+for name, at in (('sparse_repeated.gltf', (1, 1)), ('sparse_decreasing.gltf', (2, 1))):
+    gltf(name, [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3',
+                 'sparse': {'count': 2, 'indices': {'bufferView': 0, 'byteOffset': 36, 'componentType': 5121},
+                            'values': {'bufferView': 0, 'byteOffset': 12}}}],
+         [{'buffer': 0, 'byteLength': 40}], tri + bytes(at) + b'\0\0')
+gltf('technique.gltf', [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3'}],
+     [{'buffer': 0, 'byteLength': 36}], tri,
+     extra={'extensionsUsed': ['KHR_technique_webgl'], 'extensionsRequired': ['KHR_technique_webgl']})
+# No triangles, said why: a scene whose node places no mesh (the file's other node does), no meshes.
+gltf('unplaced.gltf', [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3'}],
+     [{'buffer': 0, 'byteLength': 36}], tri,
+     extra={'scenes': [{'nodes': [1]}], 'nodes': [{'mesh': 0}, {'name': 'empty'}]})
+gltf('meshless.gltf', [], [], b'', extra={'meshes': [], 'nodes': [{'name': 'empty'}]})
+# The NaN normals of an exporter (a Khronos Vulkan sample's mesh had 112 of 6,246): one NaN and one
+# zero normal of 6; the scene's other mesh as given.
+normals = struct.pack('<9f', float('nan'), 0, 1, 0, 0, 1, 0, 0, 0)
+doc = {'asset': {'version': '2.0'}, 'nodes': [{'mesh': 0}, {'mesh': 1, 'translation': [2, 0, 0]}],
+       'meshes': [{'primitives': [{'attributes': {'POSITION': 0, 'NORMAL': 1}}]},
+                  {'primitives': [{'attributes': {'POSITION': 0, 'NORMAL': 2}}]}],
+       'accessors': [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3'},
+                     {'bufferView': 0, 'byteOffset': 36, 'componentType': 5126, 'count': 3, 'type': 'VEC3'},
+                     {'bufferView': 0, 'byteOffset': 72, 'componentType': 5126, 'count': 3, 'type': 'VEC3'}],
+       'bufferViews': [{'buffer': 0, 'byteLength': 108}],
+       'buffers': [{'byteLength': 108, 'uri': 'data:application/octet-stream;base64,' +
+                    base64.b64encode(tri + normals + struct.pack('<9f', 0, 0, 1, 0, 0, 1, 0, 0, 1)).decode()}]}
+json.dump(doc, open('nan_normals.gltf', 'w'))
+open('quad.stl', 'w').write('solid q\nfacet normal 0 0 1\nouter loop\nvertex 0 0 0\nvertex 1 0 0\nvertex 1 1 0\n'
+                            'vertex 0 1 0\nendloop\nendfacet\n')
+PY
+refuse 1 "normalized_float.gltf: accessor 0 (POSITION): 'normalized' on float components (glTF normalizes 8- and 16-bit integer attributes only)" normalized_float.gltf
+refuse 1 "offset_float.gltf: accessor 0 (POSITION): byte 2 of its buffer (byteOffset 2 in bufferView 0) is not a multiple of its 4-byte components, as glTF requires" offset_float.gltf
+refuse 1 "offset_quantized.gltf: accessor 0 (POSITION): a vertex attribute at byteOffset 2, 8 bytes apart: glTF aligns them to 4 bytes" offset_quantized.gltf
+refuse 1 "stride_quantized.gltf: accessor 0 (POSITION): a vertex attribute at byteOffset 0, 6 bytes apart: glTF aligns them to 4 bytes" stride_quantized.gltf
+refuse 1 "packed_quantized.gltf: accessor 0 (POSITION): a vertex attribute at byteOffset 0, 6 bytes apart" packed_quantized.gltf
+refuse 1 "sparse_repeated.gltf: accessor 0 (POSITION) sparse: index 1 at 1 does not follow 1: glTF's sparse indices strictly increase" sparse_repeated.gltf
+refuse 1 "sparse_decreasing.gltf: accessor 0 (POSITION) sparse: index 1 at 1 does not follow 2" sparse_decreasing.gltf
+refuse 1 "unplaced.gltf: no triangles: no node of scene 0 (the one shown) places a mesh" unplaced.gltf
+refuse 1 "meshless.gltf: no triangles: the file has no meshes" meshless.gltf
+says "technique.gltf: materials, textures and lights are ignored (it requires KHR_technique_webgl)" technique.gltf
+says "nan_normals.gltf: 2 of its normals are zero or not finite: made as for a file without normals (flat)" nan_normals.gltf
+says "quad.stl: 1 facet of more than 3 vertices fanned into triangles (STL's facets are triangles); no 'endsolid' after its last solid (the file may be cut short)" quad.stl
+"$encode" draco "$root/assets/bunny.obj" draco.glb && "$encode" draco-quantized "$root/assets/bunny.obj" draco_quantized.glb ||
+  fail "gltf_encode draco failed"
+python3 - <<'PY'
+import json, struct
+data = open('draco.glb', 'rb').read()
+length = struct.unpack('<I', data[12:16])[0]
+doc = json.loads(data[20:20 + length])
+doc['accessors'][0]['sparse'] = {'count': 1, 'indices': {'bufferView': 0, 'componentType': 5125},
+                                 'values': {'bufferView': 0}}
+text = json.dumps(doc).encode()
+text += b' ' * ((4 - len(text) % 4) % 4)
+rest = data[20 + length:]
+open('draco_sparse.glb', 'wb').write(struct.pack('<3I', 0x46546C67, 2, 20 + len(text) + len(rest)) +
+                                     struct.pack('<2I', len(text), 0x4E4F534A) + text + rest)
+PY
+refuse 1 "draco_sparse.glb: accessor 0 (POSITION): 'sparse' on an accessor of KHR_draco_mesh_compression data, which the extension forbids" draco_sparse.glb
+loads "draco_quantized.glb (Draco storing shorts that its accessor, componentType 5122, says how to read)" draco_quantized.glb
+python3 "$root/tests/exr_hostile.py" . || fail "tests/exr_hostile.py failed"
+refuse 1 "exr_compression_10.exr: its header holds a value OpenEXR does not define (Attribute 'compression' (type 'compression'): Invalid value 10 (max allowed 10))" \
+  --size 8x6 --reference exr_compression_10.exr "$spheres"
+refuse 1 "exr_compression_255.exr: its header holds a value OpenEXR does not define (Attribute 'compression' (type 'compression'): Invalid value 255" \
+  --size 8x6 --reference exr_compression_255.exr "$spheres"
+refuse 1 "exr_line_order_9.exr: its header holds a value OpenEXR does not define (Attribute 'lineOrder' (type 'lineOrder'): Invalid value 9" \
+  --size 8x6 --reference exr_line_order_9.exr "$spheres"
+rm -f ./*.gltf ./*.glb quad.stl exr_*.exr
 
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000

@@ -60,19 +60,41 @@ template <typename T> T *counted_array(std::size_t n)
     return n && n <= SIZE_MAX / sizeof(T) ? static_cast<T *>(counted(n * sizeof(T))) : nullptr;
 }
 
-// Reads point p of attribute a as 3 floats into out; false when its value is missing.
-bool read_point(const draco::PointAttribute *a, uint32_t p, float *out)
+// True when the attribute stores integers.
+bool stores_integers(const draco::PointAttribute *a)
+{
+    switch (a->data_type()) {
+    case draco::DT_INT8: case draco::DT_UINT8: case draco::DT_INT16: case draco::DT_UINT16:
+    case draco::DT_INT32: case draco::DT_UINT32:
+        return true;
+    default:
+        return false;
+    }
+}
+
+// Reads point p of attribute a as 3 floats into out: as Draco dequantizes it, or with integer the
+// integers it stores, each made a float as it is; false when its value is missing or out of range.
+bool read_point(const draco::PointAttribute *a, uint32_t p, bool integer, float *out)
 {
     draco::PointIndex point(p);
     if (!a->is_mapping_identity() && p >= a->indices_map_size())
         return false;
     draco::AttributeValueIndex value = a->mapped_index(point);
-    return value.value() < a->size() && a->ConvertValue<float>(value, 3, out);
+    if (value.value() >= a->size())
+        return false;
+    if (!integer)
+        return a->ConvertValue<float>(value, 3, out);
+    int32_t v[3];
+    if (!a->ConvertValue<int32_t>(value, 3, v))
+        return false;
+    for (int k = 0; k < 3; k++)
+        out[k] = static_cast<float>(v[k]);
+    return true;
 }
 
 // The decoding itself, with the guard on.
-bool decode(const unsigned char *data, std::size_t size, int64_t position_id, int64_t normal_id, ao_draco_mesh *out,
-            char *why, std::size_t why_size)
+bool decode(const unsigned char *data, std::size_t size, int64_t position_id, int64_t normal_id,
+            const bool integers[2], ao_draco_mesh *out, char *why, std::size_t why_size)
 {
     draco::DecoderBuffer buffer;
     buffer.Init(reinterpret_cast<const char *>(data), size);
@@ -100,6 +122,11 @@ bool decode(const unsigned char *data, std::size_t size, int64_t position_id, in
                           k ? "NORMAL" : "POSITION", static_cast<long long>(ids[k]));
             return false;
         }
+        if (integers[k] && !stores_integers(attributes[k])) {
+            std::snprintf(why, why_size, "its %s attribute stores floats where the accessor says integers",
+                          k ? "NORMAL" : "POSITION");
+            return false;
+        }
     }
     std::size_t points = mesh->num_points(), faces = mesh->num_faces();
     out->positions = counted_array<float>(3 * points);
@@ -114,7 +141,7 @@ bool decode(const unsigned char *data, std::size_t size, int64_t position_id, in
     out->face_count = faces;
     for (uint32_t p = 0; p < points; p++)
         for (int k = 0; k < 2; k++)
-            if (attributes[k] && !read_point(attributes[k], p, (k ? out->normals : out->positions) + 3 * p)) {
+            if (attributes[k] && !read_point(attributes[k], p, integers[k], (k ? out->normals : out->positions) + 3 * p)) {
                 std::snprintf(why, why_size, "point %u has no %s value", p, k ? "NORMAL" : "POSITION");
                 return false;
             }
@@ -188,13 +215,14 @@ void operator delete[](void *p, const std::nothrow_t &) noexcept
 }
 
 extern "C" bool ao_draco_decode(const unsigned char *data, size_t size, int64_t position_id, int64_t normal_id,
-                                uint64_t cap, struct ao_draco_mesh *out, bool *over_cap, char *why, size_t why_size)
+                                const bool integers[2], uint64_t cap, struct ao_draco_mesh *out, bool *over_cap,
+                                char *why, size_t why_size)
 {
     *out = ao_draco_mesh{};
     guard = Guard{true, false, cap, 0, 0};
     bool ok = false;
     try {
-        ok = decode(data, size, position_id, normal_id, out, why, why_size);
+        ok = decode(data, size, position_id, normal_id, integers, out, why, why_size);
     } catch (const std::bad_alloc &) {
         std::snprintf(why, why_size, "libdraco ran out of memory");
     } catch (...) {

@@ -23,13 +23,17 @@ struct ao_draco_mesh {
 };
 
 /* Decodes the Draco mesh in data[0, size): POSITION from the attribute whose unique id is
- * position_id, NORMAL from normal_id (negative: none), each of at least 3 components (converted to
- * float as Draco dequantizes them), the faces as they decode. Every allocation the decoder makes on
- * this thread is counted, and one that would take more than cap bytes at once fails, and the
- * decoding with it: *over_cap then says so. Every point a face names is checked to exist. False,
- * with the reason in why and out empty, on any failure. Any thread. */
-bool ao_draco_decode(const unsigned char *data, size_t size, int64_t position_id, int64_t normal_id, uint64_t cap,
-                     struct ao_draco_mesh *out, bool *over_cap, char *why, size_t why_size);
+ * position_id, NORMAL from normal_id (negative: none), each of at least 3 components, the faces as
+ * they decode. An attribute is converted to float as Draco dequantizes it, or, where integers[k]
+ * (0: POSITION, 1: NORMAL) asks for it (a glTF accessor of integer components, KHR_mesh_quantization),
+ * read as the integers Draco stores, each value made a float as it is (an attribute that Draco
+ * stores as floats is then refused). Every allocation the decoder makes on this thread is counted,
+ * and one that would take more than cap bytes at once fails, and the decoding with it: *over_cap
+ * then says so. Every point a face names is checked to exist. False, with the reason in why and out
+ * empty, on any failure. Any thread. */
+bool ao_draco_decode(const unsigned char *data, size_t size, int64_t position_id, int64_t normal_id,
+                     const bool integers[2], uint64_t cap, struct ao_draco_mesh *out, bool *over_cap, char *why,
+                     size_t why_size);
 
 /* Frees what ao_draco_decode allocated and empties mesh. */
 void ao_draco_free(struct ao_draco_mesh *mesh);

@@ -488,9 +488,10 @@ static bool parse_json(struct ao_gltf *g, const char *text, size_t size)
  * aoview ignores anyway (animation, metadata): a file that requires them loads, with a note. By
  * name prefix, then whole names. */
 static const char *const LOOKS_PREFIXES[] = {"KHR_materials_", "KHR_texture_", "EXT_texture_", "MSFT_texture_",
-                                             "ADOBE_materials_", "KHR_techniques_", NULL};
-static const char *const LOOKS[] = {"KHR_lights_punctual", "EXT_lights_image_based", "KHR_xmp_json_ld", "KHR_xmp",
-                                    "KHR_animation_pointer", NULL};
+                                             "MSFT_packing_", "ADOBE_materials_", "KHR_techniques_", NULL};
+static const char *const LOOKS[] = {"KHR_lights_punctual", "EXT_lights_image_based", "EXT_lights_ies",
+                                    "KHR_xmp_json_ld", "KHR_xmp", "KHR_animation_pointer",
+                                    "KHR_technique_webgl", NULL};
 /* Required extensions that change the geometry and that aoview reads. */
 static const char *const GEOMETRY[] = {"KHR_mesh_quantization", "EXT_meshopt_compression",
                                        "KHR_draco_mesh_compression", NULL};
@@ -564,6 +565,26 @@ static bool only_points_and_lines(const struct ao_gltf *g)
             used += (size_t)snprintf(list + used, sizeof list - used, "%s%s", used ? ", " : "", names[mode]);
     return ao_gltf_error(g, "no triangles to render: its primitives have the modes %s, and aoview draws "
                          "only triangles", list);
+}
+
+/* Refuses a file whose nodes place no mesh, naming why: no meshes, no nodes, or nodes of the scene
+ * read that name none (the file's other nodes and scenes are not drawn). */
+static bool no_mesh_placed(const struct ao_gltf *g, size_t mesh_count, size_t node_count)
+{
+    json_object *scenes = ao_gltf_member(g->root, "scenes");
+    size_t scene = 0;
+    uint64_t chosen = 0;
+    if (ao_gltf_member(g->root, "scene") && ao_gltf_whole(ao_gltf_member(g->root, "scene"), AO_GLTF_MAX_INTEGER,
+                                                          &chosen))
+        scene = (size_t)chosen;
+    if (mesh_count == 0)
+        return ao_gltf_error(g, "no triangles: the file has no meshes");
+    if (node_count == 0)
+        return ao_gltf_error(g, "no triangles: the file has %zu mesh%s but no nodes to place them", mesh_count,
+                             mesh_count == 1 ? "" : "es");
+    if (ao_gltf_length(scenes) > 0)
+        return ao_gltf_error(g, "no triangles: no node of scene %zu (the one shown) places a mesh", scene);
+    return ao_gltf_error(g, "no triangles: no node places a mesh");
 }
 
 /* A placement of glTF mesh `mesh` by node `node`, found in the counting pass. */
@@ -651,6 +672,7 @@ static bool read_scene(struct ao_gltf *g, struct ao_model *model)
     struct found *found = NULL;
     size_t placements = 0;
     ok = ok && find_placements(g, node_count, placed, &found, &placements);
+    ok = ok && (placements > 0 || no_mesh_placed(g, mesh_count, node_count));
     ok = ok && (g->triangles > 0 || !(g->modes_found & 0xf) || only_points_and_lines(g));
     ok = ok && ao_load_fits_model(g->budget, g->triangles, g->vertices, placements, g->path);
     struct ao_load_array meshes = {.size = sizeof(struct ao_mesh)}, list = {.size = sizeof(struct ao_placement)};
@@ -672,7 +694,11 @@ static bool read_scene(struct ao_gltf *g, struct ao_model *model)
     model->placement_count = list.count;
     model->placements = ao_load_take(&list);
     if (ok && model->mesh_count == 0)
-        ok = ao_gltf_error(g, "no triangles (%zu degenerate ones skipped)", g->degenerate_count);
+        ok = g->degenerate_count ? ao_gltf_error(g, "no triangles (%zu degenerate ones skipped)", g->degenerate_count)
+                                 : ao_gltf_error(g, "no triangles: the meshes its nodes place have no primitives");
+    if (ok && g->recounted)
+        ao_gltf_note(g, "%s: read as decoded%s", g->recount,
+                     g->recounted > 1 ? ", as are more such primitives" : "");
     return ok;
 }
 

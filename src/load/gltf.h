@@ -32,6 +32,7 @@ struct ao_gltf_buffer {
 /* A bufferView's bytes, checked against its buffer at its first use. */
 struct ao_gltf_view {
     const unsigned char *data;
+    size_t offset;           /* its byteOffset in its buffer (0 for decoded data of its own) */
     size_t length, stride;   /* stride 0: not given (the elements are packed) */
     unsigned char *owned;    /* decoded data of its own (EXT_meshopt_compression), or NULL */
     bool ready;
@@ -46,11 +47,20 @@ struct ao_gltf_elements {
     bool normalized;
 };
 
-/* A bufferView's KHR_draco_mesh_compression data, once decoded, and the attribute ids it was
- * decoded for. */
+/* How the accessor of a Draco-compressed attribute reads its values: float as Draco dequantizes
+ * them, or (KHR_mesh_quantization) the integers Draco stores, of a component type, normalized or
+ * not. */
+struct ao_gltf_reading {
+    int component_type;
+    bool normalized;
+};
+
+/* A bufferView's KHR_draco_mesh_compression data, once decoded, and the attribute ids and readings
+ * (POSITION, NORMAL) it was decoded for. */
 struct ao_gltf_draco {
     struct ao_draco_mesh mesh;
     int64_t position_id, normal_id;
+    struct ao_gltf_reading readings[2];
     bool done;
 };
 
@@ -90,6 +100,8 @@ struct ao_gltf {
                                                           (missing where not given), uint32 */
     size_t invalid_normals;       /* its normals given as zero or not finite */
     size_t degenerate_count;      /* zero-area triangles dropped, all meshes */
+    size_t recounted;             /* Draco primitives decoding to other counts than their accessors say */
+    char recount[160];            /* the first of them, for the note */
     unsigned modes_found;         /* bit m: a primitive of mode m was found */
     size_t point_primitives, line_primitives;   /* skipped, each time a node placed them */
     char note[AO_MESH_NOTE_SIZE]; /* what was ignored that the user should hear of (mesh.h) */
@@ -144,8 +156,10 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *u
 
 /* The positions, normals (when asked for) and triangle indices, out[0] to out[2], of a primitive
  * whose KHR_draco_mesh_compression extension is ext: its bufferView decoded once (draco.h) within
- * what the scene budget has left, the result charged to it, and the primitive's accessors checked
- * against what decoded (float VEC3 attributes, counts equal). */
+ * what the scene budget has left, the result charged to it; the attributes read as their accessors
+ * say (VEC3 of floats, or of 8- and 16-bit integers dequantized as KHR_mesh_quantization does),
+ * which may not be sparse; an accessor counting other than what decoded is recounted (noted), as
+ * the decoded triangles name decoded points only. */
 bool ao_gltf_draco(struct ao_gltf *g, json_object *primitive, json_object *ext, bool normals, const char *where,
                    struct ao_gltf_elements out[3]);
 

@@ -427,6 +427,7 @@ static bool view(struct ao_gltf *g, size_t index, const struct ao_gltf_view **ou
     if (!buffer(g, buffer_index, true, &b))
         return false;
     v->data = b->data + offset;
+    v->offset = (size_t)offset;
     v->length = (size_t)length;
     v->stride = (size_t)stride;
     v->ready = true;
@@ -435,10 +436,17 @@ static bool view(struct ao_gltf *g, size_t index, const struct ao_gltf_view **ou
 
 /* ------------------------------------------------------------------ accessors */
 
-/* count elements of element bytes from byte offset of bufferView index, stride bytes apart (0:
- * packed), checked to lie inside the view; where and what name them in messages. */
+/* How elements must be aligned in their bufferView, as glTF requires (its validator reports each
+ * as an error): to their component's size from the start of the buffer; vertex attributes to 4
+ * bytes, byteOffset and byteStride alike. */
+enum alignment { ALIGN_COMPONENT, ALIGN_VERTEX };
+
+/* count elements of element bytes (components of component bytes) from byte offset of bufferView
+ * index, stride bytes apart (0: packed), checked to lie inside the view and to be aligned as glTF
+ * requires; where and what name them in messages. */
 static bool view_elements(struct ao_gltf *g, size_t index, uint64_t offset, uint64_t count, size_t element,
-                          bool strided, const char *where, const unsigned char **first, size_t *stride)
+                          size_t component, enum alignment alignment, bool strided, const char *where,
+                          const unsigned char **first, size_t *stride)
 {
     const struct ao_gltf_view *v;
     if (!view(g, index, &v))
@@ -447,6 +455,14 @@ static bool view_elements(struct ao_gltf *g, size_t index, uint64_t offset, uint
     if (step < element)
         return ao_gltf_error(g, "bufferView %zu: byteStride %llu is smaller than an element (%zu bytes)", index,
                              (unsigned long long)step, element);
+    if ((v->offset + offset) % component)
+        return ao_gltf_error(g, "%s: byte %llu of its buffer (byteOffset %llu in bufferView %zu) is not a multiple of "
+                             "its %zu-byte components, as glTF requires", where,
+                             (unsigned long long)(v->offset + offset), (unsigned long long)offset, index, component);
+    if (alignment == ALIGN_VERTEX && (offset % 4 || (count > 1 && step % 4)))
+        return ao_gltf_error(g, "%s: a vertex attribute at byteOffset %llu, %llu bytes apart: glTF aligns them to 4 "
+                             "bytes (a byteStride that is a multiple of 4)", where, (unsigned long long)offset,
+                             (unsigned long long)step);
     /* The last element ends inside the view: offset + step * (count - 1) + element. */
     uint64_t end = offset + step * (count - 1) + element;
     if (end > v->length)
@@ -460,9 +476,10 @@ static bool view_elements(struct ao_gltf *g, size_t index, uint64_t offset, uint
 
 /* The accessor's elements gathered into memory of their own (packed, element bytes each), charged
  * to the budget: a copy of those of its bufferView, or zeros without one, with the sparse entries,
- * if any, written over them. Each sparse index is checked against the count. */
+ * if any, written over them (of component bytes each, aligned to them). Each sparse index is checked
+ * against the count and must follow the one before, as glTF requires. */
 static bool gather(struct ao_gltf *g, size_t i, json_object *a, const char *where, uint64_t count, size_t element,
-                   const struct ao_gltf_elements *base)
+                   size_t component, const struct ao_gltf_elements *base)
 {
     char what[128];
     snprintf(what, sizeof what, "%s: its %llu values", where, (unsigned long long)count);
@@ -502,11 +519,12 @@ static bool gather(struct ao_gltf *g, size_t i, json_object *a, const char *wher
                              sparse_where, (unsigned long long)index_type);
     struct ao_gltf_elements at_list = {.component_type = (int)index_type};
     snprintf(what, sizeof what, "%s sparse indices", where);
-    if (!view_elements(g, index_view, index_offset, entries, ao_quantize_size((int)index_type), false, what,
-                       &index_first, &index_stride))
+    if (!view_elements(g, index_view, index_offset, entries, ao_quantize_size((int)index_type),
+                       ao_quantize_size((int)index_type), ALIGN_COMPONENT, false, what, &index_first, &index_stride))
         return false;
     snprintf(what, sizeof what, "%s sparse values", where);
-    if (!view_elements(g, value_view, value_offset, entries, element, false, what, &value_first, &value_stride))
+    if (!view_elements(g, value_view, value_offset, entries, element, component, ALIGN_COMPONENT, false, what,
+                       &value_first, &value_stride))
         return false;
     at_list.first = index_first;
     at_list.stride = index_stride;
@@ -515,6 +533,9 @@ static bool gather(struct ao_gltf *g, size_t i, json_object *a, const char *wher
         if (at >= count)
             return ao_gltf_error(g, "%s: index %u at %zu is out of range (%llu elements)", sparse_where, at, k,
                                  (unsigned long long)count);
+        if (k > 0 && at <= ao_gltf_index_at(&at_list, k - 1))
+            return ao_gltf_error(g, "%s: index %u at %zu does not follow %u: glTF's sparse indices strictly increase",
+                                 sparse_where, at, k, ao_gltf_index_at(&at_list, k - 1));
         memcpy(dense + (size_t)at * element, value_first + k * value_stride, element);
     }
     return true;
@@ -551,18 +572,22 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *u
                                     : "indices must be unsigned byte, short or int");
     if (normalized && !json_object_is_type(normalized, json_type_boolean))
         return ao_gltf_error(g, "%s: 'normalized' is not true or false", where);
+    if (normalized && json_object_get_boolean(normalized) && (component == AO_QUANTIZE_FLOAT || !attribute))
+        return ao_gltf_error(g, "%s: 'normalized' on %s (glTF normalizes 8- and 16-bit integer attributes only)",
+                             where, attribute ? "float components" : "indices");
     if (count == 0)
         return ao_gltf_error(g, "%s: count is 0", where);
     size_t size = ao_quantize_size((int)component), element = (attribute ? 3 : 1) * size;
     *out = (struct ao_gltf_elements){NULL, element, (size_t)count, (int)component, size,
                                      normalized && json_object_get_boolean(normalized)};
-    if (has_view && !view_elements(g, view_index, offset, count, element, true, where, &out->first, &out->stride))
+    if (has_view && !view_elements(g, view_index, offset, count, element, size,
+                                   attribute ? ALIGN_VERTEX : ALIGN_COMPONENT, true, where, &out->first, &out->stride))
         return false;
 
     /* Without a bufferView (zeros) or with sparse entries: gathered once into memory of its own. */
     if (has_view && !sparse)
         return true;
-    if (!g->gathered[i] && !gather(g, i, a, where, count, element, has_view ? out : NULL))
+    if (!g->gathered[i] && !gather(g, i, a, where, count, element, size, has_view ? out : NULL))
         return false;
     out->first = g->gathered[i];
     out->stride = element;
@@ -570,30 +595,74 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *u
 }
 
 /* The attribute or indices accessor of a Draco-compressed primitive (name in attributes, or
- * "indices" of the primitive): of the type (VEC3 of floats, or SCALAR), and its count that of the
- * decoded data. */
-static bool draco_accessor(struct ao_gltf *g, json_object *holder, const char *name, bool attribute, uint64_t want,
-                           const char *where)
+ * "indices" of the primitive): its index, count and, for an attribute, how it reads its values
+ * (VEC3 of float, or of 8- and 16-bit integers, KHR_mesh_quantization; normalized only those). The
+ * extension forbids 'sparse' on these accessors, which read decoded data only. */
+static bool draco_accessor(struct ao_gltf *g, json_object *holder, const char *name, bool attribute, const char *where,
+                           size_t *index, uint64_t *count, struct ao_gltf_reading *reading)
 {
-    size_t i;
-    uint64_t count, component;
+    uint64_t component = AO_QUANTIZE_FLOAT;
     char what[128];
-    if (!ao_gltf_index(g, holder, name, ao_gltf_length(g->accessors), where, &i))
+    if (!ao_gltf_index(g, holder, name, ao_gltf_length(g->accessors), where, index))
         return false;
-    snprintf(what, sizeof what, "accessor %zu (%s)", i, name);
-    json_object *a = json_object_array_get_idx(g->accessors, i), *type = ao_gltf_member(a, "type");
+    snprintf(what, sizeof what, "accessor %zu (%s)", *index, name);
+    json_object *a = json_object_array_get_idx(g->accessors, *index), *type = ao_gltf_member(a, "type");
+    json_object *normalized = ao_gltf_member(a, "normalized");
     if (!json_object_is_type(type, json_type_string) || strcmp(json_object_get_string(type), attribute ? "VEC3" : "SCALAR"))
         return ao_gltf_error(g, "%s: type must be %s", what, attribute ? "VEC3" : "SCALAR");
-    if (!ao_gltf_integer(g, a, "count", true, 0, AO_GLTF_MAX_INTEGER, what, &count) ||
-        !ao_gltf_integer(g, a, "componentType", true, 0, AO_GLTF_MAX_INTEGER, what, &component))
+    if (!ao_gltf_integer(g, a, "count", true, 0, AO_GLTF_MAX_INTEGER, what, count) ||
+        (attribute && !ao_gltf_integer(g, a, "componentType", true, 0, AO_GLTF_MAX_INTEGER, what, &component)))
         return false;
-    if (attribute && component != AO_QUANTIZE_FLOAT)
-        return ao_gltf_error(g, "%s: componentType %llu; with KHR_draco_mesh_compression aoview reads float (5126) "
-                             "attributes only", what, (unsigned long long)component);
-    if (count != want)
-        return ao_gltf_error(g, "%s: count %llu, but its KHR_draco_mesh_compression data decodes to %llu", what,
-                             (unsigned long long)count, (unsigned long long)want);
+    if (ao_gltf_member(a, "sparse"))
+        return ao_gltf_error(g, "%s: 'sparse' on an accessor of KHR_draco_mesh_compression data, which the extension "
+                             "forbids", what);
+    if (normalized && !json_object_is_type(normalized, json_type_boolean))
+        return ao_gltf_error(g, "%s: 'normalized' is not true or false", what);
+    if (!attribute)
+        return true;
+    if (component == AO_QUANTIZE_UNSIGNED_INT || ao_quantize_size((int)component) == 0)
+        return ao_gltf_error(g, "%s: componentType %llu; positions and normals must be float (5126), or byte, unsigned "
+                             "byte, short or unsigned short (5120 to 5123, KHR_mesh_quantization)", what,
+                             (unsigned long long)component);
+    reading->component_type = (int)component;
+    reading->normalized = normalized && json_object_get_boolean(normalized);
+    if (reading->normalized && component == AO_QUANTIZE_FLOAT)
+        return ao_gltf_error(g, "%s: 'normalized' on float components (only 8- and 16-bit integers are normalized)",
+                             what);
     return true;
+}
+
+/* Dequantizes the count VEC3 values decoded as integers in place, as their accessor reads them
+ * (ao_quantize_value, from the little-endian bytes of the component type); false (reported) at a
+ * value outside that type. */
+static bool dequantize(struct ao_gltf *g, float *values, size_t count, struct ao_gltf_reading reading,
+                       const char *what)
+{
+    if (reading.component_type == AO_QUANTIZE_FLOAT)
+        return true;
+    bool is_signed = reading.component_type == AO_QUANTIZE_BYTE || reading.component_type == AO_QUANTIZE_SHORT;
+    size_t size = ao_quantize_size(reading.component_type);
+    double bits = 8.0 * (double)size, lo = is_signed ? -ldexp(1.0, (int)bits - 1) : 0.0;
+    double hi = is_signed ? ldexp(1.0, (int)bits - 1) - 1.0 : ldexp(1.0, (int)bits) - 1.0;
+    for (size_t i = 0; i < 3 * count; i++) {
+        double v = values[i];
+        if (!(v >= lo && v <= hi))
+            return ao_gltf_error(g, "%s: point %zu's value %.0f lies outside componentType %d", what, i / 3, v,
+                                 reading.component_type);
+        uint32_t word = (uint32_t)(int32_t)v;
+        unsigned char le[2] = {(unsigned char)word, (unsigned char)(word >> 8)};
+        values[i] = (float)ao_quantize_value(le, reading.component_type, reading.normalized);
+    }
+    return true;
+}
+
+/* Notes a Draco primitive whose accessor counts otherwise than its data decode (the first named). */
+static void recounted(struct ao_gltf *g, const char *where, size_t accessor, uint64_t count, size_t decoded,
+                      const char *what)
+{
+    if (g->recounted++ == 0)
+        snprintf(g->recount, sizeof g->recount, "%s (KHR_draco_mesh_compression): accessor %zu counts %llu %s where "
+                 "its data decode to %zu", where, accessor, (unsigned long long)count, what, decoded);
 }
 
 bool ao_gltf_draco(struct ao_gltf *g, json_object *primitive, json_object *ext, bool normals, const char *where,
@@ -601,46 +670,59 @@ bool ao_gltf_draco(struct ao_gltf *g, json_object *primitive, json_object *ext, 
 {
     char at[128], why[256];
     snprintf(at, sizeof at, "%s (KHR_draco_mesh_compression)", where);
-    json_object *attributes = ao_gltf_member(ext, "attributes");
-    size_t index;
-    uint64_t position_id, normal_id = 0;
+    json_object *attributes = ao_gltf_member(ext, "attributes"), *accessors = ao_gltf_member(primitive, "attributes");
+    size_t index, accessor[3] = {0, 0, 0};
+    uint64_t position_id, normal_id = 0, counts[3] = {0, 0, 0};
+    struct ao_gltf_reading readings[2] = {{AO_QUANTIZE_FLOAT, false}, {AO_QUANTIZE_FLOAT, false}};
+    bool indexed = ao_gltf_member(primitive, "indices") != NULL;
     if (!ao_gltf_index(g, ext, "bufferView", ao_gltf_length(g->views), at, &index) ||
         !ao_gltf_integer(g, attributes, "POSITION", true, 0, UINT32_MAX, at, &position_id) ||
-        (normals && !ao_gltf_integer(g, attributes, "NORMAL", true, 0, UINT32_MAX, at, &normal_id)))
+        (normals && !ao_gltf_integer(g, attributes, "NORMAL", true, 0, UINT32_MAX, at, &normal_id)) ||
+        !draco_accessor(g, accessors, "POSITION", true, at, &accessor[0], &counts[0], &readings[0]) ||
+        (normals && !draco_accessor(g, accessors, "NORMAL", true, at, &accessor[1], &counts[1], &readings[1])) ||
+        (indexed && !draco_accessor(g, primitive, "indices", false, at, &accessor[2], &counts[2], NULL)))
         return false;
 
     /* Decoded once per bufferView, within what the budget has left; then the arrays are charged. */
     struct ao_gltf_draco *d = &g->draco[index];
     int64_t want_normal = normals ? (int64_t)normal_id : -1;
-    if (d->done && (d->position_id != (int64_t)position_id || d->normal_id != want_normal))
-        return ao_gltf_error(g, "%s: bufferView %zu is decoded for other attribute ids by another primitive", at,
-                             index);
+    if (d->done && (d->position_id != (int64_t)position_id || d->normal_id != want_normal ||
+                    memcmp(d->readings, readings, sizeof readings) != 0))
+        return ao_gltf_error(g, "%s: bufferView %zu is decoded for other attribute ids or types by another primitive",
+                             at, index);
     if (!d->done) {
         const struct ao_gltf_view *v;
-        bool over = false;
+        bool over = false, integers[2] = {readings[0].component_type != AO_QUANTIZE_FLOAT,
+                                          readings[1].component_type != AO_QUANTIZE_FLOAT};
         if (!view(g, index, &v))
             return false;
         uint64_t left = g->budget->limit - g->budget->used;
-        if (!ao_draco_decode(v->data, v->length, (int64_t)position_id, want_normal, left, &d->mesh, &over, why,
-                             sizeof why))
+        if (!ao_draco_decode(v->data, v->length, (int64_t)position_id, want_normal, integers, left, &d->mesh, &over,
+                             why, sizeof why))
             return over ? ao_gltf_error(g, "%s: decoding it would take more than the %llu bytes left of the scene "
                                         "budget (raise it with --scene-budget)", at, (unsigned long long)left)
                         : ao_gltf_error(g, "%s: %s", at, why);
         d->done = true;
         d->position_id = (int64_t)position_id;
         d->normal_id = want_normal;
+        memcpy(d->readings, readings, sizeof readings);
         snprintf(why, sizeof why, "%s: its %zu points and %zu triangles", at, d->mesh.point_count,
                  d->mesh.face_count);
         uint64_t bytes = (uint64_t)d->mesh.point_count * (normals ? 24 : 12) + (uint64_t)d->mesh.face_count * 12;
-        if (!ao_gltf_take(g, bytes, why))
+        if (!ao_gltf_take(g, bytes, why) ||
+            !dequantize(g, d->mesh.positions, d->mesh.point_count, readings[0], at) ||
+            (normals && !dequantize(g, d->mesh.normals, d->mesh.point_count, readings[1], at)))
             return false;
+        /* An accessor that counts otherwise than what decoded (Draco may add points at seams; the
+         * Khronos CesiumMilkTruck sample counts 1856 for 1886) is read as decoded, as cesium-native
+         * reads it: the triangles name decoded points only (draco.cc checks each). */
+        if (counts[0] != d->mesh.point_count)
+            recounted(g, where, accessor[0], counts[0], d->mesh.point_count, "points");
+        else if (normals && counts[1] != d->mesh.point_count)
+            recounted(g, where, accessor[1], counts[1], d->mesh.point_count, "normals");
+        else if (indexed && counts[2] != 3 * (uint64_t)d->mesh.face_count)
+            recounted(g, where, accessor[2], counts[2], 3 * d->mesh.face_count, "indices");
     }
-    if (!draco_accessor(g, ao_gltf_member(primitive, "attributes"), "POSITION", true, d->mesh.point_count, at) ||
-        (normals && !draco_accessor(g, ao_gltf_member(primitive, "attributes"), "NORMAL", true, d->mesh.point_count,
-                                    at)) ||
-        (ao_gltf_member(primitive, "indices") &&
-         !draco_accessor(g, primitive, "indices", false, 3 * (uint64_t)d->mesh.face_count, at)))
-        return false;
     out[0] = (struct ao_gltf_elements){(const unsigned char *)d->mesh.positions, 12, d->mesh.point_count,
                                        AO_QUANTIZE_FLOAT, 4, false};
     out[1] = (struct ao_gltf_elements){(const unsigned char *)d->mesh.normals, 12, normals ? d->mesh.point_count : 0,

@@ -6,6 +6,7 @@
  * hash, so that the computed vertex normals are shared and Phong shading works. Facet normals are
  * ignored (the normals are computed from the welded triangles). */
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -136,6 +137,7 @@ struct ascii_reader {
     size_t line;
     bool in_solid, in_facet, in_loop;
     size_t facet_loops;                /* loops in the open facet */
+    size_t polygons;                   /* loops of more than 3 vertices, fanned */
     struct ao_load_array loop;         /* uint32_t: welded vertices of the open loop */
 };
 
@@ -222,6 +224,7 @@ static bool ascii_line(struct ascii_reader *r, struct ao_load_tokens *t, struct 
         }
         r->in_loop = false;
         r->facet_loops++;
+        r->polygons += r->loop.count > 3;
         if (!ao_load_fits(w->budget, indices->count / 3 + r->loop.count - 2, w->positions.count, r->path,
                           r->line))
             return false;
@@ -238,9 +241,11 @@ static bool ascii_line(struct ascii_reader *r, struct ao_load_tokens *t, struct 
     return false;
 }
 
-/* ASCII: line by line, then the file must not end inside a solid's facet or loop. */
+/* ASCII: line by line, then the file must not end inside a solid's facet or loop. What the format
+ * does not allow but can be read, a loop of more than 3 vertices (fanned) and a last solid without
+ * 'endsolid' (the file may have been cut between facets), is said in note. */
 static bool read_ascii(struct weld *w, struct ao_load_array *indices, const char *path,
-                       const char *text, size_t size)
+                       const char *text, size_t size, char note[AO_MESH_NOTE_SIZE])
 {
     struct ascii_reader r = {.path = path, .loop = {.size = sizeof(uint32_t)}};
     const char *end = text + size;
@@ -254,6 +259,12 @@ static bool read_ascii(struct weld *w, struct ao_load_array *indices, const char
     }
     if (ok && (r.in_facet || r.in_loop))
         ok = ascii_error(&r, "file ends inside a facet");
+    if (ok && r.polygons)
+        snprintf(note, AO_MESH_NOTE_SIZE, "%zu facet%s of more than 3 vertices fanned into triangles (STL's facets "
+                 "are triangles)%s", r.polygons, r.polygons == 1 ? "" : "s", r.in_solid ? "; " : "");
+    if (ok && r.in_solid)
+        snprintf(note + strlen(note), AO_MESH_NOTE_SIZE - strlen(note),
+                 "no 'endsolid' after its last solid (the file may be cut short)");
     ao_load_free(&r.loop);
     return ok;
 }
@@ -280,7 +291,7 @@ bool ao_load_stl(struct ao_mesh *mesh, const char *path, const char *text, size_
         /* The header's count is real (the file's size matches it): check it before reading. */
         ok = ao_load_fits(budget, n, 0, path, 0) && read_binary(&w, &indices, path, text, n);
     } else if (starts_with_solid(text, size) && strlen(text) == size) {
-        ok = read_ascii(&w, &indices, path, text, size);
+        ok = read_ascii(&w, &indices, path, text, size, mesh->note);
     } else if (size < BINARY_PREFIX) {
         ao_load_report(path, 0, "neither ASCII STL (no 'solid') nor binary (%zu bytes, fewer "
                        "than the 84 of a header)", size);
