@@ -96,9 +96,16 @@ const char *ao_app_signal_name(int sig);
  * included. */
 void ao_app_block_signals(struct ao_app *app);
 
+/* Before loading: the files the run writes (-o, or --compare's two, when given or headless: `outputs`
+ * of them, and --stats) are none of those it reads (the scene, --reference) nor one another, compared
+ * as files (through links, existing or to be made in a folder); false after one line naming both.
+ * Main thread. */
+bool ao_app_check_files(const struct ao_options *opts, const char *const *outputs, size_t count);
+
 /* Opens --stats (struct ao_stats), loads the scene, --reference and tracer, and fills in the
  * renderer's config (its on_pass reporting to app->reporter) and initial settings; 0, or
- * AO_EXIT_RUNTIME after one message. The progress bar is left off. Main thread. */
+ * AO_EXIT_RUNTIME after one message. Once the scene is loaded, -o (headless or given) and --stats
+ * must not be any file it read (a mesh, a glTF buffer). The progress bar is left off. Main thread. */
 int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_render_config *config,
                 struct ao_settings *settings);
 

@@ -3,6 +3,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <pthread.h>
 #include <signal.h>
 #include <stdatomic.h>
 #include <stdarg.h>
@@ -126,8 +127,10 @@ static bool read_file(const char *path, struct ao_budget *budget, bool *mapped, 
         reason = why;
     }
     if (!reason && (mapped ? map_file(fd, (size_t)st.st_size, text, mapped, &reason)
-                        : ao_file_read_prefix(fd, (size_t)st.st_size, text, &reason)))
+                        : ao_file_read_prefix(fd, (size_t)st.st_size, text, &reason))) {
         *size = (size_t)st.st_size;
+        ao_file_note_input(fd, path);
+    }
     else if (taken)
         ao_budget_give(budget, charge);
     close(fd);
@@ -169,6 +172,50 @@ void ao_file_unmap(const char *text, size_t size, bool mapped)
         free((void *)(uintptr_t)text);
 }
 
+/* The inputs read so far (ao_file_note_input), under inputs_lock. */
+static pthread_mutex_t inputs_lock = PTHREAD_MUTEX_INITIALIZER;
+static struct input {
+    dev_t dev;
+    ino_t ino;
+    char *name;
+} *inputs;
+static size_t input_count, input_capacity;
+
+void ao_file_note_input(int fd, const char *path)
+{
+    struct stat st;
+    char *name = strdup(path);
+    if (fstat(fd, &st) != 0 || !name) {
+        free(name);
+        return;
+    }
+    pthread_mutex_lock(&inputs_lock);
+    if (input_count == input_capacity) {
+        size_t capacity = input_capacity ? 2 * input_capacity : 16;
+        struct input *grown = realloc(inputs, capacity * sizeof *grown);
+        if (grown) {
+            inputs = grown;
+            input_capacity = capacity;
+        }
+    }
+    if (input_count < input_capacity)
+        inputs[input_count++] = (struct input){st.st_dev, st.st_ino, name};
+    else
+        free(name);
+    pthread_mutex_unlock(&inputs_lock);
+}
+
+char *ao_file_input_name(unsigned long long dev, unsigned long long ino)
+{
+    char *name = NULL;
+    pthread_mutex_lock(&inputs_lock);
+    for (size_t i = 0; !name && i < input_count; i++)
+        if ((unsigned long long)inputs[i].dev == dev && (unsigned long long)inputs[i].ino == ino)
+            name = strdup(inputs[i].name);
+    pthread_mutex_unlock(&inputs_lock);
+    return name;
+}
+
 void ao_file_report(const char *format, ...)
 {
     /* Formatted, then escaped, and written with one call so that lines of several threads do not
@@ -204,6 +251,12 @@ FILE *ao_file_open_output(const char *path, const char *what, bool *created)
     }
     int err = errno;
     FILE *file = NULL;
+    struct stat st;
+    if (fd >= 0 && fstat(fd, &st) == 0 && (S_ISBLK(st.st_mode) || (S_ISREG(st.st_mode) && !(st.st_mode & 0222)))) {
+        close(fd);
+        fd = -1;
+        err = S_ISBLK(st.st_mode) ? ENOTSUP : EROFS;
+    }
     if (fd >= 0) {
         int flags = fcntl(fd, F_GETFL);
         file = flags >= 0 && fcntl(fd, F_SETFL, flags & ~O_NONBLOCK) == 0 ? fdopen(fd, "w") : NULL;
@@ -217,7 +270,10 @@ FILE *ao_file_open_output(const char *path, const char *what, bool *created)
     if (!file) {
         char name[AO_TEXT_SIZE];
         fprintf(stderr, "%s: cannot write %s: %s\n", what, ao_text_escape(path, name, sizeof name),
-                err == ENXIO ? "a FIFO that no process reads" : strerror(err));
+                err == ENXIO     ? "a FIFO that no process reads"
+                : err == ENOTSUP ? "a block device (a FIFO, a terminal or /dev/null takes rows; a disk does not)"
+                : err == EROFS   ? "it is read-only (no one may write it): it is left as it is"
+                                 : strerror(err));
         *created = false;
     }
     return file;

@@ -18,8 +18,10 @@ bool ao_file_read(const char *path, char **text, size_t *size);
  * left as it was until the caller writes (it truncates then), and without blocking: a FIFO that
  * no process reads yet is waited for, a little at a time, up to 2 s (a reader started beside
  * aoview), then refused; the descriptor then blocks again, so that a slow reader loses nothing.
- * *created: this call created the file. NULL after one line "what: cannot write path: reason".
- * Main thread (signals end the wait). */
+ * Written through: a symbolic link (its target), a FIFO, a character device (a terminal,
+ * /dev/null); refused: a block device, and a regular file no one may write (read-only even for
+ * root). *created: this call created the file. NULL after one line "what: cannot write path:
+ * reason". Main thread (signals end the wait). */
 FILE *ao_file_open_output(const char *path, const char *what, bool *created);
 
 /* ao_file_read charging the file's size plus one (the NUL) to budget before anything is allocated:
@@ -42,6 +44,14 @@ void ao_file_unmap(const char *text, size_t size, bool mapped);
  * the caller frees. Refuses, before allocating, what is not a regular file or holds fewer bytes;
  * then returns false with the reason in *why (static text) and prints nothing. Any thread. */
 bool ao_file_read_prefix(int fd, size_t length, char **data, const char **why);
+
+/* Records the open file fd as an input this process read (its name for messages: path), so that no
+ * output overwrites it (ao_file_input_name). Any thread. */
+void ao_file_note_input(int fd, const char *path);
+
+/* The name of the input read (ao_file_note_input) that is the file of identity (dev, ino), or NULL
+ * when none is: the caller frees it. Any thread. */
+char *ao_file_input_name(unsigned long long dev, unsigned long long ino);
 
 /* Prints the printf-formatted text and a newline to stderr as one line: control characters (a
  * newline in a file name or a JSON string, an escape sequence in a scene token) are written as

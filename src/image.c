@@ -1,5 +1,7 @@
 /* PNG (through stb) and PFM files. Writes go to a temporary file in the target's directory that is
  * renamed into place, so a reader never sees a partial image. */
+/* realpath (XSI), for -o through a symbolic link. */
+#define _XOPEN_SOURCE 700
 #include "image.h"
 
 #include <assert.h>
@@ -180,6 +182,41 @@ void ao_image_discard_temporaries(void)
             unlink(temps[k]);
 }
 
+/* The file an image written to path replaces: path itself, or, when path is a symbolic link, the
+ * file it leads to (the link stays: the image is written through it, as a shell's > writes), as a
+ * malloc'd name; NULL with errno (ENOENT: a link to nothing) when it cannot be resolved. */
+static char *target_of(const char *path)
+{
+    struct stat st;
+    if (lstat(path, &st) != 0 || !S_ISLNK(st.st_mode))
+        return strdup(path);
+    return realpath(path, NULL);
+}
+
+/* Why the existing file st (at target) may not be replaced by an image, or NULL: only a regular file
+ * is (a FIFO, a device or a socket is not written into: an image is written whole and renamed into
+ * place); not one this user may not write (also through the folder, by renaming), nor one nobody
+ * may write (read-only: its mode keeps it so even from root), nor another user's, which the
+ * replacement would make this user's (root gives it back its owner). */
+static const char *unreplaceable(const char *target, const struct stat *st)
+{
+    if (S_ISDIR(st->st_mode))
+        return "is a directory";
+    if (S_ISFIFO(st->st_mode))
+        return "is a FIFO, not a regular file (images are written whole and renamed into place)";
+    if (S_ISCHR(st->st_mode) || S_ISBLK(st->st_mode))
+        return "is a device, not a regular file (images are written whole and renamed into place)";
+    if (!S_ISREG(st->st_mode))
+        return "is not a regular file (images are written whole and renamed into place)";
+    if (faccessat(AT_FDCWD, target, W_OK, AT_EACCESS) != 0)
+        return "exists and this user may not write it: it is left as it is";
+    if (!(st->st_mode & 0222))
+        return "is read-only (no one may write it): it is left as it is";
+    if (st->st_uid != geteuid() && geteuid() != 0)
+        return "belongs to another user: replacing it would make it this user's, so it is left as it is";
+    return NULL;
+}
+
 bool ao_image_check_output(const char *path)
 {
     const char *slash = strrchr(path, '/');
@@ -191,14 +228,19 @@ bool ao_image_check_output(const char *path)
         report(path, reason, 0);
         return false;
     }
-    if (stat(path, &st) == 0 && S_ISDIR(st.st_mode)) {
-        report(path, "is a directory", 0);
+    char *target = target_of(path);
+    if (!target) {
+        report(path, errno == ENOENT ? "is a symbolic link to a missing file" : "cannot follow its symbolic link",
+               errno == ENOENT ? 0 : errno);
         return false;
     }
+    const char *why = stat(target, &st) == 0 ? unreplaceable(target, &st) : NULL;
     int slot;
-    FILE *f = create_temp(path, &slot);
-    if (!f) {
-        report(path, "cannot create a file in its directory", errno);
+    FILE *f = why ? NULL : create_temp(target, &slot);
+    int err = errno;
+    free(target);
+    if (why || !f) {
+        report(path, why ? why : "cannot create a file in its directory", why ? 0 : err);
         return false;
     }
     fclose(f);
@@ -206,15 +248,26 @@ bool ao_image_check_output(const char *path)
     return true;
 }
 
-/* Runs emit on a temporary file, syncs it and renames it over path; reports any failure once. */
+/* Runs emit on a temporary file, syncs it and renames it over path (through a symbolic link, over
+ * the file it leads to; an existing file's mode and, where this user may set them, owner and group
+ * kept); reports any failure once. */
 static bool write_atomically(const char *path, bool (*emit)(FILE *f, const struct raster *r),
                              const struct raster *r)
 {
     int slot;
-    FILE *f = create_temp(path, &slot);
+    char *target = target_of(path);
+    struct stat st;
+    bool existed = target && stat(target, &st) == 0;
+    const char *why = existed ? unreplaceable(target, &st) : NULL;
+    FILE *f = target && !why ? create_temp(target, &slot) : NULL;
     if (!f) {
-        report(path, "cannot create temporary file", errno);
+        report(path, why ? why : !target ? "cannot follow its symbolic link" : "cannot create temporary file",
+               why ? 0 : errno);
+        free(target);
         return false;
+    }
+    if (existed && (fchmod(fileno(f), st.st_mode & 07777) != 0 || fchown(fileno(f), st.st_uid, st.st_gid) != 0)) {
+        /* kept as far as this user may: a group it is not in becomes its own */
     }
     bool ok = emit(f, r) && fflush(f) == 0 && fsync(fileno(f)) == 0;
     int err = errno;
@@ -225,8 +278,9 @@ static bool write_atomically(const char *path, bool (*emit)(FILE *f, const struc
     const char *reason = ok ? NULL : "cannot write";
     if (!ok)
         finish_temp(slot, NULL);
-    else if ((err = finish_temp(slot, path)) != 0)
+    else if ((err = finish_temp(slot, target)) != 0)
         reason = "cannot rename temporary file into place";
+    free(target);
     if (reason)
         report(path, reason, err);
     return !reason;

@@ -132,20 +132,25 @@ static int run_compare(struct app *app, const struct ao_options *opts, const str
     return 0;
 }
 
-/* Headless: the files -o names can be written (--compare's linear output: each side's), checked
- * before loading, so that a run never renders for nothing; false after one line. */
+/* The files -o names (--compare's linear output: each side's) can be written (headless) and are
+ * none that the run reads or writes otherwise (whenever given), checked before loading, so that a
+ * run never renders for nothing; false after one line. */
 static bool check_outputs(const struct ao_options *opts)
 {
     const char *output = opts->output ? opts->output : "aoview.png";
-    if (!opts->headless)
-        return true;
-    if (!opts->compare || ao_image_has_extension(output, ".png"))
-        return ao_image_check_output(output);
-    char file[4096];
-    for (int k = 0; k < 2; k++)
-        if (!side_path(output, side_names[k], file, sizeof file) || !ao_image_check_output(file))
+    char files[2][4096];
+    const char *names[2] = {output, NULL};
+    size_t count = opts->output || opts->headless ? 1 : 0;
+    if (count && opts->compare && !ao_image_has_extension(output, ".png")) {
+        for (int k = 0; k < 2; k++)
+            if (!side_path(output, side_names[k], files[k], sizeof files[k]))
+                return false;
+        names[0] = files[0], names[1] = files[1], count = 2;
+    }
+    for (size_t k = 0; opts->headless && k < count; k++)
+        if (!ao_image_check_output(names[k]))
             return false;
-    return true;
+    return ao_app_check_files(opts, names, count);
 }
 
 static int run(struct app *app, const struct ao_options *opts)

@@ -295,7 +295,10 @@ static int run(struct ao_app *app, const struct ao_options *opts, double copy, i
     struct ao_render_config config;
     struct ao_settings settings;
     /* Rank 0's -o before loading, so that a run never renders for nothing. */
-    if (!ao_cluster_agree(rank != 0 || !mine.headless || ao_image_check_output(mine.output ? mine.output : "aoview.png")))
+    const char *output = mine.output ? mine.output : "aoview.png";
+    bool checked = rank != 0 || ((!mine.headless || ao_image_check_output(output)) &&
+                                 ao_app_check_files(&mine, &output, mine.output || mine.headless ? 1 : 0));
+    if (!ao_cluster_agree(checked))
         return AO_EXIT_RUNTIME;
     int status = load(app, &mine, rank, &config, &settings);
     if (status)

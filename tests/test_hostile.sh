@@ -611,6 +611,101 @@ front 1 "dir.png: is a directory" "" -o dir.png "${long[@]}"
 name255=$(printf 'n%.0s' $(seq 251)).pfm
 front 1 "${name255}x.pfm: file name longer than 255 bytes" "${name255}x.pfm" -o "${name255}x.pfm" "${long[@]}"
 front 1 "nodir/c-A.pfm: cannot create a file in its directory" "" -o nodir/c.pfm --compare uniform,cosine --time 100 "${long[@]}"
+# Outputs that would overwrite an input or each other, refused before loading (they exited 0, the
+# scene replaced by CSV, or the stats lost to the image); a mesh or glTF buffer the scene reads
+# as --stats, refused once the scene is loaded and before the file is touched.
+cp "$root/assets/scenes/spheres.scene" copy.scene
+cp copy.scene copy.orig
+quick=(--headless -q --spp 4 --size 16x12)
+front 1 "--stats: copy.scene is also the scene (copy.scene): aoview does not overwrite its inputs" "" \
+  "${quick[@]}" --stats copy.scene -o o.pfm copy.scene
+cmp -s copy.scene copy.orig || fail "--stats onto the scene changed it"
+front 1 "-o: x.pfm is also --stats (x.pfm): each output needs a file of its own" x.pfm "${quick[@]}" -o x.pfm \
+  --stats x.pfm copy.scene
+"$bin" "${quick[@]}" -o ref.pfm copy.scene 2>/dev/null || fail "no reference"
+cp ref.pfm ref.orig
+front 1 "-o: ref.pfm is also --reference (ref.pfm): aoview does not overwrite its inputs" "" "${quick[@]}" \
+  -o ref.pfm --reference ref.pfm copy.scene
+front 1 "-o: ./copy-A.pfm is also --stats (copy-A.pfm)" "" "${quick[@]}" -o ./copy.pfm --stats copy-A.pfm \
+  --compare uniform,cosine --time 1 copy.scene
+mkdir -p model
+cp "$root/assets/bunny.obj" model/b.obj
+printf 'camera eye 0 6 20 target 0 4 0\nmesh model/b.obj\n' > mesh.scene
+front 1 "--stats: model/b.obj is a file the scene reads (model/b.obj): aoview does not overwrite its inputs" "" \
+  "${quick[@]}" --stats model/b.obj -o o.pfm mesh.scene
+cmp -s model/b.obj "$root/assets/bunny.obj" || fail "--stats onto the scene's mesh changed it"
+cmp -s ref.pfm ref.orig || fail "-o onto --reference changed it"
+# -o and --stats through links, onto FIFOs, devices and files that are not this user's to replace.
+# A link is written through (its target replaced, the link kept, as a shell's > does); a link to
+# nothing, a FIFO, a device, a file this user may not write, one no one may write (mode 0444,
+# also for root) are refused for -o, which writes whole images and renames them into place (it
+# replaced each with a regular file of its own); --stats streams rows into what it names: a link's
+# target, a FIFO, /dev/null, but not a read-only file.
+echo old > real.pfm
+ln -sf real.pfm link.pfm
+"$bin" "${quick[@]}" -o link.pfm copy.scene 2>err.txt || fail "-o through a link: $(cat err.txt)"
+[ -L link.pfm ] && [ "$(head -c 2 real.pfm)" = PF ] || fail "-o through a link did not write its target"
+ln -sf missing.pfm dangling.pfm
+front 1 "dangling.pfm: is a symbolic link to a missing file" "" "${quick[@]}" -o dangling.pfm copy.scene
+mkfifo fifo_out.pfm
+front 1 "fifo_out.pfm: is a FIFO, not a regular file (images are written whole and renamed into place)" "" \
+  "${quick[@]}" -o fifo_out.pfm copy.scene
+[ -p fifo_out.pfm ] || fail "-o onto a FIFO replaced it"
+ln -sf /dev/null null.pfm
+front 1 "null.pfm: is a device, not a regular file" "" "${quick[@]}" -o null.pfm copy.scene
+echo keep > readonly.pfm
+chmod 444 readonly.pfm
+front 1 "readonly.pfm: is read-only (no one may write it): it is left as it is" "" "${quick[@]}" -o readonly.pfm copy.scene
+[ "$(cat readonly.pfm)" = keep ] || fail "-o replaced a read-only file"
+cp readonly.pfm readonly.csv
+front 1 "--stats: cannot write readonly.csv: it is read-only (no one may write it): it is left as it is" "" \
+  "${quick[@]}" --stats readonly.csv -o o.pfm copy.scene
+ln -sf real.csv stats_link.csv
+"$bin" "${quick[@]}" --stats stats_link.csv -o o.pfm copy.scene 2>err.txt &&
+  [ -L stats_link.csv ] && [ "$(head -c 5 real.csv)" = pass, ] || fail "--stats through a link: $(cat err.txt)"
+"$bin" "${quick[@]}" --stats /dev/null -o o.pfm copy.scene 2>err.txt || fail "--stats /dev/null: $(cat err.txt)"
+# Another user's file in a folder this user may write: as root (who may give it back), replaced
+# keeping its owner and mode; as another user, refused (it would become this user's). A file of
+# this user's keeps its mode (0600).
+echo theirs > theirs.pfm
+chmod 640 theirs.pfm
+echo mine > mine.pfm
+chmod 600 mine.pfm
+"$bin" "${quick[@]}" -o mine.pfm copy.scene 2>err.txt || fail "-o onto a 0600 file: $(cat err.txt)"
+[ "$(stat -c %a mine.pfm)" = 600 ] || fail "-o onto a 0600 file made it $(stat -c %a mine.pfm)"
+if [ "$(id -u)" = 0 ]; then
+  chown nobody theirs.pfm
+  "$bin" "${quick[@]}" -o theirs.pfm copy.scene 2>err.txt || fail "-o onto another user's file (as root): $(cat err.txt)"
+  [ "$(stat -c '%U %a' theirs.pfm)" = "nobody 640" ] && [ "$(head -c 2 theirs.pfm)" = PF ] ||
+    fail "-o onto another user's file (as root): $(stat -c '%U %a' theirs.pfm)"
+  # The other way round, aoview run as nobody (setpriv) in a folder anyone may write: root's
+  # read-only file (0644) and its writable one (0666) are both refused (nobody replaced the first
+  # with a file of its own, mode 0644: a new owner and mode).
+  other=$(mktemp -d /tmp/aoview-other.XXXXXX)
+  chmod 777 "$other"
+  cp "$root/assets/scenes/spheres.scene" "$other/s.scene"
+  echo keep > "$other/theirs.pfm"
+  echo keep > "$other/shared.pfm"
+  chmod 644 "$other/s.scene" "$other/theirs.pfm"
+  chmod 666 "$other/shared.pfm"
+  as_nobody=(setpriv --reuid=nobody --regid=nogroup --clear-groups "$bin")
+  if command -v setpriv >/dev/null && "${as_nobody[@]}" --version >/dev/null 2>&1; then
+    run=("${as_nobody[@]}")
+    front 1 "$other/theirs.pfm: exists and this user may not write it: it is left as it is" "" "${quick[@]}" \
+      -o "$other/theirs.pfm" "$other/s.scene"
+    front 1 "$other/shared.pfm: belongs to another user: replacing it would make it this user's" "" "${quick[@]}" \
+      -o "$other/shared.pfm" "$other/s.scene"
+    run=()
+    [ "$(cat "$other/theirs.pfm")$(cat "$other/shared.pfm")" = keepkeep ] || fail "nobody replaced root's files"
+  else
+    echo "(setpriv cannot run aoview as nobody here: root's files not offered to another user)"
+  fi
+  rm -rf "$other"
+else
+  echo "(not root: another user's file checked for refusal only by those who may make one)"
+fi
+rm -rf copy.scene copy.orig ref.pfm ref.orig model mesh.scene real.pfm link.pfm dangling.pfm fifo_out.pfm null.pfm \
+  readonly.pfm readonly.csv real.csv stats_link.csv theirs.pfm mine.pfm o.pfm x.pfm err.txt
 # a name of 255 bytes, the most the file system takes, is written (its temporary name is cut)
 rm -f err.txt
 "$bin" --headless -q --spp 1 --size 16x12 -o "$name255" "$root/assets/scenes/spheres.scene" 2>err.txt

@@ -258,6 +258,8 @@ static bool read_buffer_file(struct ao_gltf *g, const char *where, const char *u
     }
     const char *reason = NULL;
     bool ok = ao_file_read_prefix(fd, (size_t)length, &data, &reason);
+    if (ok)
+        ao_file_note_input(fd, path);
     close(fd);
     if (!ok)
         return ao_gltf_error(g, "%s ('%.60s'), byteLength %llu: %s", where, uri,
