@@ -392,7 +392,7 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     app->interrupt.output = opts->output ? opts->output : "aoview.png";
     char name[AO_TEXT_SIZE];
     struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh,
-                                    .crease = opts->crease, .crease_set = true};
+                                    .crease = opts->crease, .crease_set = true, .sized = opts->width != 0};
     if (!ao_scene_load_with(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, &load) ||
         !check_written_not_read(app, opts))
         return AO_EXIT_RUNTIME;

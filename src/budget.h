@@ -20,6 +20,13 @@
  * instance geometry and its share of the top-level BVH: measured in docs/reliability.md). */
 enum { AO_BUDGET_TRIANGLE = 120, AO_BUDGET_VERTEX = 60, AO_BUDGET_NODE = 160, AO_BUDGET_INSTANCE = 512 };
 
+/* What a scene's other elements are charged: per unique mesh, beside its triangles, vertices and
+ * placements (its structs in the model and the scene, its file's entry, the tracer's geometry:
+ * measured 1.1 KB more than those, docs/reliability.md); per pixel of the image a scene file's
+ * `image` line sizes (the accumulation, the frames and, for a PNG, OSMesa's buffers: measured 72 to
+ * 75 bytes; 48 for a PFM or EXR alone). */
+enum { AO_BUDGET_MESH = 1280, AO_BUDGET_PIXEL = 76 };
+
 /* A triangle's charge when the BVHs are built compact: AO_BUDGET_TRIANGLE less the 64 bytes a
  * triangle by which Embree's compact BVH lowers the peak of a 10M-triangle GLB or binary PLY
  * (docs/reliability.md). */

@@ -479,7 +479,7 @@ static int run(struct app *app, const struct ao_options *opts)
         return EXIT_USAGE;
     }
     struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh,
-                                    .crease = opts->crease, .crease_set = true};
+                                    .crease = opts->crease, .crease_set = true, .sized = opts->width != 0};
     if (!ao_scene_load_with(&app->scene, opts->scene_path, &load))
         return EXIT_RUNTIME;
 

@@ -283,6 +283,8 @@ struct world {
     struct ao_budget *budget;     /* charged for every element as it is added */
     enum ao_instancing instancing;
     double crease;                /* mesh files' crease angle, degrees (mesh.h) */
+    bool sized;                   /* the image's size is set elsewhere: an `image` line's is not charged */
+    uint64_t image_charge;        /* what the `image` line took from the budget */
 };
 
 /* Charges an element of so many triangles (a sphere counts as one) and vertices to the budget;
@@ -296,6 +298,25 @@ static bool charge(struct cursor *c, struct world *w, uint64_t triangles, uint64
     ao_budget_explain(w->budget, bytes, why, sizeof why);
     return fail(c, "%s: %llu triangles and %llu vertices %s", what, (unsigned long long)triangles,
                 (unsigned long long)vertices, why);
+}
+
+/* Takes bytes from the budget for what a line adds beside triangles and vertices; false after
+ * reporting "what need about ..." at the cursor's line. */
+static bool take(struct cursor *c, struct world *w, uint64_t bytes, const char *what)
+{
+    if (ao_budget_take(w->budget, bytes))
+        return true;
+    char why[200];
+    ao_budget_explain(w->budget, bytes, why, sizeof why);
+    return fail(c, "%s %s", what, why);
+}
+
+/* Charges a mesh file's unique meshes their structures' cost (AO_BUDGET_MESH each). */
+static bool charge_meshes(struct cursor *c, struct world *w, size_t count, const char *path)
+{
+    char what[4200];
+    snprintf(what, sizeof what, "%s: the structures of %zu mesh%s", path, count, count == 1 ? "" : "es");
+    return take(c, w, (uint64_t)count * AO_BUDGET_MESH, what);
 }
 
 static bool add_albedo(struct ao_scene *s, struct ao_vec3 rho, uint32_t *index)
@@ -399,7 +420,7 @@ static const struct loaded *load_file(struct cursor *c, struct ao_scene *s, stru
         triangles += model.meshes[i].triangle_count, vertices += model.meshes[i].vertex_count;
     struct stat st;
     char *copy = strdup(path);
-    bool ok = charge(c, w, triangles, vertices, path);
+    bool ok = charge(c, w, triangles, vertices, path) && charge_meshes(c, w, model.mesh_count, path);
     if (ok && (!copy || s->mesh_count + model.mesh_count >= UINT32_MAX ||
                !resize(&s->meshes, s->mesh_count + model.mesh_count, sizeof *s->meshes) ||
                !resize(&w->files, w->file_count + 1, sizeof *w->files))) {
@@ -430,12 +451,10 @@ static const struct loaded *load_file(struct cursor *c, struct ao_scene *s, stru
 static bool place_model(struct cursor *c, struct ao_scene *s, struct world *w, const struct loaded *f,
                         const struct ao_affine *line, struct ao_vec3 rho, const char *path)
 {
-    uint64_t bytes = (uint64_t)f->placement_count * AO_BUDGET_INSTANCE;
-    if (!ao_budget_take(w->budget, bytes)) {
-        char why[200];
-        ao_budget_explain(w->budget, bytes, why, sizeof why);
-        return fail(c, "%s: %zu placements %s", path, f->placement_count, why);
-    }
+    char what[4200];
+    snprintf(what, sizeof what, "%s: %zu placements", path, f->placement_count);
+    if (!take(c, w, (uint64_t)f->placement_count * AO_BUDGET_INSTANCE, what))
+        return false;
     uint32_t a;
     if (!add_albedo(s, rho, &a) ||
         !resize(&w->placements, w->placement_count + f->placement_count, sizeof *w->placements))
@@ -476,7 +495,9 @@ static bool parse_camera(struct cursor *c, struct ao_scene *s, struct world *w)
     return true;
 }
 
-static bool parse_image(struct cursor *c, struct ao_scene *s)
+/* "image W H": the default size, whose buffers (accumulation, frames, a PNG's) the budget is charged
+ * for unless the size is set elsewhere (--size): a 13-byte line asked for 3 GB. */
+static bool parse_image(struct cursor *c, struct ao_scene *s, struct world *w)
 {
     double v[2];
     if (numbers(c, "image", v, 2, 2) != 2)
@@ -487,7 +508,16 @@ static bool parse_image(struct cursor *c, struct ao_scene *s)
                        "%d pixels", AO_IMAGE_MAX_SIDE, AO_IMAGE_MAX_PIXELS);
     s->width = (int)v[0];
     s->height = (int)v[1];
-    return true;
+    if (w->sized)
+        return true;
+    char what[96];
+    snprintf(what, sizeof what, "'image' %dx%d: its buffers", s->width, s->height);
+    ao_budget_give(w->budget, w->image_charge);   /* a line before it is replaced */
+    w->image_charge = (uint64_t)s->width * (uint64_t)s->height * AO_BUDGET_PIXEL;
+    if (take(c, w, w->image_charge, what))
+        return true;
+    w->image_charge = 0;
+    return false;
 }
 
 static bool parse_sphere(struct cursor *c, struct ao_scene *s, struct world *w)
@@ -623,7 +653,7 @@ static bool parse_statement(struct cursor *c, struct ao_scene *s, struct world *
     if (strcmp(word, "camera") == 0)
         return parse_camera(c, s, w);
     if (strcmp(word, "image") == 0)
-        return parse_image(c, s);
+        return parse_image(c, s, w);
     if (strcmp(word, "sphere") == 0)
         return parse_sphere(c, s, w);
     if (strcmp(word, "quad") == 0)
@@ -1105,7 +1135,7 @@ static bool parse_text(struct ao_scene *scene, const char *text, const char *pat
     begin(scene, path);
     struct cursor c = {.path = path};
     struct world w = {.extent_note = "", .budget = budget, .instancing = options->instancing,
-                      .crease = crease_of(options)};
+                      .crease = crease_of(options), .sized = options->sized};
     bool ok = true;
     char line[MAX_LINE + 2];
     for (const char *p = text; ok && *p;) {

@@ -92,10 +92,11 @@ enum ao_instancing { AO_INSTANCING_AUTO, AO_INSTANCING_ALWAYS, AO_INSTANCING_NEV
  * 528-triangle mesh placed 1000 times), at 8M instances trace 1.7x faster (docs/performance.md). */
 #define AO_SCENE_FLATTEN_TRIANGLES (1u << 22)
 
-/* How ao_scene_load_with loads: the scene budget in bytes (budget.h); for a bare mesh, whether the
- * ground quad is added under it (a .scene file has only the quads it lists); which meshes it
- * instances; the BVH to build (AUTO: MEDIUM, or COMPACT where only that fits the budget); the crease
- * angle in degrees for the normals mesh files lack (mesh.h), when crease_set (else
+/* How ao_scene_load_with loads: the scene budget in bytes (budget.h), which an `image` line's
+ * buffers are charged to unless sized (the size comes from elsewhere, --size); for a bare mesh,
+ * whether the ground quad is added under it (a .scene file has only the quads it lists); which
+ * meshes it instances; the BVH to build (AUTO: MEDIUM, or COMPACT where only that fits the budget);
+ * the crease angle in degrees for the normals mesh files lack (mesh.h), when crease_set (else
  * AO_MESH_CREASE_DEFAULT, so that options set field by field keep the default). */
 struct ao_scene_options {
     uint64_t budget;
@@ -104,6 +105,7 @@ struct ao_scene_options {
     enum ao_bvh bvh;
     double crease;
     bool crease_set;
+    bool sized;
 };
 
 /* The gap between a bare mesh's lowest point and the ground quad added under it, as a fraction

@@ -302,6 +302,40 @@ PY
 refuse 1 "deep.gltf: node 1024 lies more than 1024 nodes deep, the deepest node tree aoview reads" deep.gltf
 rm -f instanced.gltf grid.gltf three.scene million.gltf string.gltf sparse.gltf grid.pfm deep.gltf
 
+# ---- the budget covers every buffer a scene file sizes (N1, N6 of the third round). A 49-byte scene
+# whose `image` line asked for 8192x8192 peaked at 3.1 GB under --scene-budget 16M and wrote an 805
+# MB file: its buffers are charged (76 bytes a pixel), and refused; --size (the user's own choice)
+# is not charged. 30,000 one-triangle OBJs loaded under 24 MiB and peaked at 62 MB: each unique
+# mesh is charged its structures (1280 bytes). An OBJ of 525,000 distinct v//vn pairs just past a
+# power of two loaded under 48 MiB and peaked at 90 MB: the pairs' hash table is charged as it grows.
+printf 'image 8192 8192\nsphere center 0 0 0 radius 1\n' > image.scene
+refuse 1 "image.scene:1: 'image' 8192x8192: its buffers need about 4.8 GiB, more than the 16.0 MiB left of the scene budget" \
+  --scene-budget 16M image.scene
+loads "image.scene at --size 1x1 (the image line not charged)" --scene-budget 16M image.scene
+python3 - <<'PY'
+import os
+os.makedirs('meshes', exist_ok=True)
+with open('meshes.scene', 'w') as scene:
+    scene.write('camera eye 0 50 300 target 0 0 0\n')
+    for i in range(30000):
+        path = 'meshes/t%d.obj' % i
+        open(path, 'w').write('v %d 0 0\nv %d 1 0\nv %d 0 1\nf 1 2 3\n' % (i % 200, i % 200, i % 200))
+        scene.write('mesh %s translate 0 %d 0\n' % (path, i // 200))
+n, positions, normals = (1 << 19) + 3000, 1024, 520
+with open('pairs.obj', 'w') as f:
+    f.writelines('v %d %d %d\n' % (i % 37, i * 7 % 41, i) for i in range(positions))
+    f.writelines('vn %d 1 %d\n' % (j % 13, j % 17) for j in range(normals))
+    for t in range(n // 3 + 1):
+        f.write('f ' + ' '.join('%d//%d' % (k % positions + 1, k // positions % normals + 1)
+                                for k in range(3 * t, 3 * t + 3)) + '\n')
+PY
+# (Both fitted these budgets before; the scene runs out at a line that depends on the order of its
+# charges.)
+refuse 1 "left of the scene budget (raise it with --scene-budget)" --scene-budget 40M meshes.scene
+refuse 1 "pairs.obj: 524289 distinct position/normal pairs and the table that indexes them need about 71.4 MiB, more than the 43.3 MiB left" \
+  --scene-budget 64M pairs.obj
+rm -rf image.scene meshes meshes.scene pairs.obj
+
 # ---- glTF as exporters write it, with counts and strides that lie: quantized positions (6-byte
 # elements) claiming a billion elements or a stride shorter than one element
 python3 - <<'PY'

@@ -1675,8 +1675,9 @@ static void test_scene_budget_covers_every_mesh_line(void **state)
     static const char text[] = "camera eye 0 1 4 target 0 0 0\nmesh tri.obj\nmesh tri.obj translate 1 0 0\n"
                                "mesh tri.obj translate 2 0 0\n";
     const char *path = temp_file("three.scene", text, sizeof text - 1);
-    /* The scene's text, the mesh, three placements and two copies, at the MEDIUM BVH's rates. */
-    uint64_t need = sizeof text + 3 * medium_charge(1, 3) + 3 * AO_BUDGET_INSTANCE;
+    /* The scene's text, the mesh (and its structures), three placements and two copies, at the MEDIUM
+     * BVH's rates. */
+    uint64_t need = sizeof text + 3 * medium_charge(1, 3) + AO_BUDGET_MESH + 3 * AO_BUDGET_INSTANCE;
     struct ao_scene_options medium = {.budget = need, .ground = true, .bvh = AO_BVH_MEDIUM};
     struct ao_scene scene;
     assert_true(ao_scene_load_with(&scene, path, &medium));
@@ -1691,7 +1692,7 @@ static void test_scene_budget_covers_every_mesh_line(void **state)
     assert_false(scene.instances[0].flat);
     ao_scene_finish(&scene);
     /* Without room for the copies' rule, the mesh and its placements alone: one byte less refused. */
-    uint64_t least = sizeof text + medium_charge(1, 3) + 3 * AO_BUDGET_INSTANCE;
+    uint64_t least = sizeof text + medium_charge(1, 3) + AO_BUDGET_MESH + 3 * AO_BUDGET_INSTANCE;
     medium.budget = least;
     assert_true(ao_scene_load_with(&scene, path, &medium));
     assert_int_equal(scene.bvh, AO_BVH_MEDIUM);
@@ -1710,7 +1711,7 @@ static void test_budget_builds_compact_where_only_that_fits(void **state)
     temp_file("tri.obj", obj, sizeof obj - 1);
     static const char text[] = "camera eye 0 1 4 target 0 0 0\nmesh tri.obj\n";
     const char *path = temp_file("one.scene", text, sizeof text - 1);
-    uint64_t medium = sizeof text + medium_charge(1, 3) + AO_BUDGET_INSTANCE;
+    uint64_t medium = sizeof text + medium_charge(1, 3) + AO_BUDGET_MESH + AO_BUDGET_INSTANCE;
     uint64_t compact = medium - (AO_BUDGET_TRIANGLE - AO_BUDGET_TRIANGLE_COMPACT);
     struct ao_scene scene;
     assert_true(ao_scene_load_budget(&scene, path, medium));

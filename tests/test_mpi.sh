@@ -216,6 +216,19 @@ differ)
   status=$?
   [ "$status" = 1 ] && [ "$(grep -c "^aoview-mpi: rank 2: .*missing.scene" mismatch.err)" = 1 ] && [ ! -e mismatch.pfm ] ||
     fail "a scene missing on rank 2 was not reported once, naming it (status $status): $(cat mismatch.err)"
+  # A scene's `image` line is charged to every rank's budget (each allocated 3.1 GB for 8192x8192
+  # under --scene-budget 16M): refused once; and --stats naming the scene, before anything loads.
+  printf 'image 8192 8192\nsphere center 0 0 0 radius 1\n' > image.scene
+  "${mpirun[@]}" -np 2 "$mpi_bin" --headless --spp 1 --scene-budget 16M -o mismatch.pfm image.scene 2>mismatch.err
+  status=$?
+  [ "$status" = 1 ] && [ "$(grep -c "image.scene:1: 'image' 8192x8192: its buffers need about 4.8 GiB" mismatch.err)" = 1 ] &&
+    [ ! -e mismatch.pfm ] || fail "an image line past the budget was not refused once (status $status): $(cat mismatch.err)"
+  cp "$spheres" copy.scene
+  "${mpirun[@]}" -np 2 "$mpi_bin" --headless --size 96x64 --spp 16 --stats copy.scene -o mismatch.pfm copy.scene \
+    2>mismatch.err
+  status=$?
+  [ "$status" = 1 ] && [ "$(grep -c "^--stats: copy.scene is also the scene" mismatch.err)" = 1 ] &&
+    cmp -s copy.scene "$spheres" || fail "--stats onto the scene was not refused once (status $status): $(cat mismatch.err)"
   ;;
 slow)
   # Rank 1 sleeps 3 ms a tile (AO_MPI_TEST_DELAY_US, read by src/cluster.c for this test only),
@@ -276,6 +289,11 @@ sigterm)
   grep -q "^aoview: rank 2 interrupted by SIGTERM at [0-9]* spp" long.err || fail "no line naming rank 2: $(cat long.err)"
   grep -q "lost" long.err && fail "a rank named lost after SIGTERM to rank 2: $(cat long.err)"
   complete_pfm long.pfm 96 64 || fail "no complete image after SIGTERM to rank 2: $(ls -A)"
+  # Its spp is the most samples a pixel has, as every stats row's and a safety copy's (it said the
+  # fewest): at least the last row's.
+  spp=$(sed -n 's/^aoview: rank 2 interrupted by SIGTERM at \([0-9]*\) spp.*/\1/p' long.err)
+  [ -n "$spp" ] && [ "$spp" -ge "$(tail -n 1 long.csv | cut -d, -f2)" ] ||
+    fail "the interrupted image says $spp spp, the last stats row $(tail -n 1 long.csv | cut -d, -f2)"
   ;;
 sigint)
   start_long

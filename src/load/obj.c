@@ -28,7 +28,7 @@ struct obj_reader {
                                                with a normal on (earlier ones backfilled) */
     bool has_normals;         /* some corner references a normal */
     size_t invalid_normals;   /* vn lines of a zero or non-finite normal */
-    const struct ao_budget *budget;
+    struct ao_budget *budget;
 };
 
 /* Reads the rest of the line as at most 6 finite numbers into out, counting them. */
@@ -256,13 +256,17 @@ static bool build_shared_vertices(struct obj_reader *o, struct ao_mesh *mesh)
     return ao_load_finish(mesh, o->path);
 }
 
-/* Open-addressing hash map from a (position, normal) pair to the vertex made for it. */
+/* Open-addressing hash map from a (position, normal) pair to the vertex made for it; its slots
+ * are taken from the budget as it grows (both tables while it rehashes: just past a power of two,
+ * 96 bytes a pair, where a vertex is charged 60) and given back when it is freed. */
 struct vertex_map {
     struct vertex_slot {
         uint64_t key;       /* position << 32 | normal; UINT64_MAX when empty */
         uint32_t vertex;
     } *slots;
     size_t capacity, count; /* capacity is a power of two, at most half full */
+    struct ao_budget *budget;
+    uint64_t taken;         /* the slots' bytes taken from it */
 };
 
 /* The slot holding key, or the empty slot where it belongs. */
@@ -275,20 +279,37 @@ static struct vertex_slot *map_slot(const struct vertex_map *map, uint64_t key)
     return &map->slots[i];
 }
 
-/* Makes room for one more entry, doubling and rehashing when half full. */
-static bool map_reserve(struct vertex_map *map)
+/* Makes room for one more entry, doubling and rehashing when half full; false when memory runs out
+ * (not reported) or the grown table would not fit in the budget beside `mesh` bytes, the charge of
+ * the mesh with that entry (*over; reported, naming path). */
+static bool map_reserve(struct vertex_map *map, uint64_t mesh, const char *path, bool *over)
 {
     if (2 * (map->count + 1) <= map->capacity)
         return true;
-    struct vertex_map grown = {NULL, map->capacity ? 2 * map->capacity : 1024, map->count};
-    if (grown.capacity > SIZE_MAX / sizeof *grown.slots ||
-        !(grown.slots = malloc(grown.capacity * sizeof *grown.slots)))
+    struct vertex_map grown = {NULL, map->capacity ? 2 * map->capacity : 1024, map->count, map->budget, map->taken};
+    uint64_t bytes = (uint64_t)grown.capacity * sizeof *grown.slots;
+    if (grown.capacity > SIZE_MAX / sizeof *grown.slots)
         return false;
-    memset(grown.slots, 0xff, grown.capacity * sizeof *grown.slots);
+    if (mesh > UINT64_MAX - bytes || !ao_budget_fits(map->budget, mesh + bytes)) {
+        char why[200];
+        ao_budget_explain(map->budget, mesh > UINT64_MAX - bytes ? UINT64_MAX : mesh + bytes, why, sizeof why);
+        ao_load_report(path, 0, "%zu distinct position/normal pairs and the table that indexes them %s",
+                       map->count + 1, why);
+        return !(*over = true);
+    }
+    ao_budget_take(map->budget, bytes);
+    grown.taken += bytes;
+    if (!(grown.slots = malloc((size_t)bytes))) {
+        ao_budget_give(map->budget, bytes);
+        return false;
+    }
+    memset(grown.slots, 0xff, (size_t)bytes);
     for (size_t i = 0; i < map->capacity; i++)
         if (map->slots[i].key != UINT64_MAX)
             *map_slot(&grown, map->slots[i].key) = map->slots[i];
     free(map->slots);
+    ao_budget_give(map->budget, (uint64_t)map->capacity * sizeof *map->slots);
+    grown.taken -= (uint64_t)map->capacity * sizeof *map->slots;
     *map = grown;
     return true;
 }
@@ -307,8 +328,10 @@ static bool split_vertex(struct obj_reader *o, struct vertex_map *map, struct sp
     if (c.normal != AO_LOAD_NO_INDEX && ao_load_normal_is_missing(normals[c.normal]))
         c.normal = AO_LOAD_NO_INDEX;
     uint64_t key = (uint64_t)c.position << 32 | c.normal;
-    if (!map_reserve(map))
-        return ao_load_out_of_memory(o->path);
+    bool over = false;
+    uint64_t mesh = ao_budget_charge(o->budget, o->corner_positions.count / 3, map->count + 1, 0);
+    if (!map_reserve(map, mesh, o->path, &over))
+        return over ? false : ao_load_out_of_memory(o->path);
     struct vertex_slot *slot = map_slot(map, key);
     if (slot->key == key) {
         *vertex = slot->vertex;
@@ -337,7 +360,7 @@ static bool split_vertex(struct obj_reader *o, struct vertex_map *map, struct sp
  * theirs. */
 static bool build_split_vertices(struct obj_reader *o, struct ao_mesh *mesh)
 {
-    struct vertex_map map = {0};
+    struct vertex_map map = {.budget = o->budget};
     struct split_output out = {.positions = {.size = sizeof(struct ao_vec3)},
                                .normals = {.size = sizeof(struct ao_vec3)}};
     const uint32_t *positions = (const uint32_t *)o->corner_positions.data;
@@ -349,6 +372,7 @@ static bool build_split_vertices(struct obj_reader *o, struct ao_mesh *mesh)
     for (size_t i = 0; ok && i < count; i++)
         ok = split_vertex(o, &map, &out, (struct corner){positions[i], normals[i]}, &mesh->indices[i]);
     free(map.slots);
+    ao_budget_give(o->budget, map.taken);
     if (ok) {
         mesh->vertex_count = out.positions.count;
         mesh->positions = ao_load_take(&out.positions);
