@@ -1,5 +1,6 @@
 /* Benchmark: a big mesh from file to first image. Writes a bumpy sphere (bench_meshes.h) of
- * 9,991,920 triangles and 4,995,962 vertices, without normals (so the loader computes them), into
+ * 9,991,920 triangles and 4,995,962 vertices, without normals (so the loader computes them; the
+ * GLB's are flat, as glTF says, and computed no more), into
  * DIR as binary PLY, ASCII PLY, OBJ and GLB; then loads each as a bare mesh (ground added, as
  * `aoview FILE` does) in a process of its own per round, rounds interleaved across the files, and
  * prints the medians of: load (read, parse, normals, the scene's setup), normals alone (recomputed
