@@ -67,19 +67,12 @@ bool ao_mesh_load(struct ao_mesh *mesh, const char *path)
     return ao_mesh_load_budget(mesh, path, &budget);
 }
 
-/* Appends a printf-formatted note to model->note, after a "; " when there are others; what does
- * not fit is left out. */
+/* Appends a printf-formatted note to model->note (ao_load_vnote). */
 static void add_note(struct ao_model *model, const char *format, ...)
 {
-    size_t used = strlen(model->note);
-    if (used + 4 >= sizeof model->note)
-        return;
-    if (used)
-        used += (size_t)snprintf(model->note + used, sizeof model->note - used, "; ");
     va_list args;
     va_start(args, format);
-    if (vsnprintf(model->note + used, sizeof model->note - used, format, args) < 0)
-        model->note[used] = '\0';
+    ao_load_vnote(model->note, format, args);
     va_end(args);
 }
 

@@ -132,6 +132,14 @@ refuse 1 "exr_zip_long.exr: the chunk of rows 0 to 5 stores 618 bytes of zip dat
   --size 8x6 --reference exr_zip_long.exr "$spheres"
 refuse 1 "exr_zip_empty.exr: cannot decode the pixels (Invalid packed size of 0)" \
   --size 8x6 --reference exr_zip_empty.exr "$spheres"
+# Header values OpenEXR does not define, over rows stored raw (N7 of the third round): the C library
+# went on with its defaults and read them; its C++ library and exrcheck refuse them.
+for case in "compression_10:'compression' (type 'compression'): Invalid value 10" \
+            "compression_255:'compression' (type 'compression'): Invalid value 255" \
+            "line_order_9:'lineOrder' (type 'lineOrder'): Invalid value 9"; do
+  refuse 1 "exr_${case%%:*}.exr: its header holds a value OpenEXR does not define (Attribute ${case#*:}" \
+    --size 8x6 --reference "exr_${case%%:*}.exr" "$spheres"
+done
 # A reference of another size is refused from its header, before its pixels are read (a small ZIP
 # file of 16384x4096 pixels once cost 800 MB before its size was compared).
 python3 -c "import sys; sys.path.insert(0, '$root/tests'); import exr_hostile as e; open('exr_big_zip.exr', 'wb').write(e.scanline_file(16384, 4096, e.HALF, e.ZIP, [(16 * k, b'x' * 64) for k in range(256)]))"
@@ -437,7 +445,7 @@ rm -f meshopt.glb meshopt-range.glb meshopt_billion.glb meshopt_count.glb draco-
 # off their alignment, sparse indices that do not increase, 'sparse' on Draco data); what the
 # specifications allow or name as harmless loads with one line (an accessor counting other than
 # its Draco data decode, a shading-only required extension, normals that are NaN or zero; an ASCII
-# STL's 4-vertex facet or missing 'endsolid'). EXR values OpenEXR does not define are refused.
+# STL's 4-vertex facet or missing 'endsolid'). (EXR values OpenEXR does not define: above.)
 python3 - <<'PY'
 import base64, json, struct
 def gltf(name, accessors, views, data, primitive=None, extra=None):
@@ -517,14 +525,7 @@ open('draco_sparse.glb', 'wb').write(struct.pack('<3I', 0x46546C67, 2, 20 + len(
 PY
 refuse 1 "draco_sparse.glb: accessor 0 (POSITION): 'sparse' on an accessor of KHR_draco_mesh_compression data, which the extension forbids" draco_sparse.glb
 loads "draco_quantized.glb (Draco storing shorts that its accessor, componentType 5122, says how to read)" draco_quantized.glb
-python3 "$root/tests/exr_hostile.py" . || fail "tests/exr_hostile.py failed"
-refuse 1 "exr_compression_10.exr: its header holds a value OpenEXR does not define (Attribute 'compression' (type 'compression'): Invalid value 10 (max allowed 10))" \
-  --size 8x6 --reference exr_compression_10.exr "$spheres"
-refuse 1 "exr_compression_255.exr: its header holds a value OpenEXR does not define (Attribute 'compression' (type 'compression'): Invalid value 255" \
-  --size 8x6 --reference exr_compression_255.exr "$spheres"
-refuse 1 "exr_line_order_9.exr: its header holds a value OpenEXR does not define (Attribute 'lineOrder' (type 'lineOrder'): Invalid value 9" \
-  --size 8x6 --reference exr_line_order_9.exr "$spheres"
-rm -f ./*.gltf ./*.glb quad.stl exr_*.exr
+rm -f ./*.gltf ./*.glb quad.stl
 
 # ---- enormous lines and polygons, generated (100 MB each)
 big=100000000

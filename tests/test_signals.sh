@@ -119,18 +119,26 @@ for case in "INT 130 stats.csv" "TERM 143 new.csv"; do
 done
 rm -f grid.obj
 
+# interrupt_after SECONDS SIGNAL COMMAND...: runs COMMAND in the background (its stderr into
+# err.txt), sends it SIGNAL after SECONDS and sets status to its exit status.
+interrupt_after() {
+  local seconds=$1 sig=$2
+  shift 2
+  "$@" 2>err.txt &
+  local pid=$!
+  sleep "$seconds"
+  kill -"$sig" "$pid"
+  wait "$pid"
+  status=$?
+}
+
 # A --stats FIFO that nobody reads: aoview waits for a reader (up to 2 s), and a signal ends the
 # wait at once; before, fopen blocked for ever and no signal ended it.
 mkfifo stats.fifo
 echo good > out.pfm
 # (timeout passes the SIGTERM on, and kills a run that ignores it.)
-timeout -s KILL 10 "$bin" --headless -q --spp 4 --size 16x12 -o out.pfm --stats stats.fifo \
-  "$root/assets/scenes/spheres.scene" 2>err.txt &
-pid=$!
-sleep 0.5
-kill -TERM "$pid"
-wait "$pid"
-status=$?
+interrupt_after 0.5 TERM timeout -s KILL 10 "$bin" --headless -q --spp 4 --size 16x12 -o out.pfm --stats stats.fifo \
+  "$root/assets/scenes/spheres.scene"
 [ "$status" = 143 ] || fail "SIGTERM waiting for a --stats FIFO's reader: exit status $status, expected 143"
 one_line "SIGTERM waiting for a --stats FIFO's reader" "interrupted by SIGTERM before rendering"
 cmp -s out.pfm good.txt || fail "SIGTERM waiting for a --stats FIFO's reader: out.pfm was overwritten"
@@ -144,13 +152,8 @@ for case in "INT 130 stats.csv" "TERM 143 new.csv"; do
   echo good > out.pfm
   echo old > stats.csv
   rm -f new.csv
-  "$bin" --headless -q --spp 1024 --spppp 1024 --adaptive off --size 1920x1080 --threads 2 -o out.pfm \
-    --stats "$stats" "$root/assets/scenes/spheres.scene" 2>err.txt &
-  pid=$!
-  sleep 1.5
-  kill -"$sig" "$pid"
-  wait "$pid"
-  status=$?
+  interrupt_after 1.5 "$sig" "$bin" --headless -q --spp 1024 --spppp 1024 --adaptive off --size 1920x1080 --threads 2 \
+    -o out.pfm --stats "$stats" "$root/assets/scenes/spheres.scene"
   [ "$status" = "$want" ] || fail "SIG$sig before the first pass: exit status $status, expected $want"
   one_line "SIG$sig before the first pass" "aoview: interrupted by SIG$sig before the first pass ended: nothing written"
   untouched "SIG$sig before the first pass"
@@ -159,13 +162,8 @@ done
 # --compare headless has no half-compared image to write: a signal ends it at once, saying so
 # (it ended silently).
 echo good > out.pfm
-"$bin" --headless --compare uniform,cosine --time 100 --size 32x24 -o out.pfm "$root/assets/scenes/spheres.scene" \
-  2>err.txt &
-pid=$!
-sleep 1
-kill -INT "$pid"
-wait "$pid"
-status=$?
+interrupt_after 1 INT "$bin" --headless --compare uniform,cosine --time 100 --size 32x24 -o out.pfm \
+  "$root/assets/scenes/spheres.scene"
 [ "$status" = 130 ] || fail "SIGINT during --compare: exit status $status, expected 130"
 [ "$(tail -n 1 err.txt)" = "aoview: interrupted by SIGINT: nothing written" ] ||
   fail "SIGINT during --compare: $(cat err.txt)"

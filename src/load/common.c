@@ -102,6 +102,17 @@ bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint
     return false;
 }
 
+void ao_load_vnote(char *note, const char *format, va_list args)
+{
+    size_t used = strlen(note);
+    if (used + 4 >= AO_MESH_NOTE_SIZE)
+        return;
+    if (used)
+        used += (size_t)snprintf(note + used, AO_MESH_NOTE_SIZE - used, "; ");
+    if (vsnprintf(note + used, AO_MESH_NOTE_SIZE - used, format, args) < 0)
+        note[used] = '\0';
+}
+
 /* Reports an allocation failure; returns false for the caller to pass on. */
 bool ao_load_out_of_memory(const char *path)
 {

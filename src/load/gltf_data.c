@@ -786,15 +786,9 @@ bool ao_gltf_begin_data(struct ao_gltf *g)
 
 void ao_gltf_note(struct ao_gltf *g, const char *format, ...)
 {
-    size_t used = strlen(g->note);
-    if (used + 4 >= sizeof g->note)
-        return;
-    if (used)
-        used += (size_t)snprintf(g->note + used, sizeof g->note - used, "; ");
     va_list args;
     va_start(args, format);
-    if (vsnprintf(g->note + used, sizeof g->note - used, format, args) < 0)
-        g->note[used] = '\0';
+    ao_load_vnote(g->note, format, args);
     va_end(args);
 }
 

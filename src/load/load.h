@@ -4,6 +4,7 @@
 #ifndef AO_LOAD_H
 #define AO_LOAD_H
 
+#include <stdarg.h>
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
@@ -84,6 +85,10 @@ bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t v
  * (ao_budget_charge); the report names the placements too. */
 bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements,
                         const char *path);
+
+/* Appends a printf-formatted note to note (AO_MESH_NOTE_SIZE bytes: what a load tells of what it
+ * ignored or made), after a "; " when there are others; what does not fit is left out. */
+void ao_load_vnote(char *note, const char *format, va_list args);
 
 /* Reports an allocation failure; returns false for the caller to pass on. */
 bool ao_load_out_of_memory(const char *path);
