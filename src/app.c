@@ -390,6 +390,7 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
 
     /* Scene, size, tracer. */
     app->interrupt.output = opts->output ? opts->output : "aoview.png";
+    ao_file_remember_inputs();
     char name[AO_TEXT_SIZE];
     struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh,
                                     .crease = opts->crease, .crease_set = true, .sized = opts->width != 0};

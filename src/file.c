@@ -180,9 +180,17 @@ static struct input {
     char *name;
 } *inputs;
 static size_t input_count, input_capacity;
+static atomic_bool remembering;
+
+void ao_file_remember_inputs(void)
+{
+    atomic_store(&remembering, true);
+}
 
 void ao_file_note_input(int fd, const char *path)
 {
+    if (!atomic_load(&remembering))
+        return;
     struct stat st;
     char *name = strdup(path);
     if (fstat(fd, &st) != 0 || !name) {

@@ -45,8 +45,14 @@ void ao_file_unmap(const char *text, size_t size, bool mapped);
  * then returns false with the reason in *why (static text) and prints nothing. Any thread. */
 bool ao_file_read_prefix(int fd, size_t length, char **data, const char **why);
 
-/* Records the open file fd as an input this process read (its name for messages: path), so that no
- * output overwrites it (ao_file_input_name). Any thread. */
+/* From now on, every file read through this module (and noted by ao_file_note_input) is remembered
+ * as an input of this process, so that no output overwrites it (ao_file_input_name); off until
+ * then, so that a library user loading file after file (tests, fuzzers) holds no growing list.
+ * Main thread, before loading. */
+void ao_file_remember_inputs(void);
+
+/* Records the open file fd as an input this process read (its name for messages: path), when
+ * inputs are remembered. Any thread. */
 void ao_file_note_input(int fd, const char *path);
 
 /* The name of the input read (ao_file_note_input) that is the file of identity (dev, ino), or NULL
