@@ -36,7 +36,9 @@ struct ao_load_tokens {
 
 /* A format's loader: parses a whole file (size bytes, followed by a NUL) into the empty mesh,
  * ending with ao_load_finish; on failure prints one line and returns false (the caller empties
- * the mesh). Before it allocates for triangles and vertices it checks that their charge fits in
+ * the mesh). Normals the file does not give are left missing (normals NULL, or a vertex's
+ * ao_load_missing_normal), given ones that are zero or not finite too, counted in
+ * mesh->invalid_normals; mesh.c makes them (ao_load_complete_normals). Before it allocates for triangles and vertices it checks that their charge fits in
  * budget (ao_load_fits), from the file's counts where it has them, else as the counts grow; what
  * else it holds for a while (a parser's tree, buffers) it takes from budget and gives back. */
 typedef bool ao_load_format(struct ao_mesh *mesh, const char *path, const char *text, size_t size,
