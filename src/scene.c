@@ -190,6 +190,14 @@ static bool albedo(struct cursor *c, struct ao_vec3 *out)
     return unit_colour(c, "albedo", out);
 }
 
+/* A crease angle: degrees from 0 to 180 (mesh.h). */
+static bool crease_angle(struct cursor *c, const char *key, double *out)
+{
+    if (!scalar(c, key, out))
+        return false;
+    return (*out >= 0.0 && *out <= 180.0) || fail(c, "'%s': expected degrees from 0 to 180", key);
+}
+
 /* Takes the next key of a statement; reports duplicates through the seen mask. */
 static const char *next_key(struct cursor *c, const char *const *keys, unsigned *seen, int *which)
 {
@@ -236,6 +244,7 @@ static bool resize(void *array, size_t count, size_t size)
  * first + count)) and its placements of them, kept for further lines naming the same file. */
 struct loaded {
     char *path;
+    double crease;                /* the crease angle its normals were made with */
     dev_t device;
     ino_t inode;
     bool identified;              /* device and inode known (stat worked) */
@@ -394,13 +403,15 @@ static bool add_quad(struct world *w, const struct dvec p[4], struct ao_vec3 n, 
     return true;
 }
 
-/* The file loaded earlier as path (by name, or by device and inode), or NULL. */
-static const struct loaded *find_loaded(const struct world *w, const char *path)
+/* The file loaded earlier as path (by name, or by device and inode) with this crease angle, or NULL. */
+static const struct loaded *find_loaded(const struct world *w, const char *path, double crease)
 {
     struct stat st;
     bool identified = stat(path, &st) == 0;
     for (size_t i = 0; i < w->file_count; i++) {
         const struct loaded *f = &w->files[i];
+        if (f->crease != crease)
+            continue;
         if (strcmp(f->path, path) == 0 ||
             (identified && f->identified && f->device == st.st_dev && f->inode == st.st_ino))
             return &w->files[i];
@@ -408,12 +419,13 @@ static const struct loaded *find_loaded(const struct world *w, const char *path)
     return NULL;
 }
 
-/* Loads the mesh file at path once for every mesh line that names it: its meshes join the scene's,
- * charged to the budget once; returns its entry, or NULL after reporting. */
-static const struct loaded *load_file(struct cursor *c, struct ao_scene *s, struct world *w, const char *path)
+/* Loads the mesh file at path once for every mesh line that names it with one crease angle: its
+ * meshes join the scene's, charged to the budget once; returns its entry, or NULL after reporting. */
+static const struct loaded *load_file(struct cursor *c, struct ao_scene *s, struct world *w, const char *path,
+                                      double crease)
 {
     struct ao_model model;
-    if (!ao_model_load_budget(&model, path, w->budget, w->crease))
+    if (!ao_model_load_budget(&model, path, w->budget, crease))
         return NULL;
     uint64_t triangles = 0, vertices = 0;
     for (size_t i = 0; i < model.mesh_count; i++)
@@ -432,7 +444,7 @@ static const struct loaded *load_file(struct cursor *c, struct ao_scene *s, stru
         return NULL;
     }
     struct loaded *f = &w->files[w->file_count++];
-    *f = (struct loaded){.path = copy, .first = s->mesh_count, .count = model.mesh_count,
+    *f = (struct loaded){.path = copy, .crease = crease, .first = s->mesh_count, .count = model.mesh_count,
                          .placements = model.placements, .placement_count = model.placement_count};
     if (stat(path, &st) == 0)
         f->identified = true, f->device = st.st_dev, f->inode = st.st_ino;
@@ -584,7 +596,7 @@ static bool parse_quad(struct cursor *c, struct ao_scene *s, struct world *w)
 
 static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
 {
-    static const char *const keys[] = {"albedo", "scale", "rotate", "translate", NULL};
+    static const char *const keys[] = {"albedo", "scale", "rotate", "translate", "crease", NULL};
     if (c->next >= c->count)
         return fail(c, "'mesh' needs a file name");
     char path[4096];
@@ -593,6 +605,7 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
     unsigned seen = 0;
     struct ao_vec3 rho = ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO);
     struct transform t = {.scale = dvec_make(1, 1, 1), .axis = dvec_make(0, 1, 0), .cos_angle = 1};
+    double crease = w->crease;
     while (c->next < c->count) {
         int k;
         double r[4];
@@ -613,11 +626,13 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
         }
         if (k == 3 && !vector(c, key, &t.translate))
             return false;
+        if (k == 4 && !crease_angle(c, key, &crease))
+            return false;
     }
     if (t.scale.x == 0.0 || t.scale.y == 0.0 || t.scale.z == 0.0)
         return fail(c, "'scale' must not be zero");
-    const struct loaded *f = find_loaded(w, path);
-    if (!f && !(f = load_file(c, s, w, path)))
+    const struct loaded *f = find_loaded(w, path, crease);
+    if (!f && !(f = load_file(c, s, w, path, crease)))
         return false;
     struct ao_affine line = affine_of(&t);
     return place_model(c, s, w, f, &line, rho, path);
@@ -1202,7 +1217,7 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budge
                       .budget = budget, .instancing = options->instancing, .crease = crease_of(options)};
     struct cursor c = {.path = path};
     struct ao_affine identity = ao_affine_identity();
-    const struct loaded *f = load_file(&c, s, &w, path);
+    const struct loaded *f = load_file(&c, s, &w, path, w.crease);
     bool ok = f && (!ground || charge(&c, &w, 2, 4, "the ground")) &&
               place_model(&c, s, &w, f, &identity, ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO), path);
     struct dvec lo, hi;

@@ -595,6 +595,38 @@ static void test_three_mesh_lines_load_one_mesh(void **state)
     teardown(&f);
 }
 
+/* A mesh line's crease sets the angle for its file: the bunny OBJ (no normals; folds of 40 to 120
+ * degrees at its ears and feet, docs/formats.md) keeps its 1839 vertices at crease 180 and splits
+ * some at the default 40; two lines naming the file with one angle share one mesh, with two
+ * angles load it twice. A crease outside [0, 180] is refused at its line. */
+static void test_a_mesh_lines_crease_angle(void **state)
+{
+    (void)state;
+    const char *root = getenv("AO_SOURCE_ROOT");
+    assert_non_null(root);
+    char text[8192];
+    snprintf(text, sizeof text,
+             "camera eye 0 12 30 target 0 0 0\nmesh %s/assets/bunny.obj crease 180\n"
+             "mesh %s/assets/bunny.obj translate 12 0 0 crease 180\n"
+             "mesh %s/assets/bunny.obj translate -12 0 0\n", root, root, root);
+    write_text("creases.scene", text);
+    struct fixture f;
+    setup(&f, "creases.scene", AO_INSTANCING_ALWAYS, false);
+    assert_int_equal(f.scene.mesh_count, 2);
+    assert_int_equal(f.scene.instance_count, 3);
+    assert_int_equal(f.scene.meshes[0].vertex_count, 1839);
+    assert_true(f.scene.meshes[1].vertex_count > 1839);
+    assert_int_equal(f.scene.meshes[1].triangle_count, f.scene.meshes[0].triangle_count);
+    teardown(&f);
+
+    snprintf(text, sizeof text, "mesh %s/assets/bunny.obj crease 181\n", root);
+    write_text("crease_bad.scene", text);
+    char path[128];
+    struct ao_scene scene;
+    struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT};
+    assert_false(ao_scene_load_with(&scene, in_dir("crease_bad.scene", path, sizeof path), &options));
+}
+
 /* A small file placing a mesh 10^5 times loads, instanced: a 600-triangle sphere under 100,000
  * glTF nodes (a 4 MB file; 60 million triangles placed, 7 GB flattened) is one mesh and 100,000
  * instances, Embree holds less than AO_BUDGET_INSTANCE a placement, and it renders. Under a budget
@@ -817,6 +849,7 @@ int main(void)
         cmocka_unit_test(test_every_bvh_renders_the_same_image),
         cmocka_unit_test(test_mirrored_placements_shade_outward),
         cmocka_unit_test(test_three_mesh_lines_load_one_mesh),
+        cmocka_unit_test(test_a_mesh_lines_crease_angle),
         cmocka_unit_test(test_a_mesh_placed_100000_times_loads),
         cmocka_unit_test(test_contact_holds_inside_instances_far_from_the_origin),
     };
