@@ -47,10 +47,80 @@ float ao_image_srgb_encode(float linear)
     return x <= 0.0031308f ? 12.92f * x : 1.055f * powf(x, 1.0f / 2.4f) - 0.055f;
 }
 
+/* The 8-bit code of linear value x: round(255 encode(x)), the curve in double precision. */
+static int srgb_code(double x)
+{
+    x = x > 0.0 ? (x < 1.0 ? x : 1.0) : 0.0;
+    double s = x <= 0.0031308 ? 12.92 * x : 1.055 * pow(x, 1.0 / 2.4) - 0.055;
+    return (int)floor(255.0 * s + 0.5);
+}
+
+/* The codes by table: the floats in (0, 1) fall into buckets by their bits >> SRGB_SHIFT (8
+ * mantissa bits, 0.4 % of a value wide), and a bucket holds at most one step between codes: the
+ * curve's slope times the bucket's width stays under 0.45 of a code everywhere (s ~ x^(1/2.4): a
+ * relative step of 0.4 %/2.4 of s <= 1; the linear part: 12.92 x 0.4 % of 0.0031). srgb_code_of[b]
+ * is the code of the bucket's first float, srgb_step[b] the first float's bits with the next code
+ * (UINT32_MAX: none). Built once (srgb_init). */
+enum { SRGB_SHIFT = 15, SRGB_ONE = 0x3F800000, SRGB_BUCKETS = SRGB_ONE >> SRGB_SHIFT };
+static uint8_t srgb_code_of[SRGB_BUCKETS];
+static uint32_t srgb_step[SRGB_BUCKETS];
+static pthread_once_t srgb_once = PTHREAD_ONCE_INIT;
+
+static float float_of(uint32_t bits)
+{
+    float x;
+    memcpy(&x, &bits, sizeof x);
+    return x;
+}
+
+static void srgb_init(void)
+{
+    for (uint32_t b = 0; b < SRGB_BUCKETS; b++) {
+        uint32_t first = b << SRGB_SHIFT, last = first | ((1u << SRGB_SHIFT) - 1);
+        int code = srgb_code(float_of(first));
+        srgb_code_of[b] = (uint8_t)code;
+        srgb_step[b] = UINT32_MAX;
+        if (srgb_code(float_of(last)) == code)
+            continue;
+        assert(srgb_code(float_of(last)) == code + 1);
+        while (first + 1 < last) { /* code at first, code + 1 at last */
+            uint32_t mid = first + (last - first) / 2;
+            if (srgb_code(float_of(mid)) > code)
+                last = mid;
+            else
+                first = mid;
+        }
+        srgb_step[b] = last;
+    }
+}
+
+/* The code of x by the table (srgb_init done). */
+static inline uint8_t srgb_lookup(float x)
+{
+    uint32_t bits;
+    memcpy(&bits, &x, sizeof bits);
+    if (bits >= SRGB_ONE) /* 1 and above, +infinity; and negative values, NaNs with the sign set */
+        return bits < 0x7F800001u ? 255 : 0;
+    uint32_t b = bits >> SRGB_SHIFT;
+    return (uint8_t)(srgb_code_of[b] + (bits >= srgb_step[b]));
+}
+
 void ao_image_encode_srgb8(const float *linear, size_t count, uint8_t *out)
 {
+    pthread_once(&srgb_once, srgb_init);
     for (size_t i = 0; i < count; i++)
-        out[i] = (uint8_t)(255.0f * ao_image_srgb_encode(linear[i]) + 0.5f);
+        out[i] = srgb_lookup(linear[i]);
+}
+
+void ao_image_encode_srgb8_bgra(const float *rgb, size_t pixels, uint8_t *out)
+{
+    pthread_once(&srgb_once, srgb_init);
+    for (size_t p = 0; p < pixels; p++, rgb += 3, out += 4) {
+        out[0] = srgb_lookup(rgb[2]);
+        out[1] = srgb_lookup(rgb[1]);
+        out[2] = srgb_lookup(rgb[0]);
+        out[3] = 255;
+    }
 }
 
 static void report(const char *path, const char *reason, int err)
