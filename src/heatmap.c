@@ -48,7 +48,7 @@ void ao_heatmap_tiles(const struct ao_frame *frame, float *heat)
         for (int i = 0; i < frame->width; i++) {
             int t = j / frame->tile * frame->tiles_x + i / frame->tile;
             float *out = heat + 3 * ((size_t)j * (size_t)frame->width + (size_t)i);
-            if (isnan(frame->tile_error[t]))
+            if (frame->tiles_x == 0 || isnan(frame->tile_error[t]))
                 memcpy(out, ao_heatmap_unknown, sizeof ao_heatmap_unknown);
             else
                 ao_heatmap_colour(&ao_heatmap_error, frame->tile_error[t], out);

@@ -29,7 +29,8 @@ void ao_heatmap_colour(const struct ao_heatmap_scale *scale, double value, float
 extern const float ao_heatmap_unknown[3];
 
 /* Paints frame's tile errors on the error scale into heat (3 linear floats per pixel, top row
- * first, the frame's size), a tile not estimated yet (NAN) in ao_heatmap_unknown. Pure. */
+ * first, the frame's size), a tile not estimated yet (NAN), and all of a preview (no tiles), in
+ * ao_heatmap_unknown. Pure. */
 void ao_heatmap_tiles(const struct ao_frame *frame, float *heat);
 
 /* Paints |rgb - reference| per pixel (the mean over its three channels) on the difference scale

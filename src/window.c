@@ -68,9 +68,10 @@ static const char HELP[] =
 #define NAVIGATION_SECONDS 0.3
 
 /* The finest preview of a run stays on screen until the run's average has this many samples per
- * pixel (mean): from then on, its error against a converged image is below the preview's
- * (tests/bench_preview.c, docs/performance.md). */
-#define PREVIEW_UNTIL_SPP 4.0
+ * pixel (mean): from then on the average's RMSE against a converged image, taken at every pixel of
+ * the screen as the eye sees them, is below the preview's (the bunny at 1920x1080 and 3840x2160:
+ * from 11 spp; tests/bench_preview.c, docs/performance.md). */
+#define PREVIEW_UNTIL_SPP 11.0
 
 /* A resize restarts the render at the new size once the framebuffer has kept its size this long;
  * meanwhile the last frame is scaled. */
@@ -530,12 +531,13 @@ static void check_reference(struct viewer *v, const struct ao_frame *f)
     v->reference_fits = fits;
 }
 
-/* The view of frame f as the window shows it: its image, or its error map or its difference from
- * the reference painted into heat[k] (grown on use); NULL when memory is short. A preview, or a
- * frame of another size than the reference in the difference view, shows its image. */
+/* The view of frame f as the window shows it: its image, or its error map (a preview's: all not
+ * known) or its difference from the reference painted into heat[k] (grown on use); NULL when memory
+ * is short. A preview, or a frame of another size than the reference, shows its image in the
+ * difference view. */
 static const float *view_of(struct viewer *v, const struct ao_frame *f, int k)
 {
-    if (v->show == SHOW_IMAGE || f->block > 1 || (v->show == SHOW_DIFFERENCE && !fits_reference(v, f)))
+    if (v->show == SHOW_IMAGE || (v->show == SHOW_DIFFERENCE && (f->block > 1 || !fits_reference(v, f))))
         return f->rgb;
     if (!grow(&v->heat[k], &v->heat_room[k], (size_t)f->width * (size_t)f->height, "the heat map"))
         return NULL;
@@ -973,6 +975,11 @@ enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_wi
 {
     XIOErrorHandler xlib_handler = XSetIOErrorHandler(on_io_error);
     if (!glfwInit()) {
+        /* With a display named, say why it could not be used before main falls back to headless. */
+        const char *why = NULL, *display = getenv("DISPLAY");
+        glfwGetError(&why);
+        if (display && display[0])
+            fprintf(stderr, "aoview: cannot use the X display %s: %s\n", display, why ? why : "unknown error");
         XSetIOErrorHandler(xlib_handler);
         return AO_WINDOW_NO_DISPLAY;
     }
