@@ -173,11 +173,7 @@ int main(int argc, char **argv)
         count = 2;
     }
     struct ao_scene scene;
-    if (!ao_scene_load(&scene, path))
-        return 1;
-    struct ao_tracer *tracer = ao_tracer_create(&scene);
-    if (!tracer)
-        return 1;
+    struct ao_tracer *tracer = bench_load(path, &scene);
     printf("%s, %d threads\n", scene.name, THREADS);
     for (int k = 0; k < count; k++)
         measure(&scene, tracer, sizes[k][0], sizes[k][1], reference_spp);

@@ -198,6 +198,17 @@ sides() {
         echo "${BASH_REMATCH[1]} ${BASH_REMATCH[2]} ${BASH_REMATCH[3]} ${BASH_REMATCH[4]}"
 }
 
+# Starts the viewer with the arguments given, its output to stdout and stderr in the work folder,
+# and waits for its window: pid and wid name them. $1 says what for, in the failure.
+open_viewer() {
+    local what=$1
+    shift
+    "$AO_BINARY" "$@" >stdout 2>stderr &
+    pid=$!
+    wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window for $what"
+    wid=${wid%%$'\n'*}
+}
+
 # Drags with the left button from ($1, $2) to ($3, $4) in the window, pausing between the steps as
 # a hand would.
 drag() {
@@ -556,10 +567,7 @@ elif [ "$mode" = truth ]; then
     # E before any tile has an estimate (both halves of a tile need a pass, and --spp 1 runs one):
     # every tile "not known", a grey (0.2 linear, code 124) that S saves as displayed; the lowest
     # colour of the scale, dark blue, is what it used to paint (labelled 0.01 %).
-    "$AO_BINARY" --size 320x240 --spp 1 --threads 2 "$scene" >stdout 2>stderr &
-    pid=$!
-    wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window for --spp 1"
-    wid=${wid%%$'\n'*}
+    open_viewer "--spp 1" --size 320x240 --spp 1 --threads 2 "$scene"
     wait_title " — spp 1 of 1 — error — .* — pass 1 — "
     press e
     sleep 0.5
@@ -573,10 +581,7 @@ elif [ "$mode" = truth ]; then
 
     # A --size the 1280x1024 screen cannot hold: one line on stderr, the window at 90 % of the
     # screen and the image following it.
-    "$AO_BINARY" --size 1600x1200 --spp 1000000 --threads 2 "$scene" >stdout 2>stderr &
-    pid=$!
-    wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window for 1600x1200"
-    wid=${wid%%$'\n'*}
+    open_viewer 1600x1200 --size 1600x1200 --spp 1000000 --threads 2 "$scene"
     wait_title "bunny.scene — 1152x864 — "
     lines=$(grep -c "a 1600x1200 window does not fit 90 % of the 1280x1024 screen: it opens at 1152x864" stderr)
     [ "$lines" -eq 1 ] || fail "$lines lines about the --size that does not fit"
@@ -591,11 +596,8 @@ elif [ "$mode" = truth ]; then
     spheres=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
     "$AO_BINARY" --headless -q --size 160x120 --spp 64 --spppp 64 -o spheres.pfm "$spheres" || fail "no reference"
     for sampling in hemisphere cosine; do
-        "$AO_BINARY" --size 160x120 --spp 64 --spppp 1 --threads 2 --adaptive off --sampling $sampling \
-            --reference spheres.pfm "$spheres" >stdout 2>stderr &
-        pid=$!
-        wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window for the chart"
-        wid=${wid%%$'\n'*}
+        open_viewer "the chart" --size 160x120 --spp 64 --spppp 1 --threads 2 --adaptive off --sampling $sampling \
+            --reference spheres.pfm "$spheres"
         wait_title "spheres.scene — 160x120 — $sampling — AA on — spp 64 of 64 — .* RMSE [0-9.e-]+"
         sleep 0.5
         read -r _ green _ < <(chart_colours)
