@@ -6,10 +6,13 @@
  * ones whose image differs from the one before (a row through the image's middle, read back from
  * the server). R: the window left alone for --seconds, per its --stats (the last run's last row);
  * H: the same run with --headless, started right after it. Medians of --rounds rounds (window and
- * headless interleaved, so that the machine's load drifts over both).
+ * headless interleaved, so that the machine's load drifts over both). Then the CPU time of the idle
+ * window's GL thread (and llvmpipe's) and of the X server against its render threads', which no
+ * other load on the machine changes.
  * Run under Xvfb with room for a 3840x2160 window (the window takes at most 90 % of the screen):
  *   xvfb-run -a -s "-screen 0 4320x2440x24" ./build/tests/bench_window [--aoview build/aoview] [SCENE]
  * or ninja -C build bench-window. Exits 77 without a display. Asserts nothing. */
+#include <dirent.h>
 #include <math.h>
 #include <signal.h>
 #include <spawn.h>
@@ -232,6 +235,78 @@ static double rate_at(const char *path, double seconds, double patience)
     return NAN;
 }
 
+/* CPU seconds (user and system) of a /proc stat file's process or thread; 0 when unreadable. */
+static double cpu_seconds(const char *path)
+{
+    FILE *f = fopen(path, "r");
+    if (!f)
+        return 0.0;
+    char line[1024];
+    double seconds = 0.0;
+    if (fgets(line, sizeof line, f)) {
+        const char *rest = strrchr(line, ')'); /* past the name, which may hold spaces */
+        unsigned long utime, stime;
+        if (rest && sscanf(rest + 2, "%*c %*d %*d %*d %*d %*d %*u %*u %*u %*u %*u %lu %lu", &utime, &stime) == 2)
+            seconds = (double)(utime + stime) / (double)sysconf(_SC_CLK_TCK);
+    }
+    fclose(f);
+    return seconds;
+}
+
+/* The pid of the X server of this display (an Xvfb whose arguments name it), or 0. */
+static long x_server(void)
+{
+    const char *display = getenv("DISPLAY");
+    long found = 0;
+    DIR *proc = opendir("/proc");
+    for (struct dirent *e; proc && display && !found && (e = readdir(proc));) {
+        char path[64], args[4096];
+        long pid = strtol(e->d_name, NULL, 10);
+        snprintf(path, sizeof path, "/proc/%ld/cmdline", pid);
+        FILE *f = pid > 0 ? fopen(path, "r") : NULL;
+        size_t n = f ? fread(args, 1, sizeof args - 1, f) : 0;
+        if (f)
+            fclose(f);
+        args[n] = '\0';
+        if (!strstr(args, "Xvfb"))
+            continue;
+        for (size_t k = 0; k < n && !found; k += strlen(args + k) + 1)
+            found = strcmp(args + k, display) == 0 ? pid : 0;
+    }
+    if (proc)
+        closedir(proc);
+    return found;
+}
+
+/* The CPU seconds aoview's process pid has spent drawing (its main thread, the GL thread, and
+ * llvmpipe's) into gl, and rendering (every other thread) into render. */
+static void cpu_split(pid_t pid, double *gl, double *render)
+{
+    char path[96];
+    snprintf(path, sizeof path, "/proc/%d/task", (int)pid);
+    *gl = *render = 0.0;
+    DIR *tasks = opendir(path);
+    for (struct dirent *e; tasks && (e = readdir(tasks));) {
+        if (e->d_name[0] == '.')
+            continue;
+        char stat[512], comm[512], name[64] = "";
+        snprintf(stat, sizeof stat, "%s/%s/stat", path, e->d_name);
+        snprintf(comm, sizeof comm, "%s/%s/comm", path, e->d_name);
+        FILE *f = fopen(comm, "r");
+        if (f && !fgets(name, sizeof name, f))
+            name[0] = '\0';
+        if (f)
+            fclose(f);
+        double seconds = cpu_seconds(stat);
+        if (atoi(e->d_name) == (int)pid || strncmp(name, "llvmpipe", 8) == 0)
+            *gl += seconds;
+        else
+            *render += seconds;
+    }
+    if (tasks)
+        closedir(tasks);
+}
+
 static void measure(Display *dpy, int damage_event, const struct options *o, int width, int height)
 {
     char size[32], seconds[32], stats[2][64];
@@ -239,7 +314,9 @@ static void measure(Display *dpy, int damage_event, const struct options *o, int
     snprintf(seconds, sizeof seconds, "%g", o->seconds);
     snprintf(stats[0], sizeof stats[0], "/tmp/bench_window_%d_w.csv", (int)getpid());
     snprintf(stats[1], sizeof stats[1], "/tmp/bench_window_%d_h.csv", (int)getpid());
-    double orbit[16], distinct[16], idle[16], headless[16], ratio[16];
+    double orbit[16], distinct[16], idle[16], headless[16], ratio[16], share[16];
+    char x_stat[64];
+    snprintf(x_stat, sizeof x_stat, "/proc/%ld/stat", x_server());
     int rounds = o->rounds < 16 ? o->rounds : 16;
     for (int round = 0; round < rounds; round++) {
         /* The orbit: a run that never ends by itself. */
@@ -267,8 +344,11 @@ static void measure(Display *dpy, int damage_event, const struct options *o, int
         const char *idle_argv[] = {o->aoview, "--size", size, "--time", seconds, "--pixel-size", "1", "--stats",
                                    stats[0], o->scene, NULL};
         remove(stats[0]);
+        double x_before = cpu_seconds(x_stat), gl, render;
         pid = launch(idle_argv);
         idle[round] = rate_at(stats[0], o->seconds, o->seconds + 60.0);
+        cpu_split(pid, &gl, &render);
+        share[round] = (gl + cpu_seconds(x_stat) - x_before) / render;
         end(pid);
         char out[80];
         snprintf(out, sizeof out, "/tmp/bench_window_%d.pfm", (int)getpid());
@@ -281,14 +361,16 @@ static void measure(Display *dpy, int damage_event, const struct options *o, int
         remove(out);
         ratio[round] = idle[round] / headless[round];
         if (getenv("AO_BENCH_VERBOSE"))
-            printf("  round %d: orbit %.1f presented (%.1f distinct), idle %.2f, headless %.2f\n", round + 1,
-                   orbit[round], distinct[round], idle[round], headless[round]);
+            printf("  round %d: orbit %.1f presented (%.1f distinct), idle %.2f, headless %.2f, drawing %.1f %%\n",
+                   round + 1, orbit[round], distinct[round], idle[round], headless[round], 100.0 * share[round]);
     }
     remove(stats[0]);
     remove(stats[1]);
-    printf("%s: orbit %.0f frames/s presented (%.0f distinct), idle window %.1f Mrays/s against headless %.1f (%.2f)\n",
-           size, bench_median(orbit, rounds), bench_median(distinct, rounds), bench_median(idle, rounds),
-           bench_median(headless, rounds), bench_median(ratio, rounds));
+    printf("%s: orbit %.0f frames/s presented, idle window %.1f Mrays/s against headless %.1f (%.2f)\n", size,
+           bench_median(orbit, rounds), bench_median(idle, rounds), bench_median(headless, rounds),
+           bench_median(ratio, rounds));
+    printf("%s: %.0f distinct frames/s of the orbit; the idle window's drawing and X server took %.1f %% of the CPU "
+           "time of its render threads\n", size, bench_median(distinct, rounds), 100.0 * bench_median(share, rounds));
     fflush(stdout);
 }
 
