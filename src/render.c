@@ -651,12 +651,29 @@ static void preview_job(void *user, int self)
     ao_preview_trace(&r->preview, preview_stops, r);
 }
 
+/* While the camera is being moved, no preview finer than cells of a quarter of the first's: each
+ * move restarts the run before a finer one would be done (at 3840x2160, cells of 8 pixels take
+ * some 30 ms, moves come every 16 ms), so that tracing it only takes cores from the window. Waits
+ * while the settings say so and nothing restarts or stops the run; true when the previews may go
+ * on. Render thread. */
+static bool navigation_allows(struct ao_render *r, int first, int block)
+{
+    if (block >= first / 4)
+        return true;
+    pthread_mutex_lock(&r->lock);
+    while (r->settings.navigating && !r->stop && r->restarts == r->pass_restarts)
+        pthread_cond_wait(&r->wake, &r->lock);
+    pthread_mutex_unlock(&r->lock);
+    return !aborted(r);
+}
+
 /* Traces and publishes the previews of the run that begins with info (pass 0) and camera, coarse
  * to fine, until the first full pass is due or a restart or stop aborts one; false when memory is
  * short. */
 static bool preview(struct ao_render *r, const struct ao_camera *camera, const struct ao_frame_info *info)
 {
-    for (int block = ao_preview_first_block(r->width, r->height); block > 1 && !aborted(r);
+    int first = ao_preview_first_block(r->width, r->height);
+    for (int block = first; block > 1 && !aborted(r) && navigation_allows(r, first, block);
          block = ao_preview_next_block(block)) {
         struct ao_preview *p = &r->preview;
         if (!ao_preview_begin(p, &r->ctx, camera, r->width, r->height, block))

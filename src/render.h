@@ -22,6 +22,9 @@ struct ao_settings {
     bool adaptive;           /* samples go where the estimated error is (render.c) */
     bool paused;
     bool previews;           /* coarse frames after each restart (preview.h), for a window's eye */
+    bool navigating;         /* the camera is being moved (a drag): previews stop at cells of about
+                                1/256 of the long side and the run waits there until a restart or
+                                until this is cleared, which no restart needs */
     enum ao_output output;   /* AO or the normals view */
     enum ao_shading shading; /* Phong or flat mesh normals */
     struct ao_camera camera;

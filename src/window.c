@@ -64,7 +64,8 @@ static const char HELP[] =
 #define PRESENT_SHARE 0.1
 
 /* A camera change from the mouse makes the window present every new frame at once, and nothing
- * else, for this long (and while a button is held). */
+ * else, for this long (and while a button is held); for as long, the renderer traces no fine
+ * preview that the next move would abort (struct ao_settings' navigating). */
 #define NAVIGATION_SECONDS 0.3
 
 /* The finest preview of a run stays on screen until the run's average has this many samples per
@@ -361,9 +362,26 @@ static void apply_mouse(struct viewer *v)
     ao_camera_orbit(&s.camera, (float)(pi * v->orbit_x / size), (float)(pi * v->orbit_y / size));
     ao_camera_pan(&s.camera, (float)(v->pan_x / size), (float)(v->pan_y / size));
     ao_camera_zoom(&s.camera, (float)pow(0.85, v->wheel));
+    s.navigating = true;
     set_settings(v, &s);
     v->orbit_x = v->orbit_y = v->pan_x = v->pan_y = v->wheel = 0;
     v->navigated_at = glfwGetTime();
+}
+
+/* Tells the renderer that the camera has stopped moving, NAVIGATION_SECONDS after the last move:
+ * its previews and passes go on. Returns the seconds until that is due, or a negative number. */
+static double end_navigation(struct viewer *v)
+{
+    struct ao_settings s;
+    get_settings(v, &s);
+    if (!s.navigating)
+        return -1.0;
+    double due = v->navigated_at + NAVIGATION_SECONDS - glfwGetTime();
+    if (due > 0.0)
+        return due;
+    s.navigating = false;
+    set_settings(v, &s);
+    return -1.0;
 }
 
 /* ---- output ---- */
@@ -941,7 +959,7 @@ static enum ao_window_result loop(struct viewer *v)
             toggle_compare(v);
         v->toggle_compare = false;
         apply_mouse(v);
-        double resize_due = follow_size(v);
+        double resize_due = follow_size(v), navigation_due = end_navigation(v);
         take_frame(v);
         struct ao_settings s;
         get_settings(v, &s);
@@ -961,6 +979,8 @@ static enum ao_window_result loop(struct viewer *v)
         double wait = due >= 0.0 ? fmax(0.0, due - glfwGetTime()) : -1.0;
         if (resize_due >= 0.0)
             wait = wait >= 0.0 ? fmin(wait, resize_due) : resize_due;
+        if (navigation_due >= 0.0)
+            wait = wait >= 0.0 ? fmin(wait, navigation_due) : navigation_due;
         if (wait < 0.0)
             glfwWaitEvents();
         else if (wait > 0.0)

@@ -6,7 +6,9 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
+#include <time.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -625,6 +627,61 @@ static void test_tile_errors_are_not_known_before_both_halves(void **state)
     ao_scene_finish(&scene);
 }
 
+struct navigation {
+    atomic_int previews, passes;
+    atomic_uint_fast64_t restarts;   /* of the last frame */
+};
+
+static void navigation_preview(const struct ao_frame_info *info, void *user)
+{
+    struct navigation *n = user;
+    atomic_fetch_add(&n->previews, 1);
+    atomic_store(&n->restarts, info->restarts);
+}
+
+static void navigation_pass(const struct ao_frame_info *info, void *user)
+{
+    struct navigation *n = user;
+    atomic_fetch_add(&n->passes, 1);
+    atomic_store(&n->restarts, info->restarts);
+}
+
+/* While the camera is being moved the previews stop at cells of a quarter of the first's (1600x900:
+ * cells of 32, 16 and 8 pixels, not 4) and the run waits, tracing nothing; cleared, the run goes on
+ * from there, the finest preview and then passes, without a restart. */
+static void test_navigation_holds_the_previews(void **state)
+{
+    (void)state;
+    struct ao_scene scene;
+    assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
+    struct ao_tracer *tracer = ao_tracer_create(&scene);
+    assert_non_null(tracer);
+    struct navigation n = {0};
+    struct ao_render_config config = {.scene = &scene, .tracer = tracer, .threads = 2, .seed = 1, .target_spp = 4,
+                                      .ao_distance = INFINITY, .on_pass = navigation_pass,
+                                      .on_preview = navigation_preview, .user = &n};
+    struct ao_settings settings = {.width = 1600, .height = 900, .sampling = AO_SAMPLING_COSINE, .aa = true,
+                                   .spppp = 1, .previews = true, .navigating = true, .camera = scene.camera};
+    struct ao_render *r = ao_render_create(&config, &settings);
+    assert_non_null(r);
+    const struct timespec tenth = {0, 100000000};
+    for (int k = 0; k < 10 && atomic_load(&n.previews) < 3; k++)
+        nanosleep(&tenth, NULL);
+    nanosleep(&tenth, NULL); /* time for a fourth preview or a pass, were they traced */
+    assert_int_equal(atomic_load(&n.previews), 3);
+    assert_int_equal(atomic_load(&n.passes), 0);
+    uint64_t run = atomic_load(&n.restarts);
+    settings.navigating = false;
+    assert_false(ao_render_set_settings(r, &settings));
+    assert_true(ao_render_wait(r));
+    assert_int_equal(atomic_load(&n.previews), 4);
+    assert_int_equal(atomic_load(&n.passes), 4);
+    assert_true(atomic_load(&n.restarts) == run);
+    ao_render_destroy(r);
+    ao_tracer_destroy(tracer);
+    ao_scene_finish(&scene);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -646,6 +703,7 @@ int main(void)
         cmocka_unit_test(test_previews_come_first_and_change_nothing),
         cmocka_unit_test(test_previews_carry_no_measured_figures),
         cmocka_unit_test(test_tile_errors_are_not_known_before_both_halves),
+        cmocka_unit_test(test_navigation_holds_the_previews),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
