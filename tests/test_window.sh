@@ -18,10 +18,12 @@
 #                          a zoom each restart both; V again; --compare at start with --time and
 #                          --stats, fair within 5 %, and an orbit once it has finished
 #   test_window.sh truth   only measured figures: titles read every 0.1 s after a resize show no
-#                          error, RMSE, time left or rate while a preview is on screen; E before any
+#                          error, RMSE or convergence while a preview is on screen, no time left or
+#                          rate before the first pass; E before any
 #                          tile has an estimate paints them all "not known"; a --size too large
 #                          for the screen says so on one line; the chart keeps the run that went
-#                          on before the window opened
+#                          on before the window opened; --pixel-size auto is 2 where Xft.dpi
+#                          says the content scale is 2
 # Needs AO_BINARY and AO_SOURCE_ROOT (tests/meson.build sets both); exits 77 when Xvfb or
 # xdotool is missing.
 set -u
@@ -33,12 +35,22 @@ for tool in xvfb-run xdotool python3; do
         exit 77
     fi
 done
+if [ "$mode" = truth ] && ! command -v xprop >/dev/null; then
+    echo "SKIP: xprop is not installed (Debian: apt-get install x11-utils)"
+    exit 77
+fi
 if [ -z "${AO_UNDER_XVFB:-}" ]; then
     # A 24-bit screen: xvfb-run's default depth has no OpenGL visual. The server keeps its screen
     # in an XWD file under AO_FBDIR, which the chart test reads.
     AO_FBDIR=$(mktemp -d)
     export AO_FBDIR
-    AO_UNDER_XVFB=1 exec xvfb-run -a -s "-screen 0 1280x1024x24 -fbdir $AO_FBDIR" "$0" "$@"
+    # truth sets a property on the root window between launches: the server must not reset when
+    # its last client leaves.
+    noreset=""
+    if [ "$mode" = truth ]; then
+        noreset=-noreset
+    fi
+    AO_UNDER_XVFB=1 exec xvfb-run -a -s "-screen 0 1280x1024x24 -fbdir $AO_FBDIR $noreset" "$0" "$@"
 fi
 
 fail() {
@@ -607,6 +619,14 @@ elif [ "$mode" = truth ]; then
     done
     echo "hemisphere-coloured chart pixels: $curve with the first run's curve, $legend with the legend alone"
     [ $((curve - legend)) -ge 30 ] || fail "the chart lost the run before the window opened"
+
+    # --pixel-size auto on a HiDPI screen: X gives the content scale by Xft.dpi (192: 2), not by
+    # the framebuffer, which is the window's size; the 640x480 window renders 320x240.
+    xprop -root -f RESOURCE_MANAGER 8s -set RESOURCE_MANAGER "$(printf 'Xft.dpi:\t192\n')"
+    open_viewer "Xft.dpi 192" --size 640x480 --spp 1000000 --threads 2 "$scene"
+    wait_title "bunny.scene — 320x240 — "
+    press Escape
+    wait "$pid" || fail "exit status $? after Esc"
     echo "PASS (truth)"
     exit 0
 elif [ "$mode" = resize ]; then
