@@ -905,7 +905,9 @@ static double update(struct viewer *v, const struct ao_settings *settings, bool 
     glfwGetFramebufferSize(v->window, &width, &height);
     bool look = v->dirty || width != v->drawn.width || height != v->drawn.height || v->show_hud != v->drawn.hud ||
                 v->show_help != v->drawn.help;
-    if (!image && !look && (!clock || navigating))
+    if (!image && !look && clock && navigating) /* the status waits for the navigation's end */
+        return v->drag >= 0 ? -1.0 : v->navigated_at + NAVIGATION_SECONDS;
+    if (!image && !look && !clock)
         return ticks ? v->status_at + CLOCK_SECONDS : -1.0;
     bool preview = !v->compare && v->shown->block > 1;
     double due = now;
