@@ -93,7 +93,6 @@ enum show {
 struct look {
     int width, height;               /* framebuffer pixels */
     bool hud, help;
-    uint64_t image;                  /* the generation of the image in the texture */
     char status[512];                /* ao_hud_format's text, as in the title */
 };
 
@@ -110,9 +109,9 @@ struct viewer {
     const struct ao_frame *shown;    /* the newest frame taken; valid until the next
                                         ao_render_take_frame */
     double shown_at;                 /* glfwGetTime() when it was taken */
-    uint64_t taken;                  /* frames taken that the texture does not show yet (while
-                                        comparing: either side's); counts up */
-    uint64_t uploaded;               /* the value of taken the texture shows; the image's generation */
+    uint64_t taken;                  /* frames taken (while comparing: either side's new ones),
+                                        counting up: the newest frame's generation */
+    uint64_t uploaded;               /* the generation the texture shows */
     int kept_block;                  /* > 1: the texture holds a preview of block x block cells of
                                         run kept_run, which stays until the run's average is as
                                         good (PREVIEW_UNTIL_SPP) */
@@ -858,7 +857,7 @@ static bool present(struct viewer *v, const struct ao_settings *settings, bool i
 {
     if (image && !upload(v))
         return false;
-    struct look look = {.hud = v->show_hud, .help = v->show_help, .image = v->uploaded};
+    struct look look = {.hud = v->show_hud, .help = v->show_help};
     glfwGetFramebufferSize(v->window, &look.width, &look.height);
     char text[sizeof look.status] = "";
     if (v->compare) {
