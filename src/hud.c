@@ -58,8 +58,7 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, const c
     out[0] = '\0';
     item(out, size, &used, separator, "%s", s->scene);
     if (preview)
-        item(out, size, &used, separator, "preview %dx%d (%d px cells)", (s->width + s->block - 1) / s->block,
-             (s->height + s->block - 1) / s->block, s->block);
+        item(out, size, &used, separator, "%dx%d preview, %d px cells", s->width, s->height, s->block);
     else
         item(out, size, &used, separator, "%dx%d", s->width, s->height);
     item(out, size, &used, separator, "%s", ao_sampling_name(f->sampling));

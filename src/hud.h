@@ -25,7 +25,7 @@ struct ao_hud_status {
 };
 
 /* Writes the status facts joined by separator into out (always terminated, truncated to size):
- * scene; "WxH", or with a preview on screen "preview WxH (N px cells)" of its cells; sampling
+ * scene; "WxH", with a preview on screen "WxH preview, N px cells"; sampling
  * mode, "AA on|off", "normals" in the normals view, "flat" with flat shading, "spp X of Y"; then,
  * once a full pass is done (info.pass > 0): "Ns", "~N s left" while estimated, "M Mrays/s", "pass
  * P", "N spp/pass" (or "auto N spp/pass"), and, unless a preview is on screen, "error E %" (E

@@ -32,7 +32,7 @@ static void test_a_preview_shows_no_figure(void **state)
                               .block = 4, .seconds = 0.3, .seconds_left = NAN, .adaptive = true};
     char text[512];
     ao_hud_format(&s, " | ", "-", text, sizeof text);
-    assert_non_null(strstr(text, "bunny.scene | preview 160x120 (4 px cells) | cosine | AA on | spp 0 of 256"));
+    assert_non_null(strstr(text, "bunny.scene | 640x480 preview, 4 px cells | cosine | AA on | spp 0 of 256"));
     const char *none[] = {"error", "RMSE", "left", "Mrays", "converged", "mean", "0.3s"};
     assert_absent(text, none, sizeof none / sizeof none[0]);
 }
@@ -66,7 +66,7 @@ static void test_the_first_passes_say_what_is_not_known(void **state)
     /* A preview kept on screen over the average: the run's progress, none of the average's figures. */
     s.block = 4;
     ao_hud_format(&s, " | ", "-", text, sizeof text);
-    assert_non_null(strstr(text, "| preview 160x120 (4 px cells) |"));
+    assert_non_null(strstr(text, "| 640x480 preview, 4 px cells |"));
     assert_non_null(strstr(text, "| 0.5s | ~2.0 s left | 4.0 Mrays/s | pass 1 |"));
     const char *average[] = {"error", "RMSE", "converged", "mean"};
     assert_absent(text, average, sizeof average / sizeof average[0]);

@@ -563,7 +563,7 @@ elif [ "$mode" = truth ]; then
     previews=0
     for _ in $(seq 15); do
         t=$(title)
-        if [[ $t == *" — preview "* || $t == *" — pass 0 — "* ]]; then
+        if [[ $t == *" preview, "* || $t == *" — pass 0 — "* ]]; then
             previews=$((previews + 1))
             [[ $t =~ error\ [0-9]|RMSE\ [0-9]|converged ]] && fail "a figure of the average on a preview: $t"
             [[ $t == *" — pass 0 — "* && $t =~ \ s\ left|Mrays/s ]] && fail "a figure before the first pass: $t"
@@ -594,7 +594,7 @@ elif [ "$mode" = truth ]; then
     # A --size the 1280x1024 screen cannot hold: one line on stderr, the window at 90 % of the
     # screen and the image following it.
     open_viewer 1600x1200 --size 1600x1200 --spp 1000000 --threads 2 "$scene"
-    wait_title "bunny.scene — 1152x864 — "
+    wait_title "bunny.scene — 1152x864[ ,]"
     lines=$(grep -c "a 1600x1200 window does not fit 90 % of the 1280x1024 screen: it opens at 1152x864" stderr)
     [ "$lines" -eq 1 ] || fail "$lines lines about the --size that does not fit"
     press Escape
