@@ -34,8 +34,9 @@ static double monotonic_seconds(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-/* Redraws the progress bar: filled by the share of the run's time gone where the time left is
- * estimated, else by spp; at most every BAR_SECONDS, and at the end. */
+/* Redraws the progress bar: filled, and its percentage, by the share of the run done
+ * (ao_progress_share: full only once done); the error "--" while not known; at most every
+ * BAR_SECONDS, and at the end. */
 static void draw_bar(struct ao_reporter *rep, const struct ao_frame_info *info)
 {
     ao_progress_add(&rep->eta, info);
@@ -43,15 +44,15 @@ static void draw_bar(struct ao_reporter *rep, const struct ao_frame_info *info)
     if (!info->done && rep->drawn_at > 0.0 && now - rep->drawn_at < BAR_SECONDS)
         return;
     rep->drawn_at = now;
-    double left = ao_progress_left(&rep->eta, info);
-    double share = !isnan(left) && info->seconds + left > 0.0 ? info->seconds / (info->seconds + left)
-                                                              : (double)info->spp / info->target_spp;
-    int filled = (int)(30.0 * (share < 1.0 ? share : 1.0));
-    char left_text[32];
-    ao_progress_format(left, left_text, sizeof left_text);
-    fprintf(stderr, "\r[%.*s%*s] spp %u/%u  error %.2f %%  %.1f s  %s  %.1f Mrays/s \033[K", filled,
-            "##############################", 30 - filled, "", info->spp, info->target_spp, 100.0 * info->error,
-            info->seconds, left_text, ao_app_mrays_per_second(info));
+    double share = ao_progress_share(&rep->eta, info);
+    int filled = (int)(30.0 * share);
+    char left_text[32], error_text[32] = "--";
+    ao_progress_format(ao_progress_left(&rep->eta, info), left_text, sizeof left_text);
+    if (!isnan(info->error))
+        snprintf(error_text, sizeof error_text, "%.2f %%", 100.0 * info->error);
+    fprintf(stderr, "\r[%.*s%*s] %3d %%  spp %u/%u  error %s  %.1f s  %s  %.1f Mrays/s \033[K", filled,
+            "##############################", 30 - filled, "", (int)(100.0 * share), info->spp, info->target_spp,
+            error_text, info->seconds, left_text, ao_app_mrays_per_second(info));
     if (info->done)
         fputc('\n', stderr);
 }

@@ -150,15 +150,26 @@ static const char usage[] =
     "  -q, --quiet           print nothing but errors\n"
     "  -h, --help            show this help\n"
     "  --version             show the version\n"
-    "\n"
-    "Window keys: U/H/C sampling, A anti-aliasing, Space pause, R restart,\n"
-    "+/- samples per pass, G adaptive sampling, E error map, N normals,\n"
-    "F flat/Phong, D difference, S screenshot, [/] pixel size,\n"
-    "drag/wheel orbit, pan, zoom, F1 or ? help, Esc/Q quit.\n";
+    "\n";
+
+/* The window's keys and mouse, after the options (one string literal would pass C's 4095). */
+static const char keys[] =
+    "Window keys: U/H/C uniform sphere, hemisphere, cosine sampling; A anti-aliasing;\n"
+    "Space pause; R restart; +/- samples per pass; G adaptive sampling; E error map;\n"
+    "D difference from --reference; N normals view; F flat/Phong normals;\n"
+    "V compare two configurations; B split/side by side; S save aoview-N.png and\n"
+    ".pfm/.exr; [/] halve/double the pixel size; F1 or ? key help; F2 hide the\n"
+    "overlay; Esc/Q quit. Mouse: left drag orbit (on the comparison's divider: move\n"
+    "it), right drag pan, wheel zoom.\n";
 
 const char *ao_cli_usage(void)
 {
-    return usage;
+    static char text[sizeof usage + sizeof keys - 1];
+    if (!text[0]) {
+        memcpy(text, usage, sizeof usage - 1);
+        memcpy(text + sizeof usage - 1, keys, sizeof keys);
+    }
+    return text;
 }
 
 /* Parses the digits in [s, end) as a decimal number without sign; false on anything else. */

@@ -1,6 +1,8 @@
-/* The image on screen: the running average in one float texture, drawn by a fullscreen triangle
- * through the display shader (the sRGB curve), letterboxed into any framebuffer, and rendered at
- * 1:1 offscreen for PNG files. Knows no window and no OSMesa: GL comes through struct ao_glapi. */
+/* The image on screen and in PNG files. The screen's: the running average encoded to 8-bit sRGB on
+ * the CPU once per new image (image.c's table), uploaded as the window's own BGRA pixels and
+ * blitted, letterboxed, into any framebuffer, with the wall time each shown frame costs measured.
+ * The files': the float image in a texture drawn at 1:1 offscreen through the display shader (the
+ * sRGB curve). Knows no window and no OSMesa: GL comes through struct ao_glapi. */
 #ifndef AO_DISPLAY_H
 #define AO_DISPLAY_H
 
@@ -29,9 +31,9 @@ struct ao_display *ao_display_create_from_source(const struct ao_glapi *gl, cons
 /* Deletes the GL objects (context still current) and frees; accepts NULL. GL thread. */
 void ao_display_destroy(struct ao_display *display);
 
-/* Copies a width x height linear RGB image, top row first, into the texture: glTexSubImage2D,
- * or a new texture when the size changed; false with one message when the size exceeds GL's
- * limit. GL thread. */
+/* Copies a width x height linear RGB image, top row first, into the texture the PNG files are
+ * drawn from: glTexSubImage2D, or a new texture when the size changed; false with one message when
+ * the size exceeds GL's limit. GL thread. */
 bool ao_display_upload(struct ao_display *display, const float *rgb, int width, int height);
 
 /* As ao_display_upload, for width x height cells of block x block pixels that cover an image_width x
@@ -44,9 +46,35 @@ bool ao_display_upload_cells(struct ao_display *display, const float *rgb, int w
  * pixels each way, if one does, else the largest centred rectangle of its aspect ratio. Pure. */
 struct ao_display_rect ao_display_fit(int image_width, int image_height, int fb_width, int fb_height);
 
-/* Clears the bound framebuffer (fb_width x fb_height) to the letterbox colour and draws the
- * uploaded image into ao_display_fit's rectangle; only clears before the first upload. GL thread. */
+/* Makes a width x height linear RGB image (top row first), or the width x height cells of block x
+ * block pixels that cover an image_width x image_height image from its top left (a preview), the
+ * screen's image: encoded to 8-bit sRGB on the CPU (ao_image_encode_srgb8_bgra) and uploaded once.
+ * Starts the frame's clock. False with one message when memory or GL's size limit is short. GL
+ * thread. */
+bool ao_display_show(struct ao_display *display, const float *rgb, int width, int height, int block, int image_width,
+                     int image_height);
+
+/* Draws the screen's image into ao_display_fit's rectangle of the default framebuffer (fb_width x
+ * fb_height) and the letterbox colour around it (all of it before the first ao_display_show): a
+ * blit, a plain copy at 1:1, each texel a block when magnified (filtered when shrunk). Starts the
+ * frame's clock unless ao_display_show did. GL thread. */
 void ao_display_draw(struct ao_display *display, int fb_width, int fb_height);
+
+/* What showing a frame costs, in wall seconds from its first GL call (ao_display_show or draw) to
+ * its presentation (ao_display_presented): of a frame with a new image (encoding, upload, blit,
+ * overlay, swap) and of a redraw of an image already shown, each the median of the last
+ * AO_DISPLAY_COSTS such frames (a one-off, as the first frame's, does not count); 0 before one. */
+enum { AO_DISPLAY_COSTS = 5 };
+struct ao_display_cost {
+    double new_image, redraw;
+};
+
+/* The frame begun by ao_display_show or ao_display_draw is on screen (the caller swapped buffers):
+ * waits for GL to finish it and stops its clock. GL thread. */
+void ao_display_presented(struct ao_display *display);
+
+/* The costs measured so far. GL thread. */
+struct ao_display_cost ao_display_cost(const struct ao_display *display);
 
 /* Renders the uploaded image at its size into an offscreen framebuffer and writes it as an 8-bit PNG
  * (the displayed image without overlays); false with one message. GL thread. */

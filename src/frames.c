@@ -13,6 +13,8 @@ void ao_frames_init(struct ao_frames *fs)
 {
     *fs = (struct ao_frames){.back = 0, .front = 2};
     atomic_init(&fs->middle, 1u);
+    atomic_init(&fs->logged, 0);
+    atomic_init(&fs->read, 0);
 }
 
 void ao_frames_finish(struct ao_frames *fs)
@@ -39,6 +41,11 @@ struct ao_frame *ao_frames_back(struct ao_frames *fs, int width, int height, int
 
 void ao_frames_publish(struct ao_frames *fs)
 {
+    uint_fast64_t logged = atomic_load_explicit(&fs->logged, memory_order_relaxed);
+    if (logged - atomic_load_explicit(&fs->read, memory_order_acquire) < AO_FRAMES_LOG) {
+        fs->log[logged % AO_FRAMES_LOG] = fs->frames[fs->back].info;
+        atomic_store_explicit(&fs->logged, logged + 1, memory_order_release);
+    }
     unsigned previous = atomic_exchange(&fs->middle, (unsigned)fs->back | FRESH);
     fs->back = (int)(previous & ~(unsigned)FRESH);
 }
@@ -50,4 +57,15 @@ const struct ao_frame *ao_frames_take(struct ao_frames *fs)
     unsigned previous = atomic_exchange(&fs->middle, (unsigned)fs->front);
     fs->front = (int)(previous & ~(unsigned)FRESH);
     return &fs->frames[fs->front];
+}
+
+int ao_frames_take_log(struct ao_frames *fs, struct ao_frame_info *out, int most)
+{
+    uint_fast64_t read = atomic_load_explicit(&fs->read, memory_order_relaxed);
+    uint_fast64_t logged = atomic_load_explicit(&fs->logged, memory_order_acquire);
+    int count = 0;
+    for (; read < logged && count < most; read++)
+        out[count++] = fs->log[read % AO_FRAMES_LOG];
+    atomic_store_explicit(&fs->read, read, memory_order_release);
+    return count;
 }

@@ -144,7 +144,7 @@ static void draw_overlay(void *user, int width, int height)
         return;
     }
     if (o->range)
-        ao_heatmap_draw_bar(hud, o->range, o->title, width - 8, 8, 1.0f, width, height);
+        ao_heatmap_draw_bar(hud, o->range, o->title, false, width - 8, 8, 1.0f, width, height);
     for (int k = 0; k < o->count; k++)
         ao_hud_draw(hud, o->labels[k].text, o->labels[k].x, o->labels[k].y, 1.0f, width, height);
     ao_hud_destroy(hud);

@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <string.h>
 
 #include "image.h"
 
@@ -14,6 +15,7 @@ static const float STOPS[][3] = {
 enum { STOP_COUNT = sizeof STOPS / sizeof STOPS[0] };
 
 const struct ao_heatmap_scale ao_heatmap_error = {.low = -4, .high = -1, .percent = true};
+const float ao_heatmap_unknown[3] = {0.2f, 0.2f, 0.2f};
 const struct ao_heatmap_scale ao_heatmap_difference = {.low = -4, .high = 0, .percent = false};
 
 /* The position of value on the scale, from 0 (low end) to 1 (high end). */
@@ -45,8 +47,11 @@ void ao_heatmap_tiles(const struct ao_frame *frame, float *heat)
     for (int j = 0; j < frame->height; j++)
         for (int i = 0; i < frame->width; i++) {
             int t = j / frame->tile * frame->tiles_x + i / frame->tile;
-            ao_heatmap_colour(&ao_heatmap_error, frame->tile_error[t],
-                              heat + 3 * ((size_t)j * (size_t)frame->width + (size_t)i));
+            float *out = heat + 3 * ((size_t)j * (size_t)frame->width + (size_t)i);
+            if (frame->tiles_x == 0 || isnan(frame->tile_error[t]))
+                memcpy(out, ao_heatmap_unknown, sizeof ao_heatmap_unknown);
+            else
+                ao_heatmap_colour(&ao_heatmap_error, frame->tile_error[t], out);
         }
 }
 
@@ -72,23 +77,34 @@ static void label(const struct ao_heatmap_scale *scale, int d, char *text, size_
 /* The bar's size in font pixels (times the scale): its ramp, and the room for its labels. */
 enum { BAR_WIDTH = 12, BAR_HEIGHT = 120, STEPS = 48 };
 
-void ao_heatmap_draw_bar(struct ao_hud *hud, const struct ao_heatmap_scale *range, const char *title, int x, int y,
-                         float scale, int fb_width, int fb_height)
+void ao_heatmap_draw_bar(struct ao_hud *hud, const struct ao_heatmap_scale *range, const char *title, bool unknown,
+                         int x, int y, float scale, int fb_width, int fb_height)
 {
-    /* The widest label is the low end's. */
+    /* The widest label is the low end's, or "not known". */
     char text[16];
     label(range, range->low, text, sizeof text);
-    int label_width, label_height;
+    int label_width, label_height, unknown_width, unknown_height;
     ao_hud_measure(hud, text, scale, &label_width, &label_height);
+    ao_hud_measure(hud, "not known", scale, &unknown_width, &unknown_height);
+    if (unknown && unknown_width > label_width)
+        label_width = unknown_width;
     int title_width, title_height;
     ao_hud_measure(hud, title, scale, &title_width, &title_height);
     float pad = AO_HUD_PADDING * scale, width = BAR_WIDTH * scale, height = BAR_HEIGHT * scale;
     float inner = width + pad + (float)label_width;
     float box = (float)title_width > inner ? (float)title_width : inner;
     float left = (float)x - box - 2 * pad, top = (float)y, bar_top = top + pad + (float)title_height + pad;
+    float bottom = bar_top + height + pad + (float)label_height / 2;
+    float swatch = bottom + pad; /* the "not known" swatch's top, a label's height */
     ao_hud_begin(hud, fb_width, fb_height);
-    ao_hud_fill(hud, left, top, (float)x, bar_top + height + pad + (float)label_height / 2,
+    ao_hud_fill(hud, left, top, (float)x, unknown ? swatch + (float)label_height + pad : bottom,
                 (struct ao_hud_colour){0.0f, 0.0f, 0.0f, 0.6f});
+    if (unknown) {
+        struct ao_hud_colour c = {ao_image_srgb_encode(ao_heatmap_unknown[0]), ao_image_srgb_encode(ao_heatmap_unknown[1]),
+                                  ao_image_srgb_encode(ao_heatmap_unknown[2]), 1.0f};
+        ao_hud_fill(hud, left + pad, swatch, left + pad + width, swatch + (float)label_height, c);
+        ao_hud_text(hud, "not known", left + 2 * pad + width, swatch, scale, (struct ao_hud_colour){1.0f, 1.0f, 1.0f, 1.0f});
+    }
     ao_hud_text(hud, title, left + pad, top + pad, scale, (struct ao_hud_colour){1.0f, 1.0f, 1.0f, 1.0f});
     /* The ramp, high end at the top, drawn in sRGB as the display shows the image. */
     for (int s = 0; s < STEPS; s++) {

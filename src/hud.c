@@ -49,16 +49,16 @@ static void item(char *out, size_t size, size_t *used, const char *separator, co
     va_end(args);
 }
 
-void ao_hud_format(const struct ao_hud_status *s, const char *separator, char *out, size_t size)
+void ao_hud_format(const struct ao_hud_status *s, const char *separator, const char *unknown, char *out,
+                   size_t size)
 {
     const struct ao_frame_info *f = &s->info;
-    double mrays = f->seconds > 0 ? (double)(f->eye_rays + f->shadow_rays) / f->seconds / 1e6 : 0;
+    bool measured = f->pass > 0, preview = s->block > 1;
     size_t used = 0;
     out[0] = '\0';
     item(out, size, &used, separator, "%s", s->scene);
-    if (s->block > 1)
-        item(out, size, &used, separator, "preview %dx%d", (s->width + s->block - 1) / s->block,
-             (s->height + s->block - 1) / s->block);
+    if (preview)
+        item(out, size, &used, separator, "%dx%d preview, %d px cells", s->width, s->height, s->block);
     else
         item(out, size, &used, separator, "%dx%d", s->width, s->height);
     item(out, size, &used, separator, "%s", ao_sampling_name(f->sampling));
@@ -68,24 +68,34 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, char *o
     if (f->shading == AO_SHADING_FLAT)
         item(out, size, &used, separator, "flat");
     item(out, size, &used, separator, "spp %u of %u", (unsigned)f->spp, (unsigned)f->target_spp);
-    if (isfinite(f->error))
-        item(out, size, &used, separator, "error %.2f %%", 100.0 * f->error);
-    item(out, size, &used, separator, "%.1fs", s->seconds);
-    char left[32];
-    ao_progress_format(f->done ? NAN : s->seconds_left, left, sizeof left);
-    if (left[0])
-        item(out, size, &used, separator, "%s", left);
-    item(out, size, &used, separator, "%.1f Mrays/s", mrays);
+    if (measured && !preview) {
+        if (isnan(f->error))
+            item(out, size, &used, separator, "error %s", unknown);
+        else
+            item(out, size, &used, separator, "error %.2f %%", 100.0 * f->error);
+    }
+    if (measured) {
+        item(out, size, &used, separator, "%.1fs", s->seconds);
+        char left[32];
+        ao_progress_format(f->done ? NAN : s->seconds_left, left, sizeof left);
+        if (left[0])
+            item(out, size, &used, separator, "%s", left);
+        if (f->seconds > 0.0)
+            item(out, size, &used, separator, "%.1f Mrays/s",
+                 (double)(f->eye_rays + f->shadow_rays) / f->seconds / 1e6);
+    }
     item(out, size, &used, separator, "pass %u", (unsigned)f->pass);
     if (s->spppp)
         item(out, size, &used, separator, "%d spp/pass", s->spppp);
-    else
+    else if (f->spppp)
         item(out, size, &used, separator, "auto %u spp/pass", (unsigned)f->spppp);
-    if (s->adaptive) {
+    else
+        item(out, size, &used, separator, "auto spp/pass");
+    if (s->adaptive && measured && !preview) {
         item(out, size, &used, separator, "adaptive: %.0f %% converged", 100.0 * f->converged);
         item(out, size, &used, separator, "mean %.0f spp", f->mean_spp);
     }
-    if (!isnan(f->rmse))
+    if (measured && !preview && !isnan(f->rmse))
         item(out, size, &used, separator, "RMSE %.4g", f->rmse);
     else if (s->reference_differs)
         item(out, size, &used, separator, "no RMSE: reference of another size");

@@ -12,9 +12,10 @@
 /* What the status line tells: the facts of the frame on screen plus the viewer's own state. */
 struct ao_hud_status {
     const char *scene;
-    struct ao_frame_info info;   /* of the frame on screen */
-    int width, height;           /* its image's size */
-    int block;                   /* > 1: a preview of block x block pixel cells */
+    struct ao_frame_info info;   /* of the frame on screen, or, while a preview stays on screen
+                                    after full passes began, of the newest full frame */
+    int width, height;           /* the image's size */
+    int block;                   /* > 1: the image shown is a preview of block x block pixel cells */
     bool reference_differs;      /* --reference has another size: no RMSE */
     double seconds;              /* elapsed since the restart, ticking between frames */
     double seconds_left;         /* progress.h's estimate, ticking down between frames; NAN: none */
@@ -24,12 +25,15 @@ struct ao_hud_status {
 };
 
 /* Writes the status facts joined by separator into out (always terminated, truncated to size):
- * scene, "WxH" (with a preview, "preview WxH" of its cells), sampling mode, "AA on|off", "normals" in the normals view, "flat" with flat shading,
- * "spp X of Y", "error E %" once estimated, "Ns", "~N s left" while estimated, "M Mrays/s",
- * "pass P", "N spp/pass" (or "auto N spp/pass"), "adaptive: C % converged", "mean M spp" when
- * adaptive, then "RMSE E" when the frame has one (else "no RMSE: reference of another
- * size" when --reference has another size) and "paused" when paused. Pure. */
-void ao_hud_format(const struct ao_hud_status *status, const char *separator, char *out, size_t size);
+ * scene; "WxH", with a preview on screen "WxH preview, N px cells"; sampling
+ * mode, "AA on|off", "normals" in the normals view, "flat" with flat shading, "spp X of Y"; then,
+ * once a full pass is done (info.pass > 0): "Ns", "~N s left" while estimated, "M Mrays/s", "pass
+ * P", "N spp/pass" (or "auto N spp/pass"), and, unless a preview is on screen, "error E %" (E
+ * `unknown` until estimated), "adaptive: C % converged" and "mean M spp" when adaptive, "RMSE E"
+ * when the frame has one (else "no RMSE: reference of another size" when --reference has another
+ * size); "paused" when paused. Every figure shown is measured: a preview's run has none yet. Pure. */
+void ao_hud_format(const struct ao_hud_status *status, const char *separator, const char *unknown, char *out,
+                   size_t size);
 
 /* The overlay's GL objects and scratch buffers; opaque. */
 struct ao_hud;

@@ -15,8 +15,15 @@ enum { AO_IMAGE_MAX_SIDE = 16384, AO_IMAGE_MAX_PIXELS = 16384 * 16384 / 4 };
 /* The sRGB encoding of one linear value, clamped to [0, 1]. */
 float ao_image_srgb_encode(float linear);
 
-/* Encodes count linear floats to 8-bit sRGB, rounding to nearest (the display shader's curve). */
+/* Encodes count linear floats to 8-bit sRGB, rounding to nearest (the display shader's curve):
+ * correctly rounded (the curve taken in double precision), by a table. The display shader rounds
+ * alike but for a value within its float rounding of a step between two codes (none of the
+ * bunny's 921,600 values at 640x480). Any thread. */
 void ao_image_encode_srgb8(const float *linear, size_t count, uint8_t *out);
+
+/* As ao_image_encode_srgb8 for `pixels` pixels of 3 floats, written as 4 bytes each: blue, green,
+ * red, 255 (GL_BGRA's order). Any thread. */
+void ao_image_encode_srgb8_bgra(const float *rgb, size_t pixels, uint8_t *out);
 
 /* Checks that an image can be written to path before it is made: its name fits the file system,
  * it is not a directory, and a temporary file can be created beside it (and is removed again);

@@ -35,6 +35,12 @@ struct tile_record {
     uint64_t samples;
 };
 
+/* The next pass as planned: the pixels it traces, and the AO samples its tiles lack of the
+ * target (the work that remains while adaptive sampling keeps them). */
+struct next_pass {
+    uint64_t pixels, lack;
+};
+
 /* A thread's share of a pass: the tiles of the pass's work list in tile rows k, k + threads,
  * k + 2 threads, ... for thread k, taken in order from `next`. Each thread keeps the same pixels
  * pass after pass, so their sums stay in its own cache (handed round between threads, they crossed
@@ -76,11 +82,12 @@ struct ao_render {
 
     /* What the last survey planned (or a restart: nothing sampled yet), for select_tiles and the
      * next pass's size: the busiest tile's spp and the largest gain among the tiles short of the
-     * target, and the pixels the next pass traces without and with adaptive sampling (known[k]:
-     * counted; with adaptive sampling off the survey counts only the first). */
+     * target, and the pixels the next pass traces without and with adaptive sampling and the
+     * samples its tiles lack of the target (known[k]: counted; with adaptive sampling off the
+     * survey counts only the first). */
     uint32_t busiest;
     double fastest;
-    uint64_t next_pixels[2];
+    struct next_pass next[2];
     bool next_known[2];
 
     /* With a share (aoview-mpi): the tiles this process owns; its work list as one span of entries
@@ -304,16 +311,16 @@ static int tile_pixels(const struct ao_render *r, int t)
 }
 
 /* Fills the work list with the tiles of this process's (every tile without a share) that the next
- * pass traces, dealt to the threads' shares by tile row, and returns how many pixels they hold:
- * the tiles ao_tile_wanted picks, with the busiest tile's spp and the largest gain that the last
- * survey found. */
-static size_t select_tiles(struct ao_render *r, bool adaptive)
+ * pass traces, dealt to the threads' shares by tile row, and returns how many pixels they hold
+ * and the samples they lack of the target: the tiles ao_tile_wanted picks, with the busiest tile's
+ * spp and the largest gain that the last survey found. */
+static struct next_pass select_tiles(struct ao_render *r, bool adaptive)
 {
     /* With a share, one list in row order, the same whatever the threads. */
     int threads = r->config.threads, groups = r->config.share ? 1 : threads, tiles = r->tiles_x * r->tiles_y;
     uint32_t target = r->config.target_spp, busiest = r->busiest;
     double fastest = r->fastest;
-    size_t pixels = 0;
+    struct next_pass plan = {0, 0};
     int n = 0;
     for (int k = 0; k < threads; k++) {
         r->shares[k].begin = n;
@@ -324,21 +331,22 @@ static size_t select_tiles(struct ao_render *r, bool adaptive)
         for (int t = k * r->tiles_x; t < tiles; t++) {
             if (r->mine[t] && ao_tile_wanted(&r->tiles[t], tile_pixels(r, t), target, adaptive, busiest, fastest)) {
                 r->work[n++] = t;
-                pixels += (size_t)tile_pixels(r, t);
+                plan.pixels += (uint64_t)tile_pixels(r, t);
+                plan.lack += (uint64_t)(target - ao_tile_spp(&r->tiles[t])) * (uint64_t)tile_pixels(r, t);
             }
             if ((t + 1) % r->tiles_x == 0) /* the end of a row: on to this share's next row */
                 t += (groups - 1) * r->tiles_x;
         }
         r->shares[k].end = n;
     }
-    return pixels;
+    return plan;
 }
 
 /* What the processes add up or maximise after a pass (struct ao_share_tally's slots). */
 enum { EXACT_VARIANCE, EXACT_MEAN, EXACT_SQUARES };
-enum { TOTAL_EYE, TOTAL_SHADOW, TOTAL_SAMPLES, TOTAL_SHORT };
+enum { TOTAL_EYE, TOTAL_SHADOW, TOTAL_SAMPLES, TOTAL_SHORT, TOTAL_LACK };
 enum { MOST_SECONDS, MOST_GAVE_UP, MOST_SPPPP, MOST_SPP, MOST_BUSIEST, MOST_FASTEST, MOST_UNHALVED, MOST_UNSETTLED };
-_Static_assert((int)EXACT_SQUARES < (int)AO_TALLY_EXACT && (int)TOTAL_SHORT < (int)AO_TALLY_TOTAL &&
+_Static_assert((int)EXACT_SQUARES < (int)AO_TALLY_EXACT && (int)TOTAL_LACK < (int)AO_TALLY_TOTAL &&
                    (int)MOST_UNSETTLED < (int)AO_TALLY_MOST,
                "the tally's slots");
 
@@ -393,6 +401,7 @@ static void tally_tiles(const struct ao_render *r, struct ao_share_tally *tally)
             most[MOST_UNSETTLED] = 1.0;
         if (spp < target) {
             tally->total[TOTAL_SHORT] += (uint64_t)tile_pixels(r, t);
+            tally->total[TOTAL_LACK] += (uint64_t)(target - spp) * (uint64_t)tile_pixels(r, t);
             most[MOST_BUSIEST] = spp > most[MOST_BUSIEST] ? spp : most[MOST_BUSIEST];
             double gain = ao_tile_settled(ts) ? ao_tile_gain(ts, tile_pixels(r, t)) : 0.0;
             most[MOST_FASTEST] = gain > most[MOST_FASTEST] ? gain : most[MOST_FASTEST];
@@ -402,22 +411,23 @@ static void tally_tiles(const struct ao_render *r, struct ao_share_tally *tally)
         ao_sum_normalize(&tally->exact[k]);
 }
 
-/* The pixels of the next pass with adaptive sampling (`adaptive`) or without: counted by the last
- * survey, or here (over the processes: every one takes the same path). False when the share stops. */
-static bool next_pixels(struct ao_render *r, bool adaptive, uint64_t *pixels)
+/* The next pass with adaptive sampling (`adaptive`) or without: as the last survey planned it, or
+ * planned here (over the processes: every one takes the same path). False when the share stops. */
+static bool next_pass(struct ao_render *r, bool adaptive, struct next_pass *plan)
 {
     if (!r->next_known[adaptive]) {
-        uint64_t own = select_tiles(r, adaptive);
+        struct next_pass own = select_tiles(r, adaptive);
+        uint64_t values[2] = {own.pixels, own.lack};
         const struct ao_render_share *share = r->config.share;
         double start = now_seconds();
-        if (share && !share->add_up(share->user, &own, 1))
+        if (share && !share->add_up(share->user, values, 2))
             return false;
         if (share)
             r->share_seconds += now_seconds() - start;
-        r->next_pixels[adaptive] = own;
+        r->next[adaptive] = (struct next_pass){values[0], values[1]};
         r->next_known[adaptive] = true;
     }
-    *pixels = r->next_pixels[adaptive];
+    *plan = r->next[adaptive];
     return true;
 }
 
@@ -467,13 +477,15 @@ static bool survey(struct ao_render *r, struct ao_frame_info *info, bool adaptiv
     /* The next pass's plan, and what it says of this one. */
     r->busiest = (uint32_t)tally.most[MOST_BUSIEST];
     r->fastest = tally.most[MOST_FASTEST];
-    r->next_pixels[0] = tally.total[TOTAL_SHORT];
+    r->next[0] = (struct next_pass){tally.total[TOTAL_SHORT], tally.total[TOTAL_LACK]};
     r->next_known[0] = true;
     r->next_known[1] = false;
-    uint64_t next;
-    if (!next_pixels(r, adaptive, &next))
+    struct next_pass plan;
+    if (!next_pass(r, adaptive, &plan))
         return false;
+    uint64_t next = plan.pixels;
     info->converged = adaptive ? 1.0 - (double)next / image : 0.0;
+    info->spp_left = (double)plan.lack / image;
     bool error_reached = r->config.target_error > 0.0 && tally.most[MOST_UNSETTLED] == 0.0 &&
                          info->error <= r->config.target_error;
     bool time_up = r->config.time_limit > 0.0 && info->seconds >= r->config.time_limit;
@@ -517,10 +529,14 @@ static double rmse(const float *image, const float *reference, size_t count)
     return sqrt(sum / (double)count);
 }
 
-/* Tile t's estimated error, as struct ao_frame's tile_error holds it. */
+/* Tile t's estimated error, as struct ao_frame's tile_error holds it: NAN until both halves of the
+ * tile have a pass. */
 static float tile_error(const struct ao_render *r, int t)
 {
-    return r->image_mean > 0.0 ? (float)(sqrt(r->tiles[t].variance / tile_pixels(r, t)) / r->image_mean) : 0.0f;
+    const struct ao_tile_state *ts = &r->tiles[t];
+    if (ts->spp[0] == 0 || ts->spp[1] == 0)
+        return NAN;
+    return r->image_mean > 0.0 ? (float)(sqrt(ts->variance / tile_pixels(r, t)) / r->image_mean) : 0.0f;
 }
 
 /* Frame f's facts for a whole image of this run, info's included. */
@@ -643,12 +659,29 @@ static void preview_job(void *user, int self)
     ao_preview_trace(&r->preview, preview_stops, r);
 }
 
+/* While the camera is being moved, no preview finer than cells of a quarter of the first's: each
+ * move restarts the run before a finer one would be done (at 3840x2160, cells of 8 pixels take
+ * some 30 ms, moves come every 16 ms), so that tracing it only takes cores from the window. Waits
+ * while the settings say so and nothing restarts or stops the run; true when the previews may go
+ * on. Render thread. */
+static bool navigation_allows(struct ao_render *r, int first, int block)
+{
+    if (block >= first / 4)
+        return true;
+    pthread_mutex_lock(&r->lock);
+    while (r->settings.navigating && !r->stop && r->restarts == r->pass_restarts)
+        pthread_cond_wait(&r->wake, &r->lock);
+    pthread_mutex_unlock(&r->lock);
+    return !aborted(r);
+}
+
 /* Traces and publishes the previews of the run that begins with info (pass 0) and camera, coarse
  * to fine, until the first full pass is due or a restart or stop aborts one; false when memory is
  * short. */
 static bool preview(struct ao_render *r, const struct ao_camera *camera, const struct ao_frame_info *info)
 {
-    for (int block = ao_preview_first_block(r->width, r->height); block > 1 && !aborted(r);
+    int first = ao_preview_first_block(r->width, r->height);
+    for (int block = first; block > 1 && !aborted(r) && navigation_allows(r, first, block);
          block = ao_preview_next_block(block)) {
         struct ao_preview *p = &r->preview;
         if (!ao_preview_begin(p, &r->ctx, camera, r->width, r->height, block))
@@ -676,6 +709,11 @@ static bool preview(struct ao_render *r, const struct ao_camera *camera, const s
 const struct ao_frame *ao_render_take_frame(struct ao_render *render)
 {
     return ao_frames_take(&render->frames);
+}
+
+int ao_render_take_log(struct ao_render *render, struct ao_frame_info *out, int most)
+{
+    return ao_frames_take_log(&render->frames, out, most);
 }
 
 /* ---- the render thread ---- */
@@ -796,11 +834,14 @@ static bool start_run(struct ao_render *r, const struct ao_settings *s, uint64_t
     /* Nothing sampled: every tile short of the target (all of them) joins the first pass. */
     r->busiest = 0;
     r->fastest = 0.0;
-    r->next_pixels[0] = r->next_pixels[1] = r->config.target_spp ? (uint64_t)r->width * (uint64_t)r->height : 0;
+    uint64_t pixels = r->config.target_spp ? (uint64_t)r->width * (uint64_t)r->height : 0;
+    r->next[0] = r->next[1] = (struct next_pass){pixels, pixels * r->config.target_spp};
     r->next_known[0] = r->next_known[1] = true;
     r->ungathered = false;
+    /* Nothing measured yet: the previews carry these facts. */
     *info = (struct ao_frame_info){.restarts = restarts, .target_spp = r->config.target_spp,
                                    .target_error = r->config.target_error, .time_limit = r->config.time_limit,
+                                   .spp_left = NAN, .error = NAN, .converged = NAN, .rmse = NAN,
                                    .sampling = s->sampling, .aa = s->aa, .output = s->output, .shading = s->shading};
     return !s->previews || r->config.share || preview(r, &s->camera, info);
 }
@@ -839,12 +880,13 @@ static void *render_main(void *arg)
         }
 
         /* Plan the pass: its tiles, its samples (from every process's pixels). */
-        uint64_t pixels;
-        if (!next_pixels(r, s.adaptive, &pixels)) {
+        struct next_pass plan;
+        if (!next_pass(r, s.adaptive, &plan)) {
             ao_render_stop(r);
             pthread_mutex_lock(&r->lock);
             break;
         }
+        uint64_t pixels = plan.pixels;
         select_tiles(r, s.adaptive);
         r->tile_pass = (struct ao_tile_pass){.target_spp = r->config.target_spp,
                                              .samples = pass_samples(&s, pixels),

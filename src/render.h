@@ -22,27 +22,37 @@ struct ao_settings {
     bool adaptive;           /* samples go where the estimated error is (render.c) */
     bool paused;
     bool previews;           /* coarse frames after each restart (preview.h), for a window's eye */
+    bool navigating;         /* the camera is being moved (a drag): previews stop at cells of about
+                                1/256 of the long side and the run waits there until a restart or
+                                until this is cleared, which no restart needs */
     enum ao_output output;   /* AO or the normals view */
     enum ao_shading shading; /* Phong or flat mesh normals */
     struct ao_camera camera;
 };
 
-/* Facts about one published frame (one finished pass). */
+/* Facts about one published frame (one finished pass, or a preview: pass 0). A figure not known
+ * yet is NAN, never 0: a preview's error, RMSE and converged share, and the error until both halves
+ * have a pass. */
 struct ao_frame_info {
     uint64_t restarts;       /* how many times accumulation restarted before this frame */
-    uint32_t pass;           /* passes since the last restart, this one included */
+    uint32_t pass;           /* passes since the last restart, this one included; 0: a preview */
     uint32_t spp;            /* AO samples per pixel since the last restart (the most any pixel has) */
     uint32_t target_spp;
     double target_error;     /* the configuration's, 0 for none */
     double time_limit;       /* the configuration's, 0 for none */
-    uint32_t spppp;          /* AO samples per pixel of this pass */
+    uint32_t spppp;          /* AO samples per pixel of this pass; 0 before the first */
     double mean_spp;         /* AO samples per pixel, averaged over the image */
+    double spp_left;         /* AO samples per pixel still to trace, averaged over the image: what the
+                                tiles that join the next pass lack of target_spp (adaptive sampling
+                                may leave them sooner); 0 when none joins (the last pass); NAN
+                                before the first pass */
     double error;            /* estimated RMSE relative to the image mean, from the even and odd
                                 passes without a reference; NAN until both halves have a pass */
-    double converged;        /* share of the pixels that adaptive sampling leaves out of the next pass */
-    double seconds;          /* wall time since the last restart */
+    double converged;        /* share of the pixels that adaptive sampling leaves out of the next
+                                pass; NAN before the first pass */
+    double seconds;          /* render time since the last restart (previews' not counted) */
     uint64_t eye_rays, shadow_rays;
-    double rmse;             /* against the reference; NAN without one */
+    double rmse;             /* against the reference; NAN without one, and before the first pass */
     enum ao_sampling sampling;
     bool aa;
     enum ao_output output;
@@ -54,7 +64,7 @@ struct ao_frame_info {
 
 /* A published frame: the running average, 3 linear floats per pixel, top row first, and the
  * estimated error of each tile of tile x tile pixels (the unit adaptive sampling decides on), as
- * an RMSE relative to the image mean, tiles_x per row, top row first; 0 until estimated. A preview
+ * an RMSE relative to the image mean, tiles_x per row, top row first; NAN until estimated. A preview
  * (block > 1, preview.h) holds width x height cells of block x block pixels of an image_width x
  * image_height image, its info that of the run it begins (pass 0), and no tile errors. */
 struct ao_frame {
@@ -71,7 +81,7 @@ struct ao_frame {
  * each fills it in for its own pass and the tiles it owns; combined, every process holds the sums
  * over all of them (`exact` as by ao_sum_merge, `total` as integers) and the maxima (`most`, never
  * negative), from which each makes one process's decisions. */
-enum { AO_TALLY_EXACT = 3, AO_TALLY_TOTAL = 4, AO_TALLY_MOST = 8 };
+enum { AO_TALLY_EXACT = 3, AO_TALLY_TOTAL = 5, AO_TALLY_MOST = 8 };
 struct ao_share_tally {
     struct ao_sum exact[AO_TALLY_EXACT];
     uint64_t total[AO_TALLY_TOTAL];
@@ -205,6 +215,11 @@ void ao_render_restart(struct ao_render *render);
 /* The newest frame published since the last call, or NULL when none is new; the frame stays valid
  * until the next call. One consumer thread only (the GL thread, or main when headless). */
 const struct ao_frame *ao_render_take_frame(struct ao_render *render);
+
+/* Copies the facts of up to `most` frames published since the last call (passes and previews,
+ * those never taken included; frames.h's AO_FRAMES_LOG at most wait) into out, oldest first; returns
+ * how many. The frame consumer's thread. */
+int ao_render_take_log(struct ao_render *render, struct ao_frame_info *out, int most);
 
 /* Blocks until the target spp is reached (true) or ao_render_stop was called or, with a share, the
  * leader ended the run (false: a follower is never done by itself). */

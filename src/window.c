@@ -54,8 +54,25 @@ static const char HELP[] =
     "F2  hide/show the overlay and error chart\n"
     "Esc or Q  quit";
 
-/* The redraw rate while the image changes; idle at the target spp. */
-#define FRAME_SECONDS (1.0 / 60.0)
+/* The status's clock (elapsed seconds, time left) changes the overlay and the title at most this
+ * often between frames. */
+#define CLOCK_SECONDS 0.5
+
+/* While passes run and nobody navigates, the window spends at most this share of the wall time
+ * presenting: a frame that cost c seconds to show waits c / PRESENT_SHARE after the last one
+ * (display.c measures c), so that the render keeps the cores (docs/performance.md). */
+#define PRESENT_SHARE 0.1
+
+/* A camera change from the mouse makes the window present every new frame at once, and nothing
+ * else, for this long (and while a button is held); for as long, the renderer traces no fine
+ * preview that the next move would abort (struct ao_settings' navigating). */
+#define NAVIGATION_SECONDS 0.3
+
+/* The finest preview of a run stays on screen until the run's average has this many samples per
+ * pixel (mean): from then on the average's RMSE against a converged image, taken at every pixel of
+ * the screen as the eye sees them, is below the preview's (the bunny at 1920x1080 and 3840x2160:
+ * from 11 spp; tests/bench_preview.c, docs/performance.md). */
+#define PREVIEW_UNTIL_SPP 11.0
 
 /* A resize restarts the render at the new size once the framebuffer has kept its size this long;
  * meanwhile the last frame is scaled. */
@@ -89,8 +106,21 @@ struct viewer {
     struct ao_glapi gl;
     struct ao_display *display;
     struct ao_hud *hud;
-    const struct ao_frame *shown;    /* on screen; valid until the next ao_render_take_frame */
+    const struct ao_frame *shown;    /* the newest frame taken; valid until the next
+                                        ao_render_take_frame */
     double shown_at;                 /* glfwGetTime() when it was taken */
+    uint64_t taken;                  /* frames taken (while comparing: either side's new ones),
+                                        counting up: the newest frame's generation */
+    uint64_t uploaded;               /* the generation the texture shows */
+    int kept_block;                  /* > 1: the texture holds a preview of block x block cells of
+                                        run kept_run, which stays until the run's average is as
+                                        good (PREVIEW_UNTIL_SPP) */
+    uint64_t kept_run;
+    char status[512];                /* the status as last made (ao_hud_format, the title's) */
+    double status_at;                /* glfwGetTime() when it was made */
+    uint64_t status_image;           /* the frame taken it was made for */
+    double presented_at;             /* glfwGetTime() when the last frame was on screen */
+    double navigated_at;             /* glfwGetTime() of the last camera change from the mouse */
     bool show_hud, show_help, save;
     enum show show;
     float *heat[2];                  /* the heat maps' colours (one per side), grown on use */
@@ -101,6 +131,9 @@ struct viewer {
     double split;                    /* the divider, as a share of the image's width */
     float *composite;                /* the comparison's two views as the layout shows them */
     int image_width, image_height;   /* of the image uploaded; 0 before the first */
+    const float *view;               /* the linear image on screen (a frame's, a heat map or the
+                                        composite), image_width x image_height, while its frames are
+                                        held; NULL for a preview's cells */
     int pixel_size;                  /* framebuffer pixels per image pixel, each way */
     double resized_at;               /* glfwGetTime() of the last framebuffer size change; a
                                         negative value: apply the size at once */
@@ -328,8 +361,26 @@ static void apply_mouse(struct viewer *v)
     ao_camera_orbit(&s.camera, (float)(pi * v->orbit_x / size), (float)(pi * v->orbit_y / size));
     ao_camera_pan(&s.camera, (float)(v->pan_x / size), (float)(v->pan_y / size));
     ao_camera_zoom(&s.camera, (float)pow(0.85, v->wheel));
+    s.navigating = true;
     set_settings(v, &s);
     v->orbit_x = v->orbit_y = v->pan_x = v->pan_y = v->wheel = 0;
+    v->navigated_at = glfwGetTime();
+}
+
+/* Tells the renderer that the camera has stopped moving, NAVIGATION_SECONDS after the last move:
+ * its previews and passes go on. Returns the seconds until that is due, or a negative number. */
+static double end_navigation(struct viewer *v)
+{
+    struct ao_settings s;
+    get_settings(v, &s);
+    if (!s.navigating)
+        return -1.0;
+    double due = v->navigated_at + NAVIGATION_SECONDS - glfwGetTime();
+    if (due > 0.0)
+        return due;
+    s.navigating = false;
+    set_settings(v, &s);
+    return -1.0;
 }
 
 /* ---- output ---- */
@@ -348,13 +399,16 @@ static float *compose_images(const struct viewer *v)
     return out;
 }
 
-/* Saves what is on screen as aoview-N.png (through the display shader at 1:1, without the
- * overlay) and aoview-N.pfm or .exr (linear; while comparing, both sides as the layout shows
- * them) in the working directory, N the first free number. */
+/* Saves what is on screen (a full frame, uploaded) as aoview-N.png (the image as the window shows
+ * it, at the render's size: one pixel per image pixel, without the overlay, encoded through the
+ * display shader as --headless -o does) and aoview-N.pfm or .exr (linear; while comparing, both
+ * sides as the layout shows them) in the working directory, N the first free number. */
 static void save(struct viewer *v)
 {
     const struct ao_frame *f = current_frame(v);
-    if (!f || (v->compare && !ao_compare_frame(v->compare, 1)))
+    if (!f || !v->view || (v->compare && !ao_compare_frame(v->compare, 1)))
+        return;
+    if (!ao_display_upload(v->display, v->view, v->image_width, v->image_height))
         return;
     float *both = v->compare ? compose_images(v) : NULL;
     if (v->compare && !both)
@@ -376,123 +430,6 @@ static void save(struct viewer *v)
         fflush(stdout);
     }
     free(both);
-}
-
-/* The status of the frame on screen; elapsed time runs on between frames while passes run. */
-static struct ao_hud_status status(const struct viewer *v, const struct ao_settings *settings)
-{
-    const struct ao_frame *f = v->shown;
-    struct ao_hud_status s = {.scene = v->info->scene_name, .info = f->info, .width = f->image_width,
-                              .height = f->image_height, .block = f->block,
-                              .reference_differs = !v->reference_fits, .spppp = settings->spppp,
-                              .adaptive = settings->adaptive, .paused = settings->paused};
-    s.seconds = s.info.seconds;
-    s.seconds_left = ao_progress_left(&v->progress, &s.info);
-    if (!s.paused && !s.info.done) {
-        double since = glfwGetTime() - v->shown_at;
-        s.seconds += since;
-        s.seconds_left = isnan(s.seconds_left) ? NAN : fmax(0.0, s.seconds_left - since);
-    }
-    return s;
-}
-
-/* The error chart's panel in the bottom right corner, in font pixels at its text scale. */
-#define CHART_WIDTH 200
-#define CHART_HEIGHT 130
-
-/* Draws the error chart, when there is one, in the bottom right corner: its text at twice the
- * content scale where the panel then fits into a quarter of the window, else at the content scale
- * with the panel at most half the window wide and tall. */
-static void draw_chart(struct viewer *v, const struct ao_chart *chart, const struct look *look, float content_scale)
-{
-    float scale = content_scale;
-    if (2 * CHART_WIDTH * scale <= 0.5f * (float)look->width && 2 * CHART_HEIGHT * scale <= 0.5f * (float)look->height)
-        scale *= 2;
-    int margin = (int)(8 * content_scale);
-    int width = (int)fminf(CHART_WIDTH * scale, 0.5f * (float)look->width);
-    int height = (int)fminf(CHART_HEIGHT * scale, 0.5f * (float)look->height);
-    ao_chartview_draw(v->hud, chart, look->width - margin - width, look->height - margin - height,
-                      width, height, scale, look->width, look->height);
-}
-
-/* Draws the image, then the overlay (the status, or while comparing the divider and the sides'
- * labels) and the chart or the help, into the framebuffer look describes. */
-static void draw(struct viewer *v, const struct look *look, const struct ao_hud_status *s)
-{
-    ao_display_draw(v->display, look->width, look->height);
-    float content_scale;
-    glfwGetWindowContentScale(v->window, &content_scale, NULL);
-    float scale = content_scale * (look->height >= 360 ? 2.0f : 1.0f);
-    int bar_top = (int)(8 * scale);
-    if (v->compare) {
-        char labels[2][AO_COMPARE_LABEL];
-        ao_compare_labels(v->compare, "\n", labels);
-        const char *const text[2] = {labels[0], labels[1]};
-        struct ao_display_rect image = ao_display_fit(v->image_width, v->image_height, look->width, look->height);
-        bar_top = ao_compareview_draw(v->hud, v->layout, v->split, image, look->hud && !look->help ? text : NULL,
-                                      scale, look->width, look->height) + (int)(8 * scale);
-    }
-    if (look->help) {
-        /* At the overlay's scale, or at the content scale where that does not fit the height. */
-        float help_scale = scale;
-        int w, h;
-        for (;;) {
-            ao_hud_measure(v->hud, HELP, help_scale, &w, &h);
-            w += (int)(2 * AO_HUD_PADDING * help_scale);
-            h += (int)(2 * AO_HUD_PADDING * help_scale);
-            if (h <= look->height || help_scale <= content_scale)
-                break;
-            help_scale = content_scale;
-        }
-        ao_hud_draw(v->hud, HELP, (look->width - w) / 2, (look->height - h) / 2, help_scale, look->width,
-                    look->height);
-    } else if (look->hud) {
-        if (!v->compare) {
-            char text[sizeof look->status];
-            ao_hud_format(s, "\n", text, sizeof text);
-            ao_hud_draw(v->hud, text, (int)(8 * scale), (int)(8 * scale), scale, look->width, look->height);
-        }
-        if (v->show != SHOW_IMAGE)
-            ao_heatmap_draw_bar(v->hud, v->show == SHOW_ERROR ? &ao_heatmap_error : &ao_heatmap_difference,
-                                v->show == SHOW_ERROR ? "estimated error" : "|image - reference|",
-                                look->width - (int)(8 * scale), bar_top, scale, look->width, look->height);
-        struct ao_chart both;
-        if (v->compare)
-            ao_compare_chart(v->compare, &both);
-        draw_chart(v, v->compare ? &both : &v->chart, look, content_scale);
-    }
-}
-
-/* Sets the title when the status changed, and redraws when what the window shows changed (or X
- * asked for it), so that drawing costs nothing while nothing changes. */
-static void update(struct viewer *v, const struct ao_settings *settings)
-{
-    if (!v->image_width || !(v->compare ? ao_compare_frame(v->compare, 1) != NULL : v->shown != NULL))
-        return;
-    struct ao_hud_status s = {0};
-    struct look look = {.hud = v->show_hud, .help = v->show_help};
-    glfwGetFramebufferSize(v->window, &look.width, &look.height);
-    if (v->compare) {
-        ao_compare_status(v->compare, v->info->scene_name, " \xe2\x80\x94 ", look.status, sizeof look.status);
-    } else {
-        s = status(v, settings);
-        ao_hud_format(&s, " \xe2\x80\x94 ", look.status, sizeof look.status);
-    }
-
-    const struct look *old = &v->drawn;
-    bool same_status = strcmp(look.status, old->status) == 0;
-    if (!same_status) {
-        char title[sizeof look.status + 16];
-        snprintf(title, sizeof title, "aoview \xe2\x80\x94 %s", look.status);
-        glfwSetWindowTitle(v->window, title);
-    }
-    if (v->dirty || !same_status || look.width != old->width || look.height != old->height ||
-        look.hud != old->hud || look.help != old->help) {
-        draw(v, &look, &s);
-        glfwSwapBuffers(v->window);
-        v->drawn = look;
-        v->dirty = false;
-    }
 }
 
 /* ---- life cycle ---- */
@@ -522,8 +459,9 @@ static int on_io_error(Display *display)
 /* The window size for a width x height image: magnified by the power of two (at most
  * MAX_PIXEL_SIZE) that brings it to READABLE_WIDTH x READABLE_HEIGHT when it is smaller (pixels
  * stay square blocks), and shrunk, keeping its aspect, to fit 90 % of the primary monitor's work
- * area when it is larger; returns the magnification. */
-static int fit_screen(int *width, int *height)
+ * area when it is larger (said on stderr, unless quiet: the render follows the window's size);
+ * returns the magnification. */
+static int fit_screen(const struct viewer *v, int *width, int *height)
 {
     int zoom = 1;
     while (*width * zoom < READABLE_WIDTH && *height * zoom < READABLE_HEIGHT && zoom < MAX_PIXEL_SIZE)
@@ -536,8 +474,12 @@ static int fit_screen(int *width, int *height)
         glfwGetMonitorWorkarea(monitor, &x, &y, &w, &h);
     double s = fmin(0.9 * w / *width, 0.9 * h / *height);
     if (s > 0 && s < 1) {
+        int wanted_width = *width, wanted_height = *height;
         *width = (int)fmax(1, *width * s);
         *height = (int)fmax(1, *height * s);
+        if (!v->info->quiet)
+            fprintf(stderr, "aoview: a %dx%d window does not fit 90 %% of the %dx%d screen: it opens at %dx%d, "
+                    "and the image follows its size\n", wanted_width, wanted_height, w, h, *width, *height);
     }
     return zoom;
 }
@@ -606,12 +548,13 @@ static void check_reference(struct viewer *v, const struct ao_frame *f)
     v->reference_fits = fits;
 }
 
-/* The view of frame f as the window shows it: its image, or its error map or its difference from
- * the reference painted into heat[k] (grown on use); NULL when memory is short. A preview, or a
- * frame of another size than the reference in the difference view, shows its image. */
+/* The view of frame f as the window shows it: its image, or its error map (a preview's: all not
+ * known) or its difference from the reference painted into heat[k] (grown on use); NULL when memory
+ * is short. A preview, or a frame of another size than the reference, shows its image in the
+ * difference view. */
 static const float *view_of(struct viewer *v, const struct ao_frame *f, int k)
 {
-    if (v->show == SHOW_IMAGE || f->block > 1 || (v->show == SHOW_DIFFERENCE && !fits_reference(v, f)))
+    if (v->show == SHOW_IMAGE || (v->show == SHOW_DIFFERENCE && (f->block > 1 || !fits_reference(v, f))))
         return f->rgb;
     if (!grow(&v->heat[k], &v->heat_room[k], (size_t)f->width * (size_t)f->height, "the heat map"))
         return NULL;
@@ -622,19 +565,37 @@ static const float *view_of(struct viewer *v, const struct ao_frame *f, int k)
     return v->heat[k];
 }
 
-/* Uploads what is on screen as the view shows it: the frame (a preview's cells as blocks), or
- * while comparing the two sides' views as the layout shows them, once both sides have the same
- * size; false when the upload failed. */
+/* Whether the texture keeps the finest preview of the run while the newest frame taken, a full
+ * one of that run, is not as good yet (PREVIEW_UNTIL_SPP): only in the image view of a single run
+ * going on, and never past a view change. */
+static bool keeps_preview(const struct viewer *v, const struct ao_settings *settings)
+{
+    const struct ao_frame *f = v->shown;
+    return !v->compare && !v->reupload && v->kept_block > 1 && v->show == SHOW_IMAGE && f && f->block == 1 &&
+           f->info.restarts == v->kept_run && f->info.mean_spp < PREVIEW_UNTIL_SPP && !f->info.done &&
+           !settings->paused;
+}
+
+/* Uploads the view of the newest frame (a preview's cells as blocks), or while comparing the two
+ * sides' views as the layout shows them, once both sides have the same size; false when the upload
+ * failed. */
 static bool upload(struct viewer *v)
 {
-    v->dirty = true;
+    v->uploaded = v->taken;
+    v->reupload = false;
+    v->kept_block = 0;
     if (!v->compare) {
         const struct ao_frame *f = v->shown;
         const float *image = view_of(v, f, 0);
         v->image_width = f->image_width;
         v->image_height = f->image_height;
-        return image && ao_display_upload_cells(v->display, image, f->width, f->height, f->block, f->image_width,
-                                                f->image_height);
+        v->view = f->block == 1 ? image : NULL;
+        if (f->block > 1) {
+            v->kept_block = f->block;
+            v->kept_run = f->info.restarts;
+        }
+        return image && ao_display_show(v->display, image, f->width, f->height, f->block, f->image_width,
+                                        f->image_height);
     }
     const struct ao_frame *a = ao_compare_frame(v->compare, 0), *b = ao_compare_frame(v->compare, 1);
     if (a->width != b->width || a->height != b->height) /* one side has restarted at a new size */
@@ -646,38 +607,37 @@ static bool upload(struct viewer *v)
     ao_compare_compose(v->layout, (int)lround(v->split * a->width), view_a, view_b, a->width, a->height, v->composite);
     v->image_width = ao_compare_width(v->layout, a->width);
     v->image_height = a->height;
-    return ao_display_upload(v->display, v->composite, v->image_width, v->image_height);
+    v->view = v->composite;
+    return ao_display_show(v->display, v->composite, v->image_width, v->image_height, 1, v->image_width,
+                           v->image_height);
 }
 
-/* Takes the newest frame (while comparing, each side's), if one is new, into the texture, or
- * uploads again when the view changed; false when the upload failed. */
-static bool take_frame(struct viewer *v)
+/* Takes the facts of every pass published since the last call into the chart and the time-left
+ * estimate, and the newest frame (while comparing, each side's), if one is new; the loop uploads
+ * it when it presents it. */
+static void take_frame(struct viewer *v)
 {
-    bool fresh;
     if (v->compare) {
-        fresh = ao_compare_take_frames(v->compare);
-        if (!ao_compare_frame(v->compare, 0) || !ao_compare_frame(v->compare, 1))
-            return true;
-        if (fresh)
+        if (ao_compare_take_frames(v->compare) && ao_compare_frame(v->compare, 0) && ao_compare_frame(v->compare, 1)) {
+            v->taken++;
             check_reference(v, ao_compare_frame(v->compare, 0));
-    } else {
-        const struct ao_frame *f = ao_render_take_frame(v->render);
-        if ((fresh = f != NULL)) {
-            v->shown = f;
-            v->shown_at = glfwGetTime();
         }
-        if (fresh && f->block == 1) {
-            ao_chart_add(&v->chart, &f->info);
-            ao_progress_add(&v->progress, &f->info);
-            check_reference(v, f);
-        }
-        if (!v->shown)
-            return true;
+        return;
     }
-    if (!fresh && !v->reupload)
-        return true;
-    v->reupload = false;
-    return upload(v);
+    struct ao_frame_info log[64];
+    for (int n; (n = ao_render_take_log(v->render, log, 64)) > 0;)
+        for (int k = 0; k < n; k++) {
+            ao_chart_add(&v->chart, &log[k]);
+            ao_progress_add(&v->progress, &log[k]);
+        }
+    const struct ao_frame *f = ao_render_take_frame(v->render);
+    if (!f)
+        return;
+    v->shown = f;
+    v->shown_at = glfwGetTime();
+    v->taken++;
+    if (f->block == 1)
+        check_reference(v, f);
 }
 
 /* V: compares the current configuration with --compare's B, or else ao_compare_partner's, paused
@@ -746,25 +706,241 @@ static double follow_size(struct viewer *v)
     return -1.0;
 }
 
+/* ---- presenting: what changed, whether it may be shown now, and showing it ---- */
+
+/* True while passes run: the image and the status's clock change by themselves. */
+static bool running(const struct viewer *v, const struct ao_settings *settings)
+{
+    if (v->compare)
+        return ao_compare_running(v->compare);
+    return !settings->paused && v->shown && !v->shown->info.done;
+}
+
+/* The status of the newest frame taken (the newest full one's facts under a kept preview); elapsed
+ * time and time left run on between frames while passes run. */
+static struct ao_hud_status status_of(const struct viewer *v, const struct ao_settings *settings)
+{
+    const struct ao_frame *f = v->shown;
+    struct ao_hud_status s = {.scene = v->info->scene_name, .info = f->info, .width = f->image_width,
+                              .height = f->image_height, .block = v->kept_block > 1 ? v->kept_block : f->block,
+                              .reference_differs = !v->reference_fits, .spppp = settings->spppp,
+                              .adaptive = settings->adaptive, .paused = settings->paused};
+    s.seconds = s.info.seconds;
+    s.seconds_left = ao_progress_left(&v->progress, &s.info);
+    if (!s.paused && !s.info.done && s.info.pass > 0) {
+        double since = glfwGetTime() - v->shown_at;
+        s.seconds += since;
+        s.seconds_left = isnan(s.seconds_left) ? NAN : fmax(0.0, s.seconds_left - since);
+    }
+    return s;
+}
+
+/* The error chart's panel in the bottom right corner, in font pixels at its text scale. */
+#define CHART_WIDTH 200
+#define CHART_HEIGHT 130
+
+/* Draws the error chart, when there is one, in the bottom right corner: its text at twice the
+ * content scale where the panel then fits into a quarter of the window, else at the content scale
+ * with the panel at most half the window wide and tall. */
+static void draw_chart(struct viewer *v, const struct ao_chart *chart, const struct look *look, float content_scale)
+{
+    float scale = content_scale;
+    if (2 * CHART_WIDTH * scale <= 0.5f * (float)look->width && 2 * CHART_HEIGHT * scale <= 0.5f * (float)look->height)
+        scale *= 2;
+    int margin = (int)(8 * content_scale);
+    int width = (int)fminf(CHART_WIDTH * scale, 0.5f * (float)look->width);
+    int height = (int)fminf(CHART_HEIGHT * scale, 0.5f * (float)look->height);
+    ao_chartview_draw(v->hud, chart, look->width - margin - width, look->height - margin - height,
+                      width, height, scale, look->width, look->height);
+}
+
+/* Lays the status items ('\n' between them) out for the overlay into out, items two spaces apart
+ * in lines no wider than 45 % of the framebuffer, and returns their text scale: twice the content
+ * scale, or less (down to 1) while the box would cover more than a sixth of the framebuffer. */
+static float status_layout(struct viewer *v, const char *items, const struct look *look, float content_scale,
+                           char *out, size_t size)
+{
+    float scale = 2.0f * content_scale;
+    for (;; scale -= 0.5f * content_scale) {
+        float pad = 2.0f * AO_HUD_PADDING * scale;
+        size_t used = 0, line = 0; /* where the current line starts in out */
+        out[0] = '\0';
+        for (const char *item = items; *item;) {
+            size_t length = strcspn(item, "\n");
+            if (used + length + 3 >= size)
+                break;
+            if (used == 0) {
+                memcpy(out, item, length);
+                used = length;
+            } else { /* on this line if it fits, else on the next */
+                int w, h;
+                memcpy(out + used, "  ", 2);
+                memcpy(out + used + 2, item, length);
+                out[used + 2 + length] = '\0';
+                ao_hud_measure(v->hud, out + line, scale, &w, &h);
+                if ((float)w + pad > 0.45f * (float)look->width) {
+                    out[used] = '\n';
+                    memcpy(out + used + 1, item, length);
+                    line = used + 1;
+                    used += 1 + length;
+                } else {
+                    used += 2 + length;
+                }
+            }
+            out[used] = '\0';
+            item += length + (item[length] == '\n');
+        }
+        int w, h;
+        ao_hud_measure(v->hud, out, scale, &w, &h);
+        if (((float)w + pad) * ((float)h + pad) <= (float)look->width * (float)look->height / 6.0f ||
+            scale - 0.5f * content_scale < 1.0f)
+            return scale;
+    }
+}
+
+/* Draws the image, then the overlay (the status items, '\n' between them, or while comparing the
+ * divider and the sides' labels) and the chart or the help, into the framebuffer look describes. */
+static void draw(struct viewer *v, const struct look *look, const char *items)
+{
+    ao_display_draw(v->display, look->width, look->height);
+    float content_scale;
+    glfwGetWindowContentScale(v->window, &content_scale, NULL);
+    content_scale = content_scale > 0.0f ? content_scale : 1.0f;
+    float scale = content_scale * (look->height >= 360 ? 2.0f : 1.0f);
+    int bar_top = (int)(8 * scale);
+    if (v->compare) {
+        char labels[2][AO_COMPARE_LABEL];
+        ao_compare_labels(v->compare, "\n", labels);
+        const char *const sides[2] = {labels[0], labels[1]};
+        struct ao_display_rect image = ao_display_fit(v->image_width, v->image_height, look->width, look->height);
+        bar_top = ao_compareview_draw(v->hud, v->layout, v->split, image, look->hud && !look->help ? sides : NULL,
+                                      scale, look->width, look->height) + (int)(8 * scale);
+    }
+    if (look->help) {
+        /* At the overlay's scale, or at the content scale where that does not fit the height. */
+        float help_scale = scale;
+        int w, h;
+        for (;;) {
+            ao_hud_measure(v->hud, HELP, help_scale, &w, &h);
+            w += (int)(2 * AO_HUD_PADDING * help_scale);
+            h += (int)(2 * AO_HUD_PADDING * help_scale);
+            if (h <= look->height || help_scale <= content_scale)
+                break;
+            help_scale = content_scale;
+        }
+        ao_hud_draw(v->hud, HELP, (look->width - w) / 2, (look->height - h) / 2, help_scale, look->width,
+                    look->height);
+    } else if (look->hud) {
+        if (!v->compare) {
+            char lines[512];
+            float text_scale = status_layout(v, items, look, content_scale, lines, sizeof lines);
+            ao_hud_draw(v->hud, lines, (int)(8 * content_scale), (int)(8 * content_scale), text_scale, look->width,
+                        look->height);
+            bar_top = (int)(8 * content_scale);
+        }
+        if (v->show != SHOW_IMAGE)
+            ao_heatmap_draw_bar(v->hud, v->show == SHOW_ERROR ? &ao_heatmap_error : &ao_heatmap_difference,
+                                v->show == SHOW_ERROR ? "estimated error" : "|image - reference|",
+                                v->show == SHOW_ERROR, look->width - (int)(8 * scale), bar_top, scale, look->width,
+                                look->height);
+        struct ao_chart both;
+        if (v->compare)
+            ao_compare_chart(v->compare, &both);
+        draw_chart(v, v->compare ? &both : &v->chart, look, content_scale);
+    }
+}
+
+/* Shows what changed: uploads the newest frame when image is set, makes the status (and the title
+ * when it changed), draws, swaps and tells display.c, which measures what that cost; false when the
+ * upload failed. */
+static bool present(struct viewer *v, const struct ao_settings *settings, bool image)
+{
+    if (image && !upload(v))
+        return false;
+    struct look look = {.hud = v->show_hud, .help = v->show_help};
+    glfwGetFramebufferSize(v->window, &look.width, &look.height);
+    char text[sizeof look.status] = "";
+    if (v->compare) {
+        ao_compare_status(v->compare, v->info->scene_name, " \xe2\x80\x94 ", look.status, sizeof look.status);
+    } else {
+        struct ao_hud_status s = status_of(v, settings);
+        ao_hud_format(&s, " \xe2\x80\x94 ", "\xe2\x80\x94", look.status, sizeof look.status);
+        ao_hud_format(&s, "\n", "--", text, sizeof text);
+    }
+    v->status_at = glfwGetTime();
+    v->status_image = v->taken;
+    if (strcmp(look.status, v->drawn.status) != 0) {
+        char title[sizeof look.status + 16];
+        snprintf(title, sizeof title, "aoview \xe2\x80\x94 %s", look.status);
+        glfwSetWindowTitle(v->window, title);
+    }
+    draw(v, &look, text);
+    glfwSwapBuffers(v->window);
+    ao_display_presented(v->display);
+    v->drawn = look;
+    v->dirty = false;
+    v->presented_at = glfwGetTime();
+    return true;
+}
+
+/* Presents what changed since the last frame on screen: a new frame, a view change, the status
+ * (its clock at most every CLOCK_SECONDS), the framebuffer's size, the overlay's or the help's
+ * toggle, an expose. At once when the user acted, navigates or nothing renders, and for previews;
+ * else once the last presentation's cost allows (PRESENT_SHARE). While navigating only new frames
+ * are shown. Returns the glfwGetTime() when something waits to be shown, else a negative number;
+ * *ok false when an upload failed. */
+static double update(struct viewer *v, const struct ao_settings *settings, bool *ok)
+{
+    *ok = true;
+    if (!(v->compare ? ao_compare_frame(v->compare, 0) && ao_compare_frame(v->compare, 1) : v->shown != NULL))
+        return -1.0;
+    double now = glfwGetTime();
+    bool runs = running(v, settings);
+    bool navigating = v->drag >= 0 || now - v->navigated_at < NAVIGATION_SECONDS;
+    bool image = v->reupload || (v->taken != v->uploaded && !keeps_preview(v, settings));
+    bool ticks = runs && !v->compare && v->shown->info.pass > 0;
+    bool clock = v->taken != v->status_image || (ticks && now - v->status_at >= CLOCK_SECONDS);
+    int width, height;
+    glfwGetFramebufferSize(v->window, &width, &height);
+    bool look = v->dirty || width != v->drawn.width || height != v->drawn.height || v->show_hud != v->drawn.hud ||
+                v->show_help != v->drawn.help;
+    if (!image && !look && clock && navigating) /* the status waits for the navigation's end */
+        return v->drag >= 0 ? -1.0 : v->navigated_at + NAVIGATION_SECONDS;
+    if (!image && !look && !clock)
+        return ticks ? v->status_at + CLOCK_SECONDS : -1.0;
+    bool preview = !v->compare && v->shown->block > 1;
+    double due = now;
+    if (!look && !v->reupload && !navigating && runs && !(image && preview)) {
+        struct ao_display_cost cost = ao_display_cost(v->display);
+        due = v->presented_at + (image ? cost.new_image : cost.redraw) / PRESENT_SHARE;
+    }
+    if (now < due)
+        return due;
+    *ok = present(v, settings, image);
+    return ticks ? v->status_at + CLOCK_SECONDS : -1.0;
+}
+
 /* Shows the window at the render's size, fitted to the screen, once the first frame is there; the
- * pixel size, unless --pixel-size set it, is the magnification of a small image times 2 on a
- * HiDPI screen (framebuffer pixels per window point). */
+ * pixel size, unless --pixel-size set it, is the magnification of a small image times 2 on a HiDPI
+ * screen (a content scale of 1.5 or more, as X's Xft.dpi of 144 or more gives, or framebuffer
+ * pixels per window point of 2 or more). */
 static bool show_first_frame(struct viewer *v)
 {
-    while (!v->image_width) {
+    while (!(v->compare ? ao_compare_frame(v->compare, 0) && ao_compare_frame(v->compare, 1) : v->shown != NULL)) {
         glfwWaitEventsTimeout(0.1);   /* woken early by ao_window_notify */
-        if (!take_frame(v))
-            return false;
+        take_frame(v);
     }
     struct ao_settings s;
     get_settings(v, &s);
-    int width = s.width, height = s.height, zoom = fit_screen(&width, &height);
+    int width = s.width, height = s.height, zoom = fit_screen(v, &width, &height);
     glfwSetWindowSize(v->window, width, height);
     glfwShowWindow(v->window);
     int points, pixels;
+    float content_scale;
     glfwGetWindowSize(v->window, &points, NULL);
     glfwGetFramebufferSize(v->window, &pixels, NULL);
-    int hidpi = points > 0 && pixels >= 2 * points ? 2 : 1;
+    glfwGetWindowContentScale(v->window, &content_scale, NULL);
+    int hidpi = (points > 0 && pixels >= 2 * points) || content_scale >= 1.5f ? 2 : 1;
     v->pixel_size = v->info->pixel_size ? v->info->pixel_size : zoom * hidpi < MAX_PIXEL_SIZE ? zoom * hidpi
                                                                                              : MAX_PIXEL_SIZE;
     v->resized_at = -1.0;
@@ -773,43 +949,45 @@ static bool show_first_frame(struct viewer *v)
     return true;
 }
 
-/* Handles input and redraws what changed at up to 60 frames/s while passes run, and sleeps in
- * glfwWaitEvents once the image is done or paused, until the window is closed. */
+/* Handles input and presents what changed (update), and sleeps in glfwWaitEvents until an event, a
+ * new frame (ao_window_notify) or what waits to be shown is due, until the window is closed. */
 static enum ao_window_result loop(struct viewer *v)
 {
     if (!show_first_frame(v))
         return AO_WINDOW_FAILED;
     while (!glfwWindowShouldClose(v->window)) {
-        /* Input first: the screenshot needs the frame on screen, which taking a new one ends. */
         if (v->toggle_compare)
             toggle_compare(v);
         v->toggle_compare = false;
         apply_mouse(v);
-        double resize_due = follow_size(v);
-        /* S saves a full frame: during previews it waits for the first */
-        if (v->save && !(current_frame(v) && current_frame(v)->block > 1)) {
+        double resize_due = follow_size(v), navigation_due = end_navigation(v);
+        take_frame(v);
+        struct ao_settings s;
+        get_settings(v, &s);
+        /* S saves a full frame (during previews it waits for the first), the very one the texture
+         * then holds: a frame not shown yet, or kept from view by a preview, is uploaded first. */
+        const struct ao_frame *f = current_frame(v);
+        if (v->save && f && f->block == 1) {
+            if (v->uploaded != v->taken && !upload(v))
+                return AO_WINDOW_FAILED;
             save(v);
             v->save = false;
         }
-        if (!take_frame(v))
+        bool ok;
+        double due = update(v, &s, &ok);
+        if (!ok)
             return AO_WINDOW_FAILED;
-
-        struct ao_settings s;
-        get_settings(v, &s);
-        double started = glfwGetTime();
-        update(v, &s);
-
-        /* Sleep until something happens once the image stops changing; then, and while passes
-         * run, handle events until the next frame is due (vsync may have used the time up). */
-        bool idle = v->compare ? !ao_compare_running(v->compare) : s.paused || (v->shown && v->shown->info.done);
-        if (idle && resize_due >= 0.0)
-            glfwWaitEventsTimeout(resize_due);
-        else if (idle)
+        double wait = due >= 0.0 ? fmax(0.0, due - glfwGetTime()) : -1.0;
+        if (resize_due >= 0.0)
+            wait = wait >= 0.0 ? fmin(wait, resize_due) : resize_due;
+        if (navigation_due >= 0.0)
+            wait = wait >= 0.0 ? fmin(wait, navigation_due) : navigation_due;
+        if (wait < 0.0)
             glfwWaitEvents();
-        for (double rest; (rest = started + FRAME_SECONDS - glfwGetTime()) > 0 &&
-                          !glfwWindowShouldClose(v->window);)
-            glfwWaitEventsTimeout(rest);
-        glfwPollEvents();
+        else if (wait > 0.0)
+            glfwWaitEventsTimeout(wait);
+        else
+            glfwPollEvents();
     }
     return AO_WINDOW_OK;
 }
@@ -818,6 +996,11 @@ enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_wi
 {
     XIOErrorHandler xlib_handler = XSetIOErrorHandler(on_io_error);
     if (!glfwInit()) {
+        /* With a display named, say why it could not be used before main falls back to headless. */
+        const char *why = NULL, *display = getenv("DISPLAY");
+        glfwGetError(&why);
+        if (display && display[0])
+            fprintf(stderr, "aoview: cannot use the X display %s: %s\n", display, why ? why : "unknown error");
         XSetIOErrorHandler(xlib_handler);
         return AO_WINDOW_NO_DISPLAY;
     }

@@ -175,11 +175,7 @@ int main(int argc, char **argv)
 {
     const char *path = argc > 1 ? argv[1] : AO_DEFAULT_SCENE;
     struct ao_scene scene;
-    if (!ao_scene_load(&scene, path))
-        return 1;
-    struct ao_tracer *tracer = ao_tracer_create(&scene);
-    if (!tracer)
-        return 1;
+    struct ao_tracer *tracer = bench_load(path, &scene);
     printf("%s, %d threads\n", scene.name, THREADS);
     const int sizes[][2] = {{640, 480}, {1920, 1080}, {3840, 2160}};
     for (size_t k = 0; k < sizeof sizes / sizeof sizes[0]; k++)

@@ -29,6 +29,18 @@ static inline double bench_median(double *v, int n)
     return v[n / 2];
 }
 
+/* Loads the scene at path into *scene and builds its tracer; exits (after the loader's message)
+ * when either fails. */
+static inline struct ao_tracer *bench_load(const char *path, struct ao_scene *scene)
+{
+    if (!ao_scene_load(scene, path))
+        exit(1);
+    struct ao_tracer *tracer = ao_tracer_create(scene);
+    if (!tracer)
+        exit(1);
+    return tracer;
+}
+
 /* Renders scene at width x height (2 threads, seed 1, cosine, AA, its own camera) in passes of
  * spppp samples until target_spp; the last frame's facts. Exits when the renderer cannot start. */
 static inline struct ao_frame_info bench_render(const struct ao_scene *scene, const struct ao_tracer *tracer,

@@ -395,7 +395,12 @@ static void test_usage_lists_every_option(void **state)
                            "--aa", "--no-aa", "--size", "--threads", "--seed", "--ao-distance",
                            "--stats", "--reference", "-q, --quiet", "-h, --help", "--version",
                            "--time", "--view", "--shading", "--compare A,B", "--scene-budget SIZE", "default 1G", "--ground on|off", "--crease-angle DEG", "N normals", "F flat/Phong", "D difference",
-                           "default 256", "default cosine", "640x480", "Esc"};
+                           "default 256", "default cosine", "640x480", "Esc",
+                           /* every window key and the mouse buttons */
+                           "U/H/C", "A anti-aliasing", "Space pause", "R restart", "+/- samples per pass",
+                           "G adaptive", "E error map", "V compare", "B split", "S save", "[/] halve/double",
+                           "F1 or ?", "F2 hide", "Esc/Q quit", "left drag orbit", "divider", "right drag pan",
+                           "wheel zoom"};
     for (size_t i = 0; i < sizeof names / sizeof names[0]; i++)
         assert_non_null(strstr(u, names[i]));
 }

@@ -170,6 +170,64 @@ static void test_srgb8_rounds_to_nearest(void **state)
     assert_memory_equal(out, want, sizeof want);
 }
 
+/* round(255 encode(x)) with the curve in double precision: what the table must give. */
+static int code_in_double(float x)
+{
+    double v = x > 0.0f ? (x < 1.0f ? x : 1.0) : 0.0;
+    double e = v <= 0.0031308 ? 12.92 * v : 1.055 * pow(v, 1.0 / 2.4) - 0.055;
+    return (int)floor(255.0 * e + 0.5);
+}
+
+/* The table's codes are the correctly rounded ones for every float in [0, 1] tried: every 97th bit
+ * pattern up to 1 (about ten million, every bucket of the table many times, its steps among them)
+ * and each side of every step between codes; the BGRA form holds the same codes, channels
+ * swapped, alpha 255. */
+static void test_srgb8_table_is_correctly_rounded(void **state)
+{
+    (void)state;
+    enum { BATCH = 4096 };
+    static float in[BATCH];
+    static uint8_t out[BATCH];
+    int n = 0;
+    uint32_t one = 0x3F800000;
+    for (uint32_t bits = 0; bits <= one; bits += 97) {
+        memcpy(&in[n++], &bits, sizeof bits);
+        if (n == BATCH || bits + 97 > one) {
+            ao_image_encode_srgb8(in, (size_t)n, out);
+            for (int k = 0; k < n; k++)
+                if (out[k] != code_in_double(in[k]))
+                    fail_msg("%.9g: table %d, double %d", (double)in[k], out[k], code_in_double(in[k]));
+            n = 0;
+        }
+    }
+    /* each side of each step: the largest float of each code and its successor */
+    for (int code = 0; code < 255; code++) {
+        uint32_t lo = 0, hi = one;
+        while (lo + 1 < hi) {
+            uint32_t mid = lo + (hi - lo) / 2;
+            float x;
+            memcpy(&x, &mid, sizeof x);
+            if (code_in_double(x) > code)
+                hi = mid;
+            else
+                lo = mid;
+        }
+        float pair[2];
+        uint8_t got[2];
+        memcpy(&pair[0], &lo, sizeof lo);
+        memcpy(&pair[1], &hi, sizeof hi);
+        ao_image_encode_srgb8(pair, 2, got);
+        assert_int_equal(got[0], code);
+        assert_int_equal(got[1], code + 1);
+    }
+    const float pixel[6] = {0.18f, 0.5f, 1.0f, -1.0f, 0.0031308f, 2.0f};
+    uint8_t bgra[8], codes[6];
+    ao_image_encode_srgb8(pixel, 6, codes);
+    ao_image_encode_srgb8_bgra(pixel, 2, bgra);
+    const uint8_t want[8] = {codes[2], codes[1], codes[0], 255, codes[5], codes[4], codes[3], 255};
+    assert_memory_equal(bgra, want, sizeof want);
+}
+
 static float *pattern(int w, int h)
 {
     float *rgb = malloc(sizeof(float) * 3 * (size_t)w * (size_t)h);
@@ -397,6 +455,7 @@ int main(void)
         cmocka_unit_test(test_srgb_known_values),
         cmocka_unit_test(test_srgb_clamps),
         cmocka_unit_test(test_srgb8_rounds_to_nearest),
+        cmocka_unit_test(test_srgb8_table_is_correctly_rounded),
         cmocka_unit_test_setup_teardown(test_pfm_round_trip, setup, teardown),
         cmocka_unit_test_setup_teardown(test_pfm_layout, setup, teardown),
         cmocka_unit_test_setup_teardown(test_pfm_big_endian_and_loose_header, setup, teardown),

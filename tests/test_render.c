@@ -6,7 +6,9 @@
 #include <cmocka.h>
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stdio.h>
+#include <time.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -24,21 +26,26 @@ struct counter {
     int calls;
     uint32_t last_pass, last_spp;
     uint32_t spppp[8];       /* of the first eight passes */
+    struct ao_frame_info passes[2];   /* the first two passes' facts */
     int previews;
     int calls_before_preview;   /* passes published before the first preview; -1: no preview */
+    struct ao_frame_info preview;   /* the first preview's facts */
 };
 
 static void count_preview(const struct ao_frame_info *info, void *user)
 {
-    (void)info;
     struct counter *c = user;
-    if (c->previews++ == 0)
+    if (c->previews++ == 0) {
         c->calls_before_preview = c->calls;
+        c->preview = *info;
+    }
 }
 
 static void count_pass(const struct ao_frame_info *info, void *user)
 {
     struct counter *c = user;
+    if (c->calls < 2)
+        c->passes[c->calls] = *info;
     if (c->calls < 8)
         c->spppp[c->calls] = info->spppp;
     c->calls++;
@@ -557,6 +564,124 @@ static void test_previews_come_first_and_change_nothing(void **state)
     free(image[1]);
 }
 
+/* A preview's facts are those of a run that has measured nothing yet: no pass, no sample, no ray,
+ * no render time, and its error, RMSE (a reference given), converged share and work left not known
+ * (NAN), never 0. The first pass measures all but the error, which needs a pass in each half. */
+static void test_previews_carry_no_measured_figures(void **state)
+{
+    (void)state;
+    struct counter counter = {.calls_before_preview = -1};
+    struct ao_frame_info info;
+    static float reference[3 * 256 * 192];
+    for (size_t k = 0; k < sizeof reference / sizeof reference[0]; k++)
+        reference[k] = 0.5f;
+    struct ao_render_config config = {.threads = 2, .seed = 7, .target_spp = 16, .reference = reference,
+                                      .reference_width = 256, .reference_height = 192};
+    struct ao_settings settings = {.width = 256, .height = 192, .sampling = AO_SAMPLING_COSINE, .aa = true,
+                                   .adaptive = true, .previews = true};
+    free(render_scene(SCENE, config, settings, &info, &counter));
+    assert_int_equal(counter.previews, 1);
+    const struct ao_frame_info *p = &counter.preview;
+    assert_int_equal(p->pass, 0);
+    assert_int_equal(p->spp, 0);
+    assert_int_equal(p->spppp, 0);
+    assert_true(p->mean_spp == 0.0 && p->seconds == 0.0 && p->eye_rays == 0 && p->shadow_rays == 0);
+    assert_true(isnan(p->error) && isnan(p->rmse) && isnan(p->converged) && isnan(p->spp_left));
+    assert_false(p->done);
+    const struct ao_frame_info *first = &counter.passes[0], *second = &counter.passes[1];
+    assert_int_equal(first->pass, 1);
+    assert_true(isnan(first->error));
+    assert_true(isfinite(first->rmse) && first->rmse > 0.0 && isfinite(first->converged) &&
+                isfinite(first->spp_left) && first->seconds > 0.0);
+    assert_true(isfinite(second->error) && second->error > 0.0);
+}
+
+/* A tile's error in a frame is NAN until both halves of it have a pass, then measured. */
+static void test_tile_errors_are_not_known_before_both_halves(void **state)
+{
+    (void)state;
+    struct ao_scene scene;
+    assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
+    struct ao_tracer *tracer = ao_tracer_create(&scene);
+    assert_non_null(tracer);
+    for (uint32_t spp = 1; spp <= 2; spp++) {
+        struct ao_render_config config = {.scene = &scene, .tracer = tracer, .threads = 2, .seed = 3,
+                                          .target_spp = spp, .ao_distance = INFINITY};
+        struct ao_settings settings = {.width = 64, .height = 48, .sampling = AO_SAMPLING_COSINE, .aa = true,
+                                       .spppp = 1, .camera = scene.camera};
+        struct ao_render *r = ao_render_create(&config, &settings);
+        assert_non_null(r);
+        assert_true(ao_render_wait(r));
+        const struct ao_frame *f = ao_render_take_frame(r);
+        assert_non_null(f);
+        assert_int_equal(f->tiles_x * f->tiles_y, 4 * 3);
+        int noisy = 0; /* tiles of sky alone are exact: measured as 0 */
+        for (int t = 0; t < f->tiles_x * f->tiles_y; t++) {
+            assert_true(spp == 1 ? isnan(f->tile_error[t]) : isfinite(f->tile_error[t]) && f->tile_error[t] >= 0.0f);
+            noisy += f->tile_error[t] > 0.0f;
+        }
+        assert_true(spp == 1 || noisy > 0);
+        ao_render_destroy(r);
+    }
+    ao_tracer_destroy(tracer);
+    ao_scene_finish(&scene);
+}
+
+struct navigation {
+    atomic_int previews, passes;
+    atomic_uint_fast64_t restarts;   /* of the last frame */
+};
+
+static void navigation_preview(const struct ao_frame_info *info, void *user)
+{
+    struct navigation *n = user;
+    atomic_fetch_add(&n->previews, 1);
+    atomic_store(&n->restarts, info->restarts);
+}
+
+static void navigation_pass(const struct ao_frame_info *info, void *user)
+{
+    struct navigation *n = user;
+    atomic_fetch_add(&n->passes, 1);
+    atomic_store(&n->restarts, info->restarts);
+}
+
+/* While the camera is being moved the previews stop at cells of a quarter of the first's (1600x900:
+ * cells of 32, 16 and 8 pixels, not 4) and the run waits, tracing nothing; cleared, the run goes on
+ * from there, the finest preview and then passes, without a restart. */
+static void test_navigation_holds_the_previews(void **state)
+{
+    (void)state;
+    struct ao_scene scene;
+    assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
+    struct ao_tracer *tracer = ao_tracer_create(&scene);
+    assert_non_null(tracer);
+    struct navigation n = {0};
+    struct ao_render_config config = {.scene = &scene, .tracer = tracer, .threads = 2, .seed = 1, .target_spp = 4,
+                                      .ao_distance = INFINITY, .on_pass = navigation_pass,
+                                      .on_preview = navigation_preview, .user = &n};
+    struct ao_settings settings = {.width = 1600, .height = 900, .sampling = AO_SAMPLING_COSINE, .aa = true,
+                                   .spppp = 1, .previews = true, .navigating = true, .camera = scene.camera};
+    struct ao_render *r = ao_render_create(&config, &settings);
+    assert_non_null(r);
+    const struct timespec tenth = {0, 100000000};
+    for (int k = 0; k < 10 && atomic_load(&n.previews) < 3; k++)
+        nanosleep(&tenth, NULL);
+    nanosleep(&tenth, NULL); /* time for a fourth preview or a pass, were they traced */
+    assert_int_equal(atomic_load(&n.previews), 3);
+    assert_int_equal(atomic_load(&n.passes), 0);
+    uint64_t run = atomic_load(&n.restarts);
+    settings.navigating = false;
+    assert_false(ao_render_set_settings(r, &settings));
+    assert_true(ao_render_wait(r));
+    assert_int_equal(atomic_load(&n.previews), 4);
+    assert_int_equal(atomic_load(&n.passes), 4);
+    assert_true(atomic_load(&n.restarts) == run);
+    ao_render_destroy(r);
+    ao_tracer_destroy(tracer);
+    ao_scene_finish(&scene);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
@@ -576,6 +701,9 @@ int main(void)
         cmocka_unit_test(test_resize_restarts_at_the_new_size),
         cmocka_unit_test(test_coarse_view_rays_are_the_image_rays),
         cmocka_unit_test(test_previews_come_first_and_change_nothing),
+        cmocka_unit_test(test_previews_carry_no_measured_figures),
+        cmocka_unit_test(test_tile_errors_are_not_known_before_both_halves),
+        cmocka_unit_test(test_navigation_holds_the_previews),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }

@@ -17,6 +17,13 @@
 #                          both layouts compared), E, D, +, G restart nothing, an orbit, a pan and
 #                          a zoom each restart both; V again; --compare at start with --time and
 #                          --stats, fair within 5 %, and an orbit once it has finished
+#   test_window.sh truth   only measured figures: titles read every 0.1 s after a resize show no
+#                          error, RMSE or convergence while a preview is on screen, no time left or
+#                          rate before the first pass; E before any
+#                          tile has an estimate paints them all "not known"; a --size too large
+#                          for the screen says so on one line; the chart keeps the run that went
+#                          on before the window opened; --pixel-size auto is 2 where Xft.dpi
+#                          says the content scale is 2
 # Needs AO_BINARY and AO_SOURCE_ROOT (tests/meson.build sets both); exits 77 when Xvfb or
 # xdotool is missing.
 set -u
@@ -28,12 +35,22 @@ for tool in xvfb-run xdotool python3; do
         exit 77
     fi
 done
+if [ "$mode" = truth ] && ! command -v xprop >/dev/null; then
+    echo "SKIP: xprop is not installed (Debian: apt-get install x11-utils)"
+    exit 77
+fi
 if [ -z "${AO_UNDER_XVFB:-}" ]; then
     # A 24-bit screen: xvfb-run's default depth has no OpenGL visual. The server keeps its screen
     # in an XWD file under AO_FBDIR, which the chart test reads.
     AO_FBDIR=$(mktemp -d)
     export AO_FBDIR
-    AO_UNDER_XVFB=1 exec xvfb-run -a -s "-screen 0 1280x1024x24 -fbdir $AO_FBDIR" "$0" "$@"
+    # truth sets a property on the root window between launches: the server must not reset when
+    # its last client leaves.
+    noreset=""
+    if [ "$mode" = truth ]; then
+        noreset=-noreset
+    fi
+    AO_UNDER_XVFB=1 exec xvfb-run -a -s "-screen 0 1280x1024x24 -fbdir $AO_FBDIR $noreset" "$0" "$@"
 fi
 
 fail() {
@@ -193,6 +210,17 @@ sides() {
         echo "${BASH_REMATCH[1]} ${BASH_REMATCH[2]} ${BASH_REMATCH[3]} ${BASH_REMATCH[4]}"
 }
 
+# Starts the viewer with the arguments given, its output to stdout and stderr in the work folder,
+# and waits for its window: pid and wid name them. $1 says what for, in the failure.
+open_viewer() {
+    local what=$1
+    shift
+    "$AO_BINARY" "$@" >stdout 2>stderr &
+    pid=$!
+    wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window for $what"
+    wid=${wid%%$'\n'*}
+}
+
 # Drags with the left button from ($1, $2) to ($3, $4) in the window, pausing between the steps as
 # a hand would.
 drag() {
@@ -261,9 +289,22 @@ if [ "$mode" = resize ]; then
     H=480
     args=(--pixel-size 1 --stats stats.csv)
 fi
+threads=2
+if [ "$mode" = truth ]; then
+    # The bunny on one thread: passes of some 50 ms at 1000x700, so that the preview a restart
+    # shows stays on screen for several readings of the title (until 11 spp); a reference, so that
+    # an RMSE is there to show once it is measured.
+    W=800
+    H=600
+    threads=1
+    scene=$AO_SOURCE_ROOT/assets/scenes/bunny.scene
+    "$AO_BINARY" --headless -q --size ${W}x$H --spp 16 --spppp 16 -o ref.pfm "$scene" ||
+        { echo "FAIL: no reference"; exit 1; }
+    args=(--pixel-size 1 --reference ref.pfm)
+fi
 # Adaptive sampling off, so that G turns it on.
-"$AO_BINARY" --size ${W}x$H --spp 1000000 --spppp 1 --threads 2 --sampling hemisphere --adaptive off "${args[@]}" \
-    "$scene" >stdout 2>stderr &
+"$AO_BINARY" --size ${W}x$H --spp 1000000 --spppp 1 --threads $threads --sampling hemisphere --adaptive off \
+    "${args[@]}" "$scene" >stdout 2>stderr &
 pid=$!
 wid=$(timeout 20 xdotool search --sync --onlyvisible --name '^aoview') || fail "no window appeared"
 wid=${wid%%$'\n'*}
@@ -402,10 +443,12 @@ elif [ "$mode" = compare ]; then
     [ "$left1" -ge 100 ] && [ "$right1" -ge 100 ] && [ "$right0" -lt 20 ] || fail "no label on each side"
     [ $((u1 - u0)) -ge 30 ] && [ $((c1 - c0)) -ge 30 ] || fail "the chart does not show both sides' curves"
 
-    # Fairness: the two sides' render seconds within 5 % of each other (about 2 s each now; the
-    # turns keep them within one pass, a few ms here).
+    # Fairness: the two sides' render seconds within 5 % of each other (the turns keep them within
+    # one pass, a few ms here). The sides share the wall clock, and the title's figures are renewed
+    # twice a second: 3 s after the labels each side shows at least (3 - 0.5) / 2 = 1.25 s.
+    sleep 1
     read -r spp_a sec_a spp_b sec_b < <(sides)
-    echo "after 2 s: A $spp_a spp $sec_a s, B $spp_b spp $sec_b s"
+    echo "after 3 s: A $spp_a spp $sec_a s, B $spp_b spp $sec_b s"
     python3 -c "import sys; a, b = $sec_a, $sec_b; sys.exit(not (a >= 1 and abs(a - b) <= 0.05 * max(a, b)))" ||
         fail "the sides' render times differ by more than 5 % ($sec_a s, $sec_b s)"
 
@@ -511,6 +554,83 @@ EOF
     read -r new_a _ new_b _ < <(sides)
     [ "$new_a" -lt "$spp_a" ] && [ "$new_b" -lt "$spp_b" ] || fail "an orbit did not restart the finished comparison"
     wait_title " — finished$"
+elif [ "$mode" = truth ]; then
+    # A resize restarts at 1000x700: its previews (the coarsest in a few ms), then the finest until
+    # the average has 11 spp. Every title read while a preview is on screen shows no error, RMSE or
+    # convergence, and before the run's first pass ("pass 0") no time left or rate either: nothing
+    # is measured yet (they used to read "error 0.00 %", "RMSE 0" and "~12976712658183 s left");
+    # once the average is on screen its figures show. 0.1 s apart, for 1.5 s.
+    wait_title "bunny.scene — 800x600 — .* — error [0-9.]+ % — .* Mrays/s — pass [0-9]+ — .* RMSE [0-9.e-]+"
+    xdotool windowsize "$wid" 1000 700
+    previews=0
+    for _ in $(seq 15); do
+        t=$(title)
+        if [[ $t == *" preview, "* || $t == *" — pass 0 — "* ]]; then
+            previews=$((previews + 1))
+            [[ $t =~ error\ [0-9]|RMSE\ [0-9]|converged ]] && fail "a figure of the average on a preview: $t"
+            [[ $t == *" — pass 0 — "* && $t =~ \ s\ left|Mrays/s ]] && fail "a figure before the first pass: $t"
+        fi
+        sleep 0.1
+    done
+    echo "titles with a preview on screen: $previews of 15"
+    [ "$previews" -ge 1 ] || fail "no title read while the preview was on screen"
+    wait_title "bunny.scene — 1000x700 — .* — error [0-9.]+ % — .* Mrays/s — pass [0-9]+ — "
+    press Escape
+    wait "$pid" || fail "exit status $? after Esc"
+
+    # E before any tile has an estimate (both halves of a tile need a pass, and --spp 1 runs one):
+    # every tile "not known", a grey (0.2 linear, code 124) that S saves as displayed; the lowest
+    # colour of the scale, dark blue, is what it used to paint (labelled 0.01 %).
+    open_viewer "--spp 1" --size 320x240 --spp 1 --threads 2 "$scene"
+    wait_title " — spp 1 of 1 — error — .* — pass 1 — "
+    press e
+    sleep 0.5
+    press s
+    check_screenshot 1 320 240
+    read -r colours coloured < <(png_stats "$work/aoview-1.png")
+    echo "E before an estimate: $colours colour(s), coloured share $coloured"
+    [ "$colours" -eq 1 ] && [ "$coloured" = 0.0 ] || fail "E before an estimate did not paint every tile not known"
+    press Escape
+    wait "$pid" || fail "exit status $? after Esc"
+
+    # A --size the 1280x1024 screen cannot hold: one line on stderr, the window at 90 % of the
+    # screen and the image following it.
+    open_viewer 1600x1200 --size 1600x1200 --spp 1000000 --threads 2 "$scene"
+    wait_title "bunny.scene — 1152x864[ ,]"
+    lines=$(grep -c "a 1600x1200 window does not fit 90 % of the 1280x1024 screen: it opens at 1152x864" stderr)
+    [ "$lines" -eq 1 ] || fail "$lines lines about the --size that does not fit"
+    press Escape
+    wait "$pid" || fail "exit status $? after Esc"
+
+    # The chart keeps the run that went on before the window opened: 64 one-sample passes of the
+    # spheres at 160x120 (the window shows them 4 times magnified: no restart), over in some tens
+    # of ms, before the window shows in most launches, charted as a curve across the plot in the
+    # sampling mode's colour, not as the single point of the newest frame: the hemisphere colour's
+    # pixels against a run whose curve is in cosine's (the legend alone in hemisphere's).
+    spheres=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
+    "$AO_BINARY" --headless -q --size 160x120 --spp 64 --spppp 64 -o spheres.pfm "$spheres" || fail "no reference"
+    for sampling in hemisphere cosine; do
+        open_viewer "the chart" --size 160x120 --spp 64 --spppp 1 --threads 2 --adaptive off --sampling $sampling \
+            --reference spheres.pfm "$spheres"
+        wait_title "spheres.scene — 160x120 — $sampling — AA on — spp 64 of 64 — .* RMSE [0-9.e-]+"
+        sleep 0.5
+        read -r _ green _ < <(chart_colours)
+        [ "$sampling" = hemisphere ] && curve=$green || legend=$green
+        press Escape
+        wait "$pid" || fail "exit status $? after Esc"
+    done
+    echo "hemisphere-coloured chart pixels: $curve with the first run's curve, $legend with the legend alone"
+    [ $((curve - legend)) -ge 30 ] || fail "the chart lost the run before the window opened"
+
+    # --pixel-size auto on a HiDPI screen: X gives the content scale by Xft.dpi (192: 2), not by
+    # the framebuffer, which is the window's size; the 640x480 window renders 320x240.
+    xprop -root -f RESOURCE_MANAGER 8s -set RESOURCE_MANAGER "$(printf 'Xft.dpi:\t192\n')"
+    open_viewer "Xft.dpi 192" --size 640x480 --spp 1000000 --threads 2 "$scene"
+    wait_title "bunny.scene — 320x240 — "
+    press Escape
+    wait "$pid" || fail "exit status $? after Esc"
+    echo "PASS (truth)"
+    exit 0
 elif [ "$mode" = resize ]; then
     # Each run's first pass is a --stats row with pass 1.
     runs() { awk -F, '$1 == 1' stats.csv | wc -l; }
