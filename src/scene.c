@@ -284,6 +284,8 @@ struct world {
     size_t quad_count;
     struct loaded *files;
     size_t file_count;
+    uint32_t *file_slots;         /* hash table of the identified files: index + 1, or 0 (empty) */
+    size_t slot_count;            /* a power of two, at least twice file_count; 0 before the first */
     struct mesh_info *info;       /* per mesh, from survey() */
     struct dvec eye, target;      /* the camera's, when has_camera */
     bool has_camera;
@@ -403,19 +405,57 @@ static bool add_quad(struct world *w, const struct dvec p[4], struct ao_vec3 n, 
     return true;
 }
 
-/* The file loaded earlier as path (by name, or by device and inode) with this crease angle, or NULL. */
+/* The slot of file_slots where a file of this identity and crease angle is, or the empty one where
+ * it would go. */
+static size_t file_slot(const struct world *w, dev_t device, ino_t inode, double crease)
+{
+    uint64_t bits;
+    memcpy(&bits, &crease, sizeof bits);
+    uint64_t h = ((uint64_t)device * 0x9E3779B97F4A7C15u) ^ ((uint64_t)inode * 0xC2B2AE3D27D4EB4Fu) ^ bits;
+    h ^= h >> 29;
+    size_t mask = w->slot_count - 1;
+    for (size_t i = (size_t)h & mask;; i = (i + 1) & mask) {
+        uint32_t k = w->file_slots[i];
+        if (!k || (w->files[k - 1].device == device && w->files[k - 1].inode == inode &&
+                   w->files[k - 1].crease == crease))
+            return i;
+    }
+}
+
+/* Enters files[index], identified, into the hash table, doubling it when half full; false when
+ * memory is short. */
+static bool index_file(struct world *w, size_t index)
+{
+    if (2 * (index + 1) > w->slot_count) {
+        size_t count = w->slot_count ? 2 * w->slot_count : 64;
+        uint32_t *slots = calloc(count, sizeof *slots);
+        if (!slots)
+            return false;
+        free(w->file_slots);
+        w->file_slots = slots, w->slot_count = count;
+        for (size_t i = 0; i < index; i++)
+            if (w->files[i].identified)
+                w->file_slots[file_slot(w, w->files[i].device, w->files[i].inode, w->files[i].crease)] = (uint32_t)i + 1;
+    }
+    const struct loaded *f = &w->files[index];
+    w->file_slots[file_slot(w, f->device, f->inode, f->crease)] = (uint32_t)index + 1;
+    return true;
+}
+
+/* The file loaded earlier as path (by device and inode, or by name where stat fails) with this
+ * crease angle, or NULL. */
 static const struct loaded *find_loaded(const struct world *w, const char *path, double crease)
 {
     struct stat st;
-    bool identified = stat(path, &st) == 0;
-    for (size_t i = 0; i < w->file_count; i++) {
-        const struct loaded *f = &w->files[i];
-        if (f->crease != crease)
-            continue;
-        if (strcmp(f->path, path) == 0 ||
-            (identified && f->identified && f->device == st.st_dev && f->inode == st.st_ino))
-            return &w->files[i];
+    if (stat(path, &st) == 0) {
+        if (!w->slot_count)
+            return NULL;
+        uint32_t k = w->file_slots[file_slot(w, st.st_dev, st.st_ino, crease)];
+        return k ? &w->files[k - 1] : NULL;
     }
+    for (size_t i = 0; i < w->file_count; i++)
+        if (w->files[i].crease == crease && strcmp(w->files[i].path, path) == 0)
+            return &w->files[i];
     return NULL;
 }
 
@@ -446,8 +486,16 @@ static const struct loaded *load_file(struct cursor *c, struct ao_scene *s, stru
     struct loaded *f = &w->files[w->file_count++];
     *f = (struct loaded){.path = copy, .crease = crease, .first = s->mesh_count, .count = model.mesh_count,
                          .placements = model.placements, .placement_count = model.placement_count};
-    if (stat(path, &st) == 0)
+    if (stat(path, &st) == 0) {
         f->identified = true, f->device = st.st_dev, f->inode = st.st_ino;
+        if (!index_file(w, w->file_count - 1)) {
+            w->file_count--;
+            free(copy);
+            ao_model_finish(&model);
+            fail(c, "out of memory adding '%s'", path);
+            return NULL;
+        }
+    }
     memcpy(s->meshes + s->mesh_count, model.meshes, model.mesh_count * sizeof *model.meshes);
     s->mesh_count += model.mesh_count;
     s->degenerate_count += model.degenerate_count;
@@ -1122,6 +1170,7 @@ static void world_finish(struct world *w)
         free(w->files[i].placements);
     }
     free(w->files);
+    free(w->file_slots);
     free(w->placements);
     free(w->quads);
     free(w->info);
