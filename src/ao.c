@@ -9,7 +9,10 @@
  * the uniform sphere) add nothing and are not traced. */
 #include "ao.h"
 
+#include "rng.h"
+#include "sampling.h"
 #include "simd.h"
+#include "tracer.h"
 
 /* Keys of a pixel's eye-ray stream (indexed by eye ray) and AO stream (indexed by sample), in the
  * pass slot of the key, where no real pass number reaches. */

@@ -1,5 +1,7 @@
 #include "chartview.h"
 
+#include "sampling.h"
+
 #include <math.h>
 #include <stdio.h>
 

@@ -11,7 +11,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "render.h"
+#include "share.h"
 
 /* The cluster; opaque. */
 struct ao_cluster;

@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli.h"
 #include "sampling.h"
 
 /* One side: its renderer and configuration, what the turns know of its current run, and what the

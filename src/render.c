@@ -14,7 +14,10 @@
 #include "frames.h"
 #include "pool.h"
 #include "preview.h"
+#include "scene.h"
+#include "share.h"
 #include "tile.h"
+#include "tracer.h"
 
 /* --spppp auto: the first pass after a restart takes one sample per pixel, so that the first
  * frame comes at once; then each pass of a half (even, odd) takes AUTO_PER_RAY samples, then

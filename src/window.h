@@ -6,7 +6,7 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "cli.h"
+#include "modes.h"
 #include "render.h"
 
 /* What the window shows besides the frames; strings owned by the caller for the whole run. */

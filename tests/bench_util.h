@@ -6,6 +6,8 @@
 #include <time.h>
 
 #include "render.h"
+#include "scene.h"
+#include "tracer.h"
 
 /* Seconds on the monotonic clock. */
 static inline double bench_now(void)

@@ -7,6 +7,8 @@
 #include <string.h>
 
 #include "render.h"
+#include "scene.h"
+#include "tracer.h"
 
 /* Renders with config and settings until the target spp and returns a malloc'd copy of the final
  * frame's RGB floats (settings->width x settings->height). */

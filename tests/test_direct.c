@@ -14,6 +14,7 @@
 
 #include "ao.h"
 #include "render.h"
+#include "rng.h"
 #include "scene.h"
 #include "tracer.h"
 

@@ -18,6 +18,7 @@
 #include "headless.h"
 #include "image.h"
 #include "render.h"
+#include "sampling.h"
 #include "scene.h"
 #include "shaders/ao_shaders.h"
 #include "tracer.h"

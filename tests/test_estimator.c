@@ -10,6 +10,7 @@
 #include <math.h>
 
 #include "ao.h"
+#include "sampling.h"
 #include "scene.h"
 #include "tracer.h"
 

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "progress.h"
+#include "render.h"
 #include "scene.h"
 #include "tracer.h"
 

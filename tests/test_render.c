@@ -12,6 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ao.h"
 #include "render.h"
 #include "scene.h"
 #include "tracer.h"

@@ -19,6 +19,7 @@
 #include "ao.h"
 #include "render.h"
 #include "render_image.h"
+#include "sampling.h"
 #include "scene.h"
 #include "tracer.h"
 
