@@ -10,6 +10,7 @@
 
 #include "affine.h"
 #include "file.h"
+#include "text.h"
 #include "image.h"
 #include "mesh.h"
 
@@ -39,9 +40,9 @@ static bool fail(const struct cursor *c, const char *fmt, ...)
     vsnprintf(message, sizeof message, fmt, ap);
     va_end(ap);
     if (c->line)
-        ao_file_report("%s:%d: %s", c->path, c->line, message);
+        ao_text_report("%s:%d: %s", c->path, c->line, message);
     else
-        ao_file_report("%s: %s", c->path, message);
+        ao_text_report("%s: %s", c->path, message);
     return false;
 }
 
@@ -1314,7 +1315,7 @@ bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct a
         return false;
     bool ok = strlen(text) == got;
     if (!ok)
-        ao_file_report("%s: not a text file (it contains a NUL byte)", path);
+        ao_text_report("%s: not a text file (it contains a NUL byte)", path);
     ok = ok && parse_text(scene, text, path, &budget, options);
     free(text);
     return ok;

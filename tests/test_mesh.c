@@ -20,7 +20,7 @@
 #include <meshoptimizer.h>
 
 #include "file.h"
-#include "load/load.h"
+#include "load/loader.h"
 #include "mesh.h"
 #include "scene.h"
 

@@ -1,7 +1,7 @@
 /* What the mesh loaders share (see load.h): growth arrays, line tokens, numbers, error lines. */
 /* Linux's madvise and MADV_HUGEPAGE, which POSIX lacks, for ao_load_advise_huge alone. */
 #define _DEFAULT_SOURCE
-#include "load/load.h"
+#include "load/loader.h"
 
 #include <float.h>
 #include <math.h>
@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "file.h"
+#include "text.h"
 
 /* Makes room for n more elements (storage exists after any call, even for n = 0, so that no null
  * pointer meets an offset); false when memory or size_t runs out. */
@@ -69,9 +70,9 @@ void ao_load_report(const char *path, size_t line, const char *format, ...)
     vsnprintf(message, sizeof message, format, args);
     va_end(args);
     if (line)
-        ao_file_report("%s:%zu: %s", path, line, message);
+        ao_text_report("%s:%zu: %s", path, line, message);
     else
-        ao_file_report("%s: %s", path, message);
+        ao_text_report("%s: %s", path, message);
 }
 
 bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, const char *path,

@@ -9,7 +9,8 @@
 #include <unistd.h>
 
 #include "file.h"
-#include "load/load.h"
+#include "text.h"
+#include "load/loader.h"
 #include "pool.h"
 
 /* A point or direction in double precision, for exact-enough normals of float positions. */

@@ -10,7 +10,7 @@
 #include <json.h>
 
 #include "load/draco.h"
-#include "load/load.h"
+#include "load/loader.h"
 
 /* The deepest node tree aoview reads: a node under more ancestors than this is refused (real files
  * nest a few dozen deep; the tree is walked without recursion, so this bounds nothing but trust). */

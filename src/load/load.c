@@ -11,13 +11,14 @@
 #include <unistd.h>
 
 #include "file.h"
-#include "load/load.h"
+#include "text.h"
+#include "load/loader.h"
 
 bool ao_mesh_compute_normals_on(struct ao_mesh *mesh, int threads)
 {
     if (ao_load_normals(mesh, threads))
         return true;
-    ao_file_report("out of memory computing mesh normals");
+    ao_text_report("out of memory computing mesh normals");
     return false;
 }
 
