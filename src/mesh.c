@@ -1,17 +1,21 @@
-/* The common end of a load (see load.h): zero-area triangles dropped, and the normals a file does
- * not give made, as its format means them: flat (glTF), or angle-weighted across the edges
- * flatter than a crease angle (OBJ, PLY, STL), the vertices on sharper edges split so that each
- * side keeps its own normal. The passes over a big mesh run on one thread per core, with results
- * that do not depend on the number of threads. */
+/* Meshes (see mesh.h): placement, freeing, zero-area triangles dropped, and the normals a file does
+ * not give made, as its format means them: flat (glTF), or angle-weighted across the edges flatter
+ * than a crease angle (OBJ, PLY, STL), the vertices on sharper edges split so that each side keeps
+ * its own normal. The passes over a big mesh run on one thread per core, with results that do not
+ * depend on the number of threads. */
+/* Linux's madvise and MADV_HUGEPAGE, which POSIX lacks, for ao_mesh_advise_huge alone. */
+#define _DEFAULT_SOURCE
+#include "mesh.h"
+
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/mman.h>
 #include <unistd.h>
 
-#include "file.h"
-#include "text.h"
-#include "load/loader.h"
 #include "pool.h"
+#include "text.h"
 
 /* A point or direction in double precision, for exact-enough normals of float positions. */
 struct dvec {
@@ -48,6 +52,122 @@ static struct dvec area_vector(const struct ao_mesh *mesh, size_t t)
     struct dvec a = dsub(position(mesh, v[1]), p0), b = dsub(position(mesh, v[2]), p0);
     struct dvec n = {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
     return n;
+}
+
+/* ------------------------------------------------------------------ the mesh */
+
+/* Reports an allocation failure as "path: out of memory"; returns false for the caller to pass on. */
+static bool out_of_memory(const char *path)
+{
+    ao_text_report("%s: out of memory", path);
+    return false;
+}
+
+bool ao_mesh_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, const char *path,
+                  size_t line)
+{
+    uint64_t charge = ao_budget_charge(budget, triangles, vertices, 0);
+    if (ao_budget_fits(budget, charge))
+        return true;
+    char why[200], where[32] = "";
+    ao_budget_explain(budget, charge, why, sizeof why);
+    if (line)
+        snprintf(where, sizeof where, ":%zu", line);
+    ao_text_report("%s%s: %llu triangles and %llu vertices %s", path, where, (unsigned long long)triangles,
+                   (unsigned long long)vertices, why);
+    return false;
+}
+
+/* Advises the pages that [data, data + size) touches into transparent huge pages, where the system
+ * has them (Linux's "madvise" mode) and the array is big enough to gain. The advice covers all of
+ * a big block that malloc mapped by itself (from its page-aligned header to its end), so that its
+ * mapping stays whole and realloc can still move it without copying; pages shared with other
+ * blocks only change how they are backed. */
+void ao_mesh_advise_huge(void *data, size_t size)
+{
+#ifdef MADV_HUGEPAGE
+    uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE), start = (uintptr_t)data;
+    uintptr_t begin = start / page * page, end = (start + size + page - 1) / page * page;
+    if (size >= AO_MESH_HUGE_ARRAY)
+        madvise((void *)begin, end - begin, MADV_HUGEPAGE);
+#else
+    (void)data, (void)size;
+#endif
+}
+
+/* The unit vector along (x, y, z) in single precision, or zero when it is zero or not finite.
+ * Divided first by its largest component, so that squares neither overflow nor vanish. */
+struct ao_vec3 ao_mesh_unit(double x, double y, double z)
+{
+    double big = fmax(fabs(x), fmax(fabs(y), fabs(z)));
+    if (!(big > 0.0) || !isfinite(x) || !isfinite(y) || !isfinite(z))
+        return ao_vec3_make(0.0f, 0.0f, 0.0f);
+    x /= big, y /= big, z /= big;
+    double length = sqrt(x * x + y * y + z * z);
+    return ao_vec3_make((float)(x / length), (float)(y / length), (float)(z / length));
+}
+
+struct ao_vec3 ao_mesh_missing_normal(void)
+{
+    return ao_vec3_make(NAN, NAN, NAN);
+}
+
+bool ao_mesh_normal_is_missing(struct ao_vec3 n)
+{
+    return isnan(n.x);
+}
+
+struct ao_vec3 ao_mesh_given_normal(double x, double y, double z, size_t *invalid)
+{
+    struct ao_vec3 n = ao_mesh_unit(x, y, z);
+    if (n.x != 0.0f || n.y != 0.0f || n.z != 0.0f)
+        return n;
+    ++*invalid;
+    return ao_mesh_missing_normal();
+}
+
+size_t ao_mesh_place(struct ao_mesh *dst, size_t vertex_base, size_t triangle_base, const struct ao_mesh *src,
+                     const struct ao_affine *map)
+{
+    double n[9], q[3];
+    bool mirror = ao_affine_normals(map, n) < 0.0;
+    size_t bad = src->vertex_count;
+    for (size_t v = 0; v < src->vertex_count; v++) {
+        struct ao_vec3 a = src->positions[v], b = src->normals[v];
+        ao_affine_point(map, a.x, a.y, a.z, q);
+        struct ao_vec3 *o = &dst->positions[vertex_base + v];
+        *o = ao_vec3_make((float)q[0], (float)q[1], (float)q[2]);
+        if (bad == src->vertex_count && !ao_vec3_is_finite(*o))
+            bad = v;
+        dst->normals[vertex_base + v] = ao_mesh_unit(n[0] * b.x + n[3] * b.y + n[6] * b.z,
+                                                     n[1] * b.x + n[4] * b.y + n[7] * b.z,
+                                                     n[2] * b.x + n[5] * b.y + n[8] * b.z);
+    }
+    uint32_t base = (uint32_t)vertex_base, *t = dst->indices + 3 * triangle_base;
+    for (size_t k = 0; k < src->triangle_count; k++) {
+        uint32_t i0 = src->indices[3 * k], i1 = src->indices[3 * k + 1], i2 = src->indices[3 * k + 2];
+        t[3 * k] = base + i0;
+        t[3 * k + 1] = base + (mirror ? i2 : i1);
+        t[3 * k + 2] = base + (mirror ? i1 : i2);
+    }
+    return bad;
+}
+
+void ao_mesh_finish(struct ao_mesh *mesh)
+{
+    free(mesh->positions);
+    free(mesh->normals);
+    free(mesh->indices);
+    memset(mesh, 0, sizeof *mesh);
+}
+
+void ao_model_finish(struct ao_model *model)
+{
+    for (size_t i = 0; model->meshes && i < model->mesh_count; i++)
+        ao_mesh_finish(&model->meshes[i]);
+    free(model->meshes);
+    free(model->placements);
+    memset(model, 0, sizeof *model);
 }
 
 /* ------------------------------------------------------------------ passes on a team */
@@ -103,9 +223,8 @@ static void count_degenerate(void *user, int k)
     }
 }
 
-/* Removes zero-area triangles (a repeated index included), counting them: found in parallel,
- * then, when there are any, removed in one pass. */
-static void drop_degenerate(struct ao_mesh *mesh)
+/* Found in parallel, then, when there are any, removed in one pass. */
+void ao_mesh_drop_degenerate(struct ao_mesh *mesh)
 {
     struct mesh_pass pass = {.mesh = mesh};
     size_t found = 0, kept = 0;
@@ -122,20 +241,6 @@ static void drop_degenerate(struct ao_mesh *mesh)
     }
     mesh->degenerate_count += found;
     mesh->triangle_count -= found;
-}
-
-void ao_load_finish_mesh(struct ao_mesh *mesh)
-{
-    drop_degenerate(mesh);
-}
-
-bool ao_load_finish(struct ao_mesh *mesh, const char *path)
-{
-    drop_degenerate(mesh);
-    if (mesh->triangle_count > 0)
-        return true;
-    ao_load_report(path, 0, "no triangles (%zu degenerate ones skipped)", mesh->degenerate_count);
-    return false;
 }
 
 /* ------------------------------------------------------------------ angle-weighted normals */
@@ -203,7 +308,7 @@ static void normals_part(void *user, int k)
         }
     }
     for (uint32_t i = first; i < first + count; i++)
-        out[i] = ao_load_unit(out[i].x, out[i].y, out[i].z);
+        out[i] = ao_mesh_unit(out[i].x, out[i].y, out[i].z);
 }
 
 /* Writes the angle-weighted normals of all mesh->vertex_count vertices into out, on so many
@@ -214,14 +319,16 @@ static void angle_weighted_normals(const struct ao_mesh *mesh, struct ao_vec3 *o
     run_parts(normals_part, &pass);
 }
 
-bool ao_load_normals(struct ao_mesh *mesh, int threads)
+/* Angle-weighted normals of every vertex into mesh->normals (allocated when NULL), on so many
+ * threads (0: run_parts's choice); false when memory runs out (not reported). */
+static bool compute_normals(struct ao_mesh *mesh, int threads)
 {
     if (mesh->vertex_count == 0)
         return true;
     if (!mesh->normals) {
         if (!(mesh->normals = malloc(mesh->vertex_count * sizeof *mesh->normals)))
             return false;
-        ao_load_advise_huge(mesh->normals, mesh->vertex_count * sizeof *mesh->normals);
+        ao_mesh_advise_huge(mesh->normals, mesh->vertex_count * sizeof *mesh->normals);
     }
     angle_weighted_normals(mesh, mesh->normals, threads);
     return true;
@@ -232,11 +339,11 @@ static bool fill_missing_normals(struct ao_mesh *mesh, const char *path)
 {
     struct ao_vec3 *computed = malloc(mesh->vertex_count * sizeof *computed);
     if (!computed)
-        return ao_load_out_of_memory(path);
-    ao_load_advise_huge(computed, mesh->vertex_count * sizeof *computed);
+        return out_of_memory(path);
+    ao_mesh_advise_huge(computed, mesh->vertex_count * sizeof *computed);
     angle_weighted_normals(mesh, computed, 0);
     for (size_t i = 0; i < mesh->vertex_count; i++)
-        if (ao_load_normal_is_missing(mesh->normals[i]))
+        if (ao_mesh_normal_is_missing(mesh->normals[i]))
             mesh->normals[i] = computed[i];
     free(computed);
     return true;
@@ -362,7 +469,7 @@ static void sides_part(void *user, int k)
     } else {
         for (size_t v = first; v < end; v++) {
             uint32_t begin = cr->start[v], count = cr->start[v + 1] - begin;
-            bool missing = !mesh->normals || ao_load_normal_is_missing(mesh->normals[v]);
+            bool missing = !mesh->normals || ao_mesh_normal_is_missing(mesh->normals[v]);
             if (!missing || count == 0) {
                 memset(cr->side + begin, 0, count * sizeof *cr->side);
                 cr->extra[v] = 0;
@@ -400,7 +507,7 @@ static bool list_corners(const struct ao_mesh *mesh, uint32_t **start, uint32_t 
     *corners = malloc((n ? n : 1) * sizeof **corners);
     if (!*start || !*corners)
         return false;
-    ao_load_advise_huge(*corners, n * sizeof **corners);
+    ao_mesh_advise_huge(*corners, n * sizeof **corners);
     for (size_t c = 0; c < n; c++)
         (*start)[mesh->indices[c] + 1]++;
     for (size_t v = 0; v < mesh->vertex_count; v++)
@@ -431,7 +538,7 @@ static bool add_split_vertices(struct ao_mesh *mesh, const struct crease *cr, si
         for (uint32_t n = cr->extra[v]; n < cr->extra[v + 1]; n++) {
             positions[n] = positions[v];
             if (mesh->normals)
-                mesh->normals[n] = ao_load_missing_normal();
+                mesh->normals[n] = ao_mesh_missing_normal();
         }
     return true;
 }
@@ -444,8 +551,8 @@ static bool add_split_vertices(struct ao_mesh *mesh, const struct crease *cr, si
 static bool split_creases(struct ao_mesh *mesh, const char *path, double cos_crease, const struct ao_budget *budget)
 {
     if (3 * (uint64_t)mesh->triangle_count > UINT32_MAX) {
-        ao_load_report(path, 0, "%zu triangles are too many for a crease angle (at most %u); --crease-angle 0 "
-                       "or 180 takes any number", mesh->triangle_count, UINT32_MAX / 3);
+        ao_text_report("%s: %zu triangles are too many for a crease angle (at most %u); --crease-angle 0 "
+                       "or 180 takes any number", path, mesh->triangle_count, UINT32_MAX / 3);
         return false;
     }
     uint32_t *start = NULL, *corners = NULL;
@@ -458,7 +565,7 @@ static bool split_creases(struct ao_mesh *mesh, const char *path, double cos_cre
     ok = ok && cr.side && cr.extra;
     struct mesh_pass pass = {.mesh = mesh, .crease = &cr};
     if (ok) {
-        ao_load_advise_huge(cr.side, 3 * mesh->triangle_count * sizeof *cr.side);
+        ao_mesh_advise_huge(cr.side, 3 * mesh->triangle_count * sizeof *cr.side);
         run_parts(sides_part, &pass);
         ok = !cr.failed;
     }
@@ -467,14 +574,14 @@ static bool split_creases(struct ao_mesh *mesh, const char *path, double cos_cre
     for (size_t v = 0; ok && v <= mesh->vertex_count; v++) {   /* the new vertices' numbers */
         uint32_t more = v < mesh->vertex_count ? cr.extra[v] : 0;
         cr.extra[v] = (uint32_t)count;
-        if ((count += more) >= AO_LOAD_NO_INDEX) {
-            ao_load_report(path, 0, "more than %u vertices once split along its creases", AO_LOAD_NO_INDEX - 1);
+        if ((count += more) >= AO_MESH_INDEX_LIMIT) {
+            ao_text_report("%s: more than %u vertices once split along its creases", path, AO_MESH_INDEX_LIMIT - 1);
             ok = false;
             reported = true;
         }
     }
     if (ok && count > mesh->vertex_count) {
-        reported = !ao_load_fits(budget, mesh->triangle_count, count, path, 0);
+        reported = !ao_mesh_fits(budget, mesh->triangle_count, count, path, 0);
         ok = !reported && add_split_vertices(mesh, &cr, (size_t)count);
         if (ok) {
             pass.threads = 0;
@@ -486,27 +593,40 @@ static bool split_creases(struct ao_mesh *mesh, const char *path, double cos_cre
     free(corners);
     free(cr.side);
     free(cr.extra);
-    return ok || reported || ao_load_out_of_memory(path);
+    return ok || reported || out_of_memory(path);
 }
 
-bool ao_load_complete_normals(struct ao_mesh *mesh, const char *path, double crease, const struct ao_budget *budget)
+bool ao_mesh_complete_normals(struct ao_mesh *mesh, const char *path, double crease, const struct ao_budget *budget)
 {
     size_t missing = mesh->normals ? 0 : mesh->vertex_count;
     for (size_t v = 0; mesh->normals && v < mesh->vertex_count; v++)
-        missing += ao_load_normal_is_missing(mesh->normals[v]);
+        missing += ao_mesh_normal_is_missing(mesh->normals[v]);
     if (missing == 0 || mesh->triangle_count == 0)
         return true;
     if (crease <= 0.0) {   /* flat: a zero normal, which shading replaces by the triangle's own */
         if (!mesh->normals && !(mesh->normals = calloc(mesh->vertex_count, sizeof *mesh->normals)))
-            return ao_load_out_of_memory(path);
+            return out_of_memory(path);
         for (size_t v = 0; v < mesh->vertex_count; v++)
-            if (ao_load_normal_is_missing(mesh->normals[v]))
+            if (ao_mesh_normal_is_missing(mesh->normals[v]))
                 mesh->normals[v] = ao_vec3_make(0.0f, 0.0f, 0.0f);
         return true;
     }
     if (crease < 180.0 && !split_creases(mesh, path, cos(crease * (3.14159265358979323846 / 180.0)), budget))
         return false;
     if (!mesh->normals)
-        return ao_load_normals(mesh, 0) || ao_load_out_of_memory(path);
+        return compute_normals(mesh, 0) || out_of_memory(path);
     return fill_missing_normals(mesh, path);
+}
+
+bool ao_mesh_compute_normals_on(struct ao_mesh *mesh, int threads)
+{
+    if (compute_normals(mesh, threads))
+        return true;
+    ao_text_report("out of memory computing mesh normals");
+    return false;
+}
+
+bool ao_mesh_compute_normals(struct ao_mesh *mesh)
+{
+    return ao_mesh_compute_normals_on(mesh, 0);
 }

@@ -12,6 +12,7 @@
 #include "file.h"
 #include "text.h"
 #include "image.h"
+#include "load/load.h"
 #include "mesh.h"
 
 enum { MAX_TOKENS = 64, MAX_LINE = 4096, MAX_VALUES = 3 };
@@ -466,7 +467,7 @@ static const struct loaded *load_file(struct cursor *c, struct ao_scene *s, stru
                                       double crease)
 {
     struct ao_model model;
-    if (!ao_model_load_budget(&model, path, w->budget, crease))
+    if (!ao_load_model(&model, path, w->budget, crease))
         return NULL;
     uint64_t triangles = 0, vertices = 0;
     for (size_t i = 0; i < model.mesh_count; i++)
@@ -1307,7 +1308,7 @@ bool ao_scene_load_with(struct ao_scene *scene, const char *path, const struct a
 {
     struct ao_budget budget = {.limit = options->budget, .bvh = options->bvh};
     memset(scene, 0, sizeof *scene);
-    if (ao_mesh_is_mesh_path(path))
+    if (ao_load_is_mesh(path))
         return load_bare_mesh(scene, path, &budget, options);
     char *text;
     size_t got;

@@ -1,4 +1,4 @@
-/* Benchmark: mesh load time (ao_model_load_budget: read, parse, index, normals; a glTF's meshes
+/* Benchmark: mesh load time (ao_load_model: read, parse, index, normals; a glTF's meshes
  * once each, as scenes load them) of each file named on the
  * command line, runs interleaved round by round so that a busy machine slows every format alike;
  * prints the median of the rounds per file and its ratio to the first file. Asserts nothing.
@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "bench_util.h"
+#include "load/load.h"
 #include "mesh.h"
 
 enum { MAX_FILES = 16, MAX_ROUNDS = 99 };
@@ -32,7 +33,7 @@ int main(int argc, char **argv)
             struct ao_model model;
             struct ao_budget budget = {.limit = UINT64_MAX / 2};
             double start = bench_now();
-            if (!ao_model_load_budget(&model, argv[first + f], &budget, AO_MESH_CREASE_DEFAULT))
+            if (!ao_load_model(&model, argv[first + f], &budget, AO_MESH_CREASE_DEFAULT))
                 return 1;
             seconds[f][r] = bench_now() - start;
             triangles[f] = 0;

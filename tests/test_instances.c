@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "ao.h"
+#include "load/load.h"
 #include "mesh.h"
 #include "render.h"
 #include "render_image.h"
@@ -192,7 +193,7 @@ static void bunny_mesh(struct ao_mesh *m)
     char path[4096];
     assert_non_null(root);
     snprintf(path, sizeof path, "%s/assets/bunny.obj", root);
-    assert_true(ao_mesh_load(m, path));
+    assert_true(ao_load_mesh(m, path, NULL));
 }
 
 /* ------------------------------------------------------------------ scenes */

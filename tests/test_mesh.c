@@ -20,6 +20,7 @@
 #include <meshoptimizer.h>
 
 #include "file.h"
+#include "load/load.h"
 #include "load/loader.h"
 #include "mesh.h"
 #include "scene.h"
@@ -79,7 +80,7 @@ static unsigned char *slurp(const char *path, size_t *size)
     return data;
 }
 
-/* Runs ao_mesh_load with stderr redirected, returning what it printed in err. */
+/* Runs ao_load_mesh with stderr redirected, returning what it printed in err. */
 static bool load_captured(struct ao_mesh *mesh, const char *path, char *err, size_t err_size)
 {
     FILE *capture = tmpfile();
@@ -88,7 +89,7 @@ static bool load_captured(struct ao_mesh *mesh, const char *path, char *err, siz
     int saved = dup(STDERR_FILENO);
     assert_true(saved >= 0);
     assert_true(dup2(fileno(capture), STDERR_FILENO) >= 0);
-    bool ok = ao_mesh_load(mesh, path);
+    bool ok = ao_load_mesh(mesh, path, NULL);
     fflush(stderr);
     assert_true(dup2(saved, STDERR_FILENO) >= 0);
     close(saved);
@@ -110,7 +111,7 @@ static uint64_t medium_charge(uint64_t triangles, uint64_t vertices)
     return medium_model(triangles, vertices, 0);
 }
 
-/* Runs ao_mesh_load_budget within a budget of `limit` bytes at the MEDIUM BVH's rates, stderr
+/* Runs ao_load_mesh within a budget of `limit` bytes at the MEDIUM BVH's rates, stderr
  * captured in err; the budget must come back empty, whatever happened. */
 static bool load_within(struct ao_mesh *mesh, const char *path, uint64_t limit, char *err, size_t err_size)
 {
@@ -121,7 +122,7 @@ static bool load_within(struct ao_mesh *mesh, const char *path, uint64_t limit, 
     int saved = dup(STDERR_FILENO);
     assert_true(saved >= 0);
     assert_true(dup2(fileno(capture), STDERR_FILENO) >= 0);
-    bool ok = ao_mesh_load_budget(mesh, path, &budget);
+    bool ok = ao_load_mesh(mesh, path, &budget);
     fflush(stderr);
     assert_true(dup2(saved, STDERR_FILENO) >= 0);
     close(saved);
@@ -485,7 +486,7 @@ static void load_at_crease(struct ao_mesh *mesh, const char *path, double crease
 {
     struct ao_budget budget = {.limit = AO_BUDGET_DEFAULT};
     struct ao_model model;
-    assert_true(ao_model_load_budget(&model, path, &budget, crease));
+    assert_true(ao_load_model(&model, path, &budget, crease));
     assert_int_equal(model.mesh_count, 1);
     *mesh = model.meshes[0];
     model.meshes[0] = (struct ao_mesh){0};
@@ -1123,7 +1124,7 @@ static void test_gltf_meshes_load_once(void **state)
     const char *path = placed_gltf("placed.gltf", 1000);
     struct ao_model model;
     struct ao_budget budget = {.limit = UINT64_MAX / 2};
-    assert_true(ao_model_load_budget(&model, path, &budget, AO_MESH_CREASE_DEFAULT));
+    assert_true(ao_load_model(&model, path, &budget, AO_MESH_CREASE_DEFAULT));
     assert_int_equal(budget.used, 0);
     assert_int_equal(model.mesh_count, 2);
     assert_int_equal(model.placement_count, 1001);
@@ -1148,7 +1149,7 @@ static void test_gltf_meshes_load_once(void **state)
     uint64_t unique = medium_model(400, 404, 1001), flat = medium_charge(200200, 202202);
     assert_true(flat > unique + (4 << 20));
     budget = (struct ao_budget){.limit = unique + (4 << 20), .bvh = AO_BVH_MEDIUM};
-    assert_true(ao_model_load_budget(&model, path, &budget, AO_MESH_CREASE_DEFAULT));
+    assert_true(ao_load_model(&model, path, &budget, AO_MESH_CREASE_DEFAULT));
     ao_model_finish(&model);
     char err[1024];
     struct ao_mesh mesh;
@@ -2161,7 +2162,7 @@ static void test_invalid_normals(void **state)
                               "f 1//1 2//2 3//4\nf 1//3 3//4 2//2\n";
     struct ao_budget budget = {.limit = AO_BUDGET_DEFAULT};
     struct ao_model model;
-    assert_true(ao_model_load_budget(&model, temp_file("nan.obj", obj, sizeof obj - 1), &budget, 40.0));
+    assert_true(ao_load_model(&model, temp_file("nan.obj", obj, sizeof obj - 1), &budget, 40.0));
     assert_int_equal(model.invalid_normals, 3);
     assert_non_null(strstr(model.note, "3 of its normals are zero or not finite: made as for a file without "
                                        "normals (smooth up to the crease angle)"));
@@ -2187,7 +2188,7 @@ static void test_invalid_normals(void **state)
         "   {\"bufferView\": 0, \"byteOffset\": 36, \"componentType\": 5126, \"count\": 3, \"type\": \"VEC3\"}],\n"
         " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 72}],\n"
         " \"buffers\": [{\"byteLength\": %zu, \"uri\": \"%s\"}]}\n";
-    assert_true(ao_model_load_budget(&model, gltf_file("nan.gltf", json, &data, sizeof data), &budget, 40.0));
+    assert_true(ao_load_model(&model, gltf_file("nan.gltf", json, &data, sizeof data), &budget, 40.0));
     assert_int_equal(model.invalid_normals, 2);
     assert_non_null(strstr(model.note, "2 of its normals are zero or not finite: made as for a file without "
                                        "normals (flat)"));

@@ -188,15 +188,15 @@ static bool add_vertices(struct ao_gltf *g, const struct ao_gltf_elements *posit
     if (!p || (keep && !n))
         return ao_load_out_of_memory(g->path);
     for (size_t i = 0; keep && i < earlier; i++)
-        *n++ = ao_load_missing_normal();
+        *n++ = ao_mesh_missing_normal();
     for (size_t i = 0; i < positions->count; i++) {
         p[i] = ao_gltf_position(positions, i);
         if (!ao_vec3_is_finite(p[i]))
             return ao_gltf_error(g, "%s: vertex %zu is not a finite float", where, i);
         if (keep)
-            n[i] = normals ? ao_load_given_normal(ao_gltf_value(normals, i, 0), ao_gltf_value(normals, i, 1),
+            n[i] = normals ? ao_mesh_given_normal(ao_gltf_value(normals, i, 0), ao_gltf_value(normals, i, 1),
                                                   ao_gltf_value(normals, i, 2), &g->invalid_normals)
-                           : ao_load_missing_normal();
+                           : ao_mesh_missing_normal();
     }
     return true;
 }
@@ -335,7 +335,7 @@ static bool build_mesh(struct ao_gltf *g, size_t mesh, struct ao_load_array *mes
     m.indices = ao_load_take(&g->indices);
     m.normals = ao_load_take(&g->normals);
     m.invalid_normals = g->invalid_normals;
-    ao_load_finish_mesh(&m);
+    ao_mesh_drop_degenerate(&m);
     g->degenerate_count += m.degenerate_count;
     struct ao_mesh *slot = m.triangle_count ? ao_load_append(meshes, 1) : NULL;
     bool ok = !m.triangle_count || slot || ao_load_out_of_memory(g->path);

@@ -1,31 +1,17 @@
-/* The mesh interface: dispatch by extension to the loaders of src/load/ (one file per format,
- * each given the file mapped), the normals the file lacks made as its format means them
- * (src/load/finish.c), and a model's placements applied for those who want one mesh. */
-#include "mesh.h"
+/* Loading a mesh file (see load.h): the format table, dispatch by extension to the loaders of this
+ * folder (one file per format, each given the file mapped), the common end of a load (degenerate
+ * triangles dropped, the normals a file lacks made as its format means them: mesh.c), and a
+ * model's placements applied for those who want one mesh. */
+#include "load/load.h"
 
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
-#include <unistd.h>
 
 #include "file.h"
-#include "text.h"
 #include "load/loader.h"
-
-bool ao_mesh_compute_normals_on(struct ao_mesh *mesh, int threads)
-{
-    if (ao_load_normals(mesh, threads))
-        return true;
-    ao_text_report("out of memory computing mesh normals");
-    return false;
-}
-
-bool ao_mesh_compute_normals(struct ao_mesh *mesh)
-{
-    return ao_mesh_compute_normals_on(mesh, 0);
-}
 
 /* ------------------------------------------------------------------ entry points */
 
@@ -57,15 +43,18 @@ static int format_of(const char *path)
     return -1;
 }
 
-bool ao_mesh_is_mesh_path(const char *path)
+bool ao_load_is_mesh(const char *path)
 {
     return format_of(path) >= 0;
 }
 
-bool ao_mesh_load(struct ao_mesh *mesh, const char *path)
+bool ao_load_finish(struct ao_mesh *mesh, const char *path)
 {
-    struct ao_budget budget = {.limit = AO_BUDGET_DEFAULT};
-    return ao_mesh_load_budget(mesh, path, &budget);
+    ao_mesh_drop_degenerate(mesh);
+    if (mesh->triangle_count > 0)
+        return true;
+    ao_load_report(path, 0, "no triangles (%zu degenerate ones skipped)", mesh->degenerate_count);
+    return false;
 }
 
 /* Appends a printf-formatted note to model->note (ao_load_vnote). */
@@ -84,7 +73,7 @@ static bool complete_normals(struct ao_model *model, const char *path, bool flat
 {
     size_t invalid = 0;
     for (size_t i = 0; i < model->mesh_count; i++) {
-        if (!ao_load_complete_normals(&model->meshes[i], path, flat ? 0.0 : crease, budget))
+        if (!ao_mesh_complete_normals(&model->meshes[i], path, flat ? 0.0 : crease, budget))
             return false;
         invalid += model->meshes[i].invalid_normals;
     }
@@ -112,9 +101,11 @@ static bool load_single(ao_load_format *load, struct ao_model *model, const char
     return true;
 }
 
-bool ao_model_load_budget(struct ao_model *model, const char *path, struct ao_budget *budget, double crease)
+bool ao_load_model(struct ao_model *model, const char *path, struct ao_budget *budget, double crease)
 {
     memset(model, 0, sizeof *model);
+    struct ao_budget defaults = {.limit = AO_BUDGET_DEFAULT};
+    budget = budget ? budget : &defaults;
     int format = format_of(path);
     const char *text;
     size_t size;
@@ -135,42 +126,6 @@ bool ao_model_load_budget(struct ao_model *model, const char *path, struct ao_bu
     return ok;
 }
 
-void ao_model_finish(struct ao_model *model)
-{
-    for (size_t i = 0; model->meshes && i < model->mesh_count; i++)
-        ao_mesh_finish(&model->meshes[i]);
-    free(model->meshes);
-    free(model->placements);
-    memset(model, 0, sizeof *model);
-}
-
-size_t ao_mesh_place(struct ao_mesh *dst, size_t vertex_base, size_t triangle_base, const struct ao_mesh *src,
-                     const struct ao_affine *map)
-{
-    double n[9], q[3];
-    bool mirror = ao_affine_normals(map, n) < 0.0;
-    size_t bad = src->vertex_count;
-    for (size_t v = 0; v < src->vertex_count; v++) {
-        struct ao_vec3 a = src->positions[v], b = src->normals[v];
-        ao_affine_point(map, a.x, a.y, a.z, q);
-        struct ao_vec3 *o = &dst->positions[vertex_base + v];
-        *o = ao_vec3_make((float)q[0], (float)q[1], (float)q[2]);
-        if (bad == src->vertex_count && !ao_vec3_is_finite(*o))
-            bad = v;
-        dst->normals[vertex_base + v] = ao_load_unit(n[0] * b.x + n[3] * b.y + n[6] * b.z,
-                                                     n[1] * b.x + n[4] * b.y + n[7] * b.z,
-                                                     n[2] * b.x + n[5] * b.y + n[8] * b.z);
-    }
-    uint32_t base = (uint32_t)vertex_base, *t = dst->indices + 3 * triangle_base;
-    for (size_t k = 0; k < src->triangle_count; k++) {
-        uint32_t i0 = src->indices[3 * k], i1 = src->indices[3 * k + 1], i2 = src->indices[3 * k + 2];
-        t[3 * k] = base + i0;
-        t[3 * k + 1] = base + (mirror ? i2 : i1);
-        t[3 * k + 2] = base + (mirror ? i1 : i2);
-    }
-    return bad;
-}
-
 /* Every placement of the model applied, into one mesh (ao_mesh_place). False (reported) when
  * memory or 2^32 vertices run out, or a position leaves float's range. */
 static bool flatten(const struct ao_model *model, struct ao_mesh *out, const char *path,
@@ -181,12 +136,12 @@ static bool flatten(const struct ao_model *model, struct ao_mesh *out, const cha
         const struct ao_mesh *m = &model->meshes[model->placements[i].mesh];
         vertices += m->vertex_count;
         triangles += m->triangle_count;
-        if (vertices >= AO_LOAD_NO_INDEX || triangles > SIZE_MAX / 12) {
-            ao_load_report(path, 0, "more than %u vertices once its placements are applied", AO_LOAD_NO_INDEX - 1);
+        if (vertices >= AO_MESH_INDEX_LIMIT || triangles > SIZE_MAX / 12) {
+            ao_load_report(path, 0, "more than %u vertices once its placements are applied", AO_MESH_INDEX_LIMIT - 1);
             return false;
         }
     }
-    if (!ao_load_fits(budget, triangles, vertices, path, 0))
+    if (!ao_mesh_fits(budget, triangles, vertices, path, 0))
         return false;
     out->positions = malloc((vertices ? vertices : 1) * sizeof *out->positions);
     out->normals = malloc((vertices ? vertices : 1) * sizeof *out->normals);
@@ -207,11 +162,13 @@ static bool flatten(const struct ao_model *model, struct ao_mesh *out, const cha
     return true;
 }
 
-bool ao_mesh_load_budget(struct ao_mesh *mesh, const char *path, struct ao_budget *budget)
+bool ao_load_mesh(struct ao_mesh *mesh, const char *path, struct ao_budget *budget)
 {
     memset(mesh, 0, sizeof *mesh);
+    struct ao_budget defaults = {.limit = AO_BUDGET_DEFAULT};
+    budget = budget ? budget : &defaults;
     struct ao_model model;
-    if (!ao_model_load_budget(&model, path, budget, AO_MESH_CREASE_DEFAULT))
+    if (!ao_load_model(&model, path, budget, AO_MESH_CREASE_DEFAULT))
         return false;
     bool ok;
     if (model.mesh_count == 1 && model.placement_count == 1 && ao_affine_is_identity(&model.placements[0].to_model)) {
@@ -230,12 +187,4 @@ bool ao_mesh_load_budget(struct ao_mesh *mesh, const char *path, struct ao_budge
     if (!ok)
         ao_mesh_finish(mesh);
     return ok;
-}
-
-void ao_mesh_finish(struct ao_mesh *mesh)
-{
-    free(mesh->positions);
-    free(mesh->normals);
-    free(mesh->indices);
-    memset(mesh, 0, sizeof *mesh);
 }
