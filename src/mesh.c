@@ -14,44 +14,23 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include "dvec3.h"
 #include "pool.h"
 #include "text.h"
 
-/* A point or direction in double precision, for exact-enough normals of float positions. */
-struct dvec {
-    double x, y, z;
-};
-
-/* A vertex position in double precision. */
-static struct dvec position(const struct ao_mesh *mesh, uint32_t vertex)
+/* A vertex position in double precision, for exact-enough normals of float positions. */
+static struct ao_dvec3 position(const struct ao_mesh *mesh, uint32_t vertex)
 {
-    struct ao_vec3 p = mesh->positions[vertex];
-    struct dvec d = {p.x, p.y, p.z};
-    return d;
-}
-
-/* b - a. */
-static struct dvec dsub(struct dvec b, struct dvec a)
-{
-    struct dvec d = {b.x - a.x, b.y - a.y, b.z - a.z};
-    return d;
-}
-
-/* a . b */
-static double ddot(struct dvec a, struct dvec b)
-{
-    return a.x * b.x + a.y * b.y + a.z * b.z;
+    return ao_dvec3_of(mesh->positions[vertex]);
 }
 
 /* Twice the area vector of triangle t, (p1 - p0) x (p2 - p0), exact for float positions up
  * to one rounding; zero exactly when the triangle is degenerate. */
-static struct dvec area_vector(const struct ao_mesh *mesh, size_t t)
+static struct ao_dvec3 area_vector(const struct ao_mesh *mesh, size_t t)
 {
     const uint32_t *v = mesh->indices + 3 * t;
-    struct dvec p0 = position(mesh, v[0]);
-    struct dvec a = dsub(position(mesh, v[1]), p0), b = dsub(position(mesh, v[2]), p0);
-    struct dvec n = {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
-    return n;
+    struct ao_dvec3 p0 = position(mesh, v[0]);
+    return ao_dvec3_cross(ao_dvec3_sub(position(mesh, v[1]), p0), ao_dvec3_sub(position(mesh, v[2]), p0));
 }
 
 /* ------------------------------------------------------------------ the mesh */
@@ -129,14 +108,13 @@ struct ao_vec3 ao_mesh_given_normal(double x, double y, double z, size_t *invali
 size_t ao_mesh_place(struct ao_mesh *dst, size_t vertex_base, size_t triangle_base, const struct ao_mesh *src,
                      const struct ao_affine *map)
 {
-    double n[9], q[3];
+    double n[9];
     bool mirror = ao_affine_normals(map, n) < 0.0;
     size_t bad = src->vertex_count;
     for (size_t v = 0; v < src->vertex_count; v++) {
         struct ao_vec3 a = src->positions[v], b = src->normals[v];
-        ao_affine_point(map, a.x, a.y, a.z, q);
         struct ao_vec3 *o = &dst->positions[vertex_base + v];
-        *o = ao_vec3_make((float)q[0], (float)q[1], (float)q[2]);
+        *o = ao_dvec3_narrow(ao_affine_point(map, a.x, a.y, a.z));
         if (bad == src->vertex_count && !ao_vec3_is_finite(*o))
             bad = v;
         dst->normals[vertex_base + v] = ao_mesh_unit(n[0] * b.x + n[3] * b.y + n[6] * b.z,
@@ -218,8 +196,8 @@ static void count_degenerate(void *user, int k)
     size_t end = part_start(pass->mesh->triangle_count, k + 1, pass->threads);
     pass->degenerate[k] = 0;
     for (size_t t = part_start(pass->mesh->triangle_count, k, pass->threads); t < end; t++) {
-        struct dvec n = area_vector(pass->mesh, t);
-        pass->degenerate[k] += ddot(n, n) == 0.0;
+        struct ao_dvec3 n = area_vector(pass->mesh, t);
+        pass->degenerate[k] += ao_dvec3_dot(n, n) == 0.0;
     }
 }
 
@@ -232,8 +210,8 @@ void ao_mesh_drop_degenerate(struct ao_mesh *mesh)
     for (int k = 0; k < pass.threads; k++)
         found += pass.degenerate[k];
     for (size_t t = 0; found && t < mesh->triangle_count; t++) {
-        struct dvec n = area_vector(mesh, t);
-        if (ddot(n, n) == 0.0)
+        struct ao_dvec3 n = area_vector(mesh, t);
+        if (ao_dvec3_dot(n, n) == 0.0)
             continue;
         if (kept != t)
             memcpy(mesh->indices + 3 * kept, mesh->indices + 3 * t, 3 * sizeof *mesh->indices);
@@ -286,17 +264,16 @@ static void normals_part(void *user, int k)
         bool mine[3] = {v[0] - first < count, v[1] - first < count, v[2] - first < count};
         if (!(mine[0] | mine[1] | mine[2]))
             continue;
-        struct dvec p[3] = {position(mesh, v[0]), position(mesh, v[1]), position(mesh, v[2])};
-        struct dvec edge[3] = {dsub(p[1], p[0]), dsub(p[2], p[1]), dsub(p[0], p[2])};
-        struct dvec b = dsub(p[2], p[0]);
-        struct dvec n = {edge[0].y * b.z - edge[0].z * b.y, edge[0].z * b.x - edge[0].x * b.z,
-                         edge[0].x * b.y - edge[0].y * b.x};   /* area_vector's, as it computes it */
-        double twice_area = sqrt(ddot(n, n));
+        struct ao_dvec3 p[3] = {position(mesh, v[0]), position(mesh, v[1]), position(mesh, v[2])};
+        struct ao_dvec3 edge[3] = {ao_dvec3_sub(p[1], p[0]), ao_dvec3_sub(p[2], p[1]), ao_dvec3_sub(p[0], p[2])};
+        struct ao_dvec3 b = ao_dvec3_sub(p[2], p[0]);
+        struct ao_dvec3 n = ao_dvec3_cross(edge[0], b);   /* area_vector's, as it computes it */
+        double twice_area = sqrt(ao_dvec3_dot(n, n));
         if (twice_area == 0.0)
             continue;
         /* Corner c's edges are edge[c] and -edge[c + 2]; |a x b| = twice the area at every corner,
          * so the angle comes stably from it and a . b. */
-        double dots[3] = {ddot(edge[0], b), -ddot(edge[1], edge[0]), -ddot(edge[2], edge[1])};
+        double dots[3] = {ao_dvec3_dot(edge[0], b), -ao_dvec3_dot(edge[1], edge[0]), -ao_dvec3_dot(edge[2], edge[1])};
         double scale = 1.0 / twice_area;
         for (int c = 0; c < 3; c++) {
             if (!mine[c])
@@ -365,12 +342,11 @@ struct crease {
 };
 
 /* The unit normal of triangle t. */
-static struct dvec unit_normal(const struct ao_mesh *mesh, size_t t)
+static struct ao_dvec3 unit_normal(const struct ao_mesh *mesh, size_t t)
 {
-    struct dvec n = area_vector(mesh, t);
-    double length = sqrt(ddot(n, n));
-    struct dvec u = {n.x / length, n.y / length, n.z / length};
-    return u;
+    struct ao_dvec3 n = area_vector(mesh, t);
+    double length = sqrt(ao_dvec3_dot(n, n));
+    return ao_dvec3_make(n.x / length, n.y / length, n.z / length);
 }
 
 /* The root of i in a forest of parent links, halving the path on the way. */
@@ -413,7 +389,7 @@ enum { PAIRWISE_RUN = 8 };
  * fan. Writes each corner's side into side and returns the number of sides. Scratch: parent (k),
  * keys (2k), normals (k). */
 static uint32_t sides_of(const struct ao_mesh *mesh, const uint32_t *list, uint32_t k, double cos_crease,
-                         uint32_t *side, uint32_t *parent, uint64_t *keys, struct dvec *normals)
+                         uint32_t *side, uint32_t *parent, uint64_t *keys, struct ao_dvec3 *normals)
 {
     /* Each corner names its two neighbours at v: an edge (v, w) that two corners both name is
      * shared by their triangles. */
@@ -433,7 +409,7 @@ static uint32_t sides_of(const struct ao_mesh *mesh, const uint32_t *list, uint3
         for (size_t x = a; x < b; x++)
             for (size_t y = x + 1; y < b && (b - a <= PAIRWISE_RUN || y == x + 1); y++) {
                 uint32_t p = (uint32_t)keys[x], q = (uint32_t)keys[y];
-                if (ddot(normals[p], normals[q]) > cos_crease) {
+                if (ao_dvec3_dot(normals[p], normals[q]) > cos_crease) {
                     uint32_t rp = root_of(parent, p), rq = root_of(parent, q);
                     parent[rp < rq ? rq : rp] = rp < rq ? rp : rq;
                 }
@@ -463,7 +439,7 @@ static void sides_part(void *user, int k)
         most = cr->start[v + 1] - cr->start[v] > most ? cr->start[v + 1] - cr->start[v] : most;
     uint32_t *parent = malloc((most ? most : 1) * sizeof *parent);
     uint64_t *keys = malloc((most ? 2 * (size_t)most : 1) * sizeof *keys);
-    struct dvec *normals = malloc((most ? most : 1) * sizeof *normals);
+    struct ao_dvec3 *normals = malloc((most ? most : 1) * sizeof *normals);
     if (!parent || !keys || !normals) {
         cr->failed = true;
     } else {

@@ -9,6 +9,7 @@
 #include <sys/stat.h>
 
 #include "affine.h"
+#include "dvec3.h"
 #include "file.h"
 #include "text.h"
 #include "image.h"
@@ -79,71 +80,12 @@ static int numbers(struct cursor *c, const char *key, double *v, int min, int ma
     return n;
 }
 
-/* A point or direction in double precision: scene coordinates until the scene is placed. */
-struct dvec {
-    double x, y, z;
-};
-
-static struct dvec dvec_make(double x, double y, double z)
-{
-    struct dvec v = {x, y, z};
-    return v;
-}
-
-static struct dvec dvec_add(struct dvec a, struct dvec b)
-{
-    return dvec_make(a.x + b.x, a.y + b.y, a.z + b.z);
-}
-
-static struct dvec dvec_sub(struct dvec a, struct dvec b)
-{
-    return dvec_make(a.x - b.x, a.y - b.y, a.z - b.z);
-}
-
-static struct dvec dvec_scale(struct dvec a, double s)
-{
-    return dvec_make(a.x * s, a.y * s, a.z * s);
-}
-
-static struct dvec dvec_cross(struct dvec a, struct dvec b)
-{
-    return dvec_make(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
-
-static double dvec_dot(struct dvec a, struct dvec b)
-{
-    return a.x * b.x + a.y * b.y + a.z * b.z;
-}
-
-static struct dvec dvec_of(struct ao_vec3 v)
-{
-    return dvec_make(v.x, v.y, v.z);
-}
-
-/* The unit vector along v into *out; false when v is zero or not finite. Divided first by its
- * largest component, so that no square overflows or vanishes. */
-static bool unit(struct dvec v, struct dvec *out)
-{
-    double big = fmax(fabs(v.x), fmax(fabs(v.y), fabs(v.z)));
-    if (!(big > 0.0) || !isfinite(v.x) || !isfinite(v.y) || !isfinite(v.z))
-        return false;
-    v = dvec_scale(v, 1.0 / big);
-    *out = dvec_scale(v, 1.0 / sqrt(dvec_dot(v, v)));
-    return true;
-}
-
-/* v narrowed to float. */
-static struct ao_vec3 narrow(struct dvec v)
-{
-    return ao_vec3_make((float)v.x, (float)v.y, (float)v.z);
-}
-
-static bool vector(struct cursor *c, const char *key, struct dvec *out)
+static bool vector(struct cursor *c, const char *key, struct ao_dvec3 *out)
 {
     double v[3];
     if (!numbers(c, key, v, 3, 3))
         return false;
-    *out = dvec_make(v[0], v[1], v[2]);
+    *out = ao_dvec3_make(v[0], v[1], v[2]);
     return true;
 }
 
@@ -153,7 +95,7 @@ static bool scalar(struct cursor *c, const char *key, double *out)
 }
 
 /* One number or three: a grey level or an RGB triple. */
-static bool triple(struct cursor *c, const char *key, struct dvec *out)
+static bool triple(struct cursor *c, const char *key, struct ao_dvec3 *out)
 {
     double v[3];
     int n = numbers(c, key, v, 1, 3);
@@ -161,17 +103,17 @@ static bool triple(struct cursor *c, const char *key, struct dvec *out)
         return fail(c, "'%s': expected 1 or 3 numbers, got 2", key);
     if (n == 0)
         return false;
-    *out = n == 1 ? dvec_make(v[0], v[0], v[0]) : dvec_make(v[0], v[1], v[2]);
+    *out = n == 1 ? ao_dvec3_make(v[0], v[0], v[0]) : ao_dvec3_make(v[0], v[1], v[2]);
     return true;
 }
 
 /* triple() narrowed to float, for colours. */
 static bool colour(struct cursor *c, const char *key, struct ao_vec3 *out)
 {
-    struct dvec v = {0};
+    struct ao_dvec3 v = {0};
     if (!triple(c, key, &v))
         return false;
-    *out = narrow(v);
+    *out = ao_dvec3_narrow(v);
     return true;
 }
 
@@ -263,7 +205,7 @@ struct pending {
 
 /* A quad waiting for place(): its corners in world space, unit normal and albedo. */
 struct quad {
-    struct dvec p[4];
+    struct ao_dvec3 p[4];
     struct ao_vec3 n, rho;
 };
 
@@ -272,14 +214,14 @@ struct quad {
 struct mesh_info {
     size_t placements, left;      /* placements in all, and those not yet built into instances */
     bool instanced;
-    struct dvec lo, hi;
+    struct ao_dvec3 lo, hi;
 };
 
 /* The scene while it is read, in double precision and world space; ao_scene's meshes and
  * instances, sphere centres and camera are filled from it once the whole scene is known
  * (place()). */
 struct world {
-    struct dvec *sphere_centers;  /* parallel to scene->spheres */
+    struct ao_dvec3 *sphere_centers;  /* parallel to scene->spheres */
     struct pending *placements;
     size_t placement_count;
     struct quad *quads;
@@ -289,7 +231,7 @@ struct world {
     uint32_t *file_slots;         /* hash table of the identified files: index + 1, or 0 (empty) */
     size_t slot_count;            /* a power of two, at least twice file_count; 0 before the first */
     struct mesh_info *info;       /* per mesh, from survey() */
-    struct dvec eye, target;      /* the camera's, when has_camera */
+    struct ao_dvec3 eye, target;      /* the camera's, when has_camera */
     bool has_camera;
     int camera_line;
     const char *extent_note;      /* what makes up the extent, for its message ("" in scene files) */
@@ -359,17 +301,17 @@ static void add_note(struct ao_scene *s, const char *path, const char *note)
 
 /* Scale, then rotation about a unit axis, then translation (SPEC.md's order), in double. */
 struct transform {
-    struct dvec scale, axis, translate;
+    struct ao_dvec3 scale, axis, translate;
     double cos_angle, sin_angle;
 };
 
 /* Rodrigues' rotation of v about t->axis. */
-static struct dvec rotate(const struct transform *t, struct dvec v)
+static struct ao_dvec3 rotate(const struct transform *t, struct ao_dvec3 v)
 {
-    struct dvec k = t->axis;
-    struct dvec r = dvec_scale(v, t->cos_angle);
-    r = dvec_add(r, dvec_scale(dvec_cross(k, v), t->sin_angle));
-    return dvec_add(r, dvec_scale(k, dvec_dot(k, v) * (1.0 - t->cos_angle)));
+    struct ao_dvec3 k = t->axis;
+    struct ao_dvec3 r = ao_dvec3_scale(v, t->cos_angle);
+    r = ao_dvec3_add(r, ao_dvec3_scale(ao_dvec3_cross(k, v), t->sin_angle));
+    return ao_dvec3_add(r, ao_dvec3_scale(k, ao_dvec3_dot(k, v) * (1.0 - t->cos_angle)));
 }
 
 /* The transform as an affine map: column j of L is the rotated axis j scaled by scale j. */
@@ -378,8 +320,8 @@ static struct ao_affine affine_of(const struct transform *t)
     struct ao_affine a;
     double s[3] = {t->scale.x, t->scale.y, t->scale.z};
     for (int j = 0; j < 3; j++) {
-        struct dvec e = dvec_make(j == 0 ? s[0] : 0.0, j == 1 ? s[1] : 0.0, j == 2 ? s[2] : 0.0);
-        struct dvec column = rotate(t, e);
+        struct ao_dvec3 e = ao_dvec3_make(j == 0 ? s[0] : 0.0, j == 1 ? s[1] : 0.0, j == 2 ? s[2] : 0.0);
+        struct ao_dvec3 column = rotate(t, e);
         a.m[3 * j] = column.x, a.m[3 * j + 1] = column.y, a.m[3 * j + 2] = column.z;
     }
     a.m[9] = t->translate.x, a.m[10] = t->translate.y, a.m[11] = t->translate.z;
@@ -397,7 +339,7 @@ static bool resolve_path(const struct cursor *c, const char *name, char *out, si
 }
 
 /* Appends the quad of corners p (triangles p0 p1 p2 and p0 p2 p3) and unit normal n. */
-static bool add_quad(struct world *w, const struct dvec p[4], struct ao_vec3 n, struct ao_vec3 rho)
+static bool add_quad(struct world *w, const struct ao_dvec3 p[4], struct ao_vec3 n, struct ao_vec3 rho)
 {
     if (!resize(&w->quads, w->quad_count + 1, sizeof *w->quads))
         return false;
@@ -532,7 +474,7 @@ static bool parse_camera(struct cursor *c, struct ao_scene *s, struct world *w)
 {
     static const char *const keys[] = {"eye", "target", "up", "fov", NULL};
     unsigned seen = 0;
-    struct dvec up = dvec_make(0, 1, 0);
+    struct ao_dvec3 up = ao_dvec3_make(0, 1, 0);
     double fov = 40.0;
     while (c->next < c->count) {
         int k;
@@ -550,7 +492,7 @@ static bool parse_camera(struct cursor *c, struct ao_scene *s, struct world *w)
         return false;
     if (!(fov > 0.0 && fov < 180.0))
         return fail(c, "'fov' must lie strictly between 0 and 180 degrees");
-    s->camera.up = narrow(up);
+    s->camera.up = ao_dvec3_narrow(up);
     s->camera.fov = (float)fov;
     w->has_camera = true;
     w->camera_line = c->line;
@@ -587,7 +529,7 @@ static bool parse_sphere(struct cursor *c, struct ao_scene *s, struct world *w)
     static const char *const keys[] = {"center", "radius", "albedo", NULL};
     unsigned seen = 0;
     struct ao_sphere sp = {.albedo = ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO)};
-    struct dvec center = {0};
+    struct ao_dvec3 center = {0};
     double radius = 0.0;
     while (c->next < c->count) {
         int k;
@@ -617,7 +559,7 @@ static bool parse_quad(struct cursor *c, struct ao_scene *s, struct world *w)
 {
     static const char *const keys[] = {"corner", "edge1", "edge2", "albedo", NULL};
     unsigned seen = 0;
-    struct dvec corner = {0}, e1 = {0}, e2 = {0};
+    struct ao_dvec3 corner = {0}, e1 = {0}, e2 = {0};
     struct ao_vec3 rho = ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO);
     while (c->next < c->count) {
         int k;
@@ -633,14 +575,14 @@ static bool parse_quad(struct cursor *c, struct ao_scene *s, struct world *w)
     }
     if (!require(c, seen, keys, 7u))
         return false;
-    struct ao_vec3 n = narrow(dvec_cross(e1, e2));
+    struct ao_vec3 n = ao_dvec3_narrow(ao_dvec3_cross(e1, e2));
     if (!(ao_vec3_length(n) > 0.0f) || !ao_vec3_is_finite(n))
         return fail(c, "quad: edge1 and edge2 span no area");
     n = ao_vec3_normalize(n);
     if (!charge(c, w, 2, 4, "quad"))
         return false;
     (void)s;
-    struct dvec p[4] = {corner, dvec_add(corner, e1), dvec_add(dvec_add(corner, e1), e2), dvec_add(corner, e2)};
+    struct ao_dvec3 p[4] = {corner, ao_dvec3_add(corner, e1), ao_dvec3_add(ao_dvec3_add(corner, e1), e2), ao_dvec3_add(corner, e2)};
     return add_quad(w, p, n, rho) || fail(c, "out of memory");
 }
 
@@ -654,7 +596,7 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
         return false;
     unsigned seen = 0;
     struct ao_vec3 rho = ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO);
-    struct transform t = {.scale = dvec_make(1, 1, 1), .axis = dvec_make(0, 1, 0), .cos_angle = 1};
+    struct transform t = {.scale = ao_dvec3_make(1, 1, 1), .axis = ao_dvec3_make(0, 1, 0), .cos_angle = 1};
     double crease = w->crease;
     while (c->next < c->count) {
         int k;
@@ -669,7 +611,7 @@ static bool parse_mesh(struct cursor *c, struct ao_scene *s, struct world *w)
         if (k == 2) {
             if (numbers(c, key, r, 4, 4) != 4)
                 return false;
-            if (!unit(dvec_make(r[0], r[1], r[2]), &t.axis))
+            if (!ao_dvec3_unit(ao_dvec3_make(r[0], r[1], r[2]), &t.axis))
                 return fail(c, "'rotate': the axis must not be zero");
             t.cos_angle = cos(r[3] * PI / 180.0);
             t.sin_angle = sin(r[3] * PI / 180.0);
@@ -818,7 +760,7 @@ static void narrow_affine(const struct ao_affine *m, float out[12])
 
 /* The box lo..hi of mesh's positions, in its own frame (float comparisons: the loop stays in
  * registers, and a float's minimum is exact). */
-static void box_of(const struct ao_mesh *mesh, struct dvec *lo, struct dvec *hi)
+static void box_of(const struct ao_mesh *mesh, struct ao_dvec3 *lo, struct ao_dvec3 *hi)
 {
     float l[3] = {INFINITY, INFINITY, INFINITY}, h[3] = {-INFINITY, -INFINITY, -INFINITY};
     for (size_t v = 0; v < mesh->vertex_count; v++) {
@@ -828,8 +770,8 @@ static void box_of(const struct ao_mesh *mesh, struct dvec *lo, struct dvec *hi)
             h[k] = p[k] > h[k] ? p[k] : h[k];
         }
     }
-    *lo = dvec_make(l[0], l[1], l[2]);
-    *hi = dvec_make(h[0], h[1], h[2]);
+    *lo = ao_dvec3_make(l[0], l[1], l[2]);
+    *hi = ao_dvec3_make(h[0], h[1], h[2]);
 }
 
 /* Fills w->info: how often each mesh is placed, its box in its own frame, and whether it is
@@ -873,10 +815,10 @@ static bool survey(struct ao_scene *s, struct world *w)
 }
 
 /* The box lo..hi grown to hold p. */
-static void grow(struct dvec *lo, struct dvec *hi, struct dvec p)
+static void grow(struct ao_dvec3 *lo, struct ao_dvec3 *hi, struct ao_dvec3 p)
 {
-    *lo = dvec_make(fmin(lo->x, p.x), fmin(lo->y, p.y), fmin(lo->z, p.z));
-    *hi = dvec_make(fmax(hi->x, p.x), fmax(hi->y, p.y), fmax(hi->z, p.z));
+    *lo = ao_dvec3_make(fmin(lo->x, p.x), fmin(lo->y, p.y), fmin(lo->z, p.z));
+    *hi = ao_dvec3_make(fmax(hi->x, p.x), fmax(hi->y, p.y), fmax(hi->z, p.z));
 }
 
 /* True when m's linear part is diagonal: each world coordinate is then a product and a sum of one
@@ -892,35 +834,30 @@ static bool diagonal(const struct ao_affine *m)
  * when instanced (a box holding the instance) or mapped by a diagonal map (exact); else of its
  * mesh's every vertex (exact). */
 static void grow_by_placement(const struct ao_scene *s, const struct world *w, const struct pending *p,
-                              struct dvec *lo, struct dvec *hi)
+                              struct ao_dvec3 *lo, struct ao_dvec3 *hi)
 {
     const struct mesh_info *info = &w->info[p->mesh];
-    double q[3];
     if (info->instanced || diagonal(&p->to_world)) {
-        for (int k = 0; k < 8; k++) {
-            ao_affine_point(&p->to_world, k & 1 ? info->hi.x : info->lo.x, k & 2 ? info->hi.y : info->lo.y,
-                            k & 4 ? info->hi.z : info->lo.z, q);
-            grow(lo, hi, dvec_make(q[0], q[1], q[2]));
-        }
+        for (int k = 0; k < 8; k++)
+            grow(lo, hi, ao_affine_point(&p->to_world, k & 1 ? info->hi.x : info->lo.x, k & 2 ? info->hi.y : info->lo.y,
+                                         k & 4 ? info->hi.z : info->lo.z));
         return;
     }
     const struct ao_mesh *m = &s->meshes[p->mesh];
-    for (size_t v = 0; v < m->vertex_count; v++) {
-        ao_affine_point(&p->to_world, m->positions[v].x, m->positions[v].y, m->positions[v].z, q);
-        grow(lo, hi, dvec_make(q[0], q[1], q[2]));
-    }
+    for (size_t v = 0; v < m->vertex_count; v++)
+        grow(lo, hi, ao_affine_point(&p->to_world, m->positions[v].x, m->positions[v].y, m->positions[v].z));
 }
 
 /* World-space bounding box of all geometry (w->info must be current); false for an empty scene. */
-static bool bounds(const struct ao_scene *s, const struct world *w, struct dvec *lo, struct dvec *hi)
+static bool bounds(const struct ao_scene *s, const struct world *w, struct ao_dvec3 *lo, struct ao_dvec3 *hi)
 {
-    *lo = dvec_make(INFINITY, INFINITY, INFINITY);
-    *hi = dvec_make(-INFINITY, -INFINITY, -INFINITY);
+    *lo = ao_dvec3_make(INFINITY, INFINITY, INFINITY);
+    *hi = ao_dvec3_make(-INFINITY, -INFINITY, -INFINITY);
     for (size_t i = 0; i < s->sphere_count; i++) {
-        struct dvec c = w->sphere_centers[i];
+        struct ao_dvec3 c = w->sphere_centers[i];
         double r = s->spheres[i].radius;
-        grow(lo, hi, dvec_make(c.x - r, c.y - r, c.z - r));
-        grow(lo, hi, dvec_make(c.x + r, c.y + r, c.z + r));
+        grow(lo, hi, ao_dvec3_make(c.x - r, c.y - r, c.z - r));
+        grow(lo, hi, ao_dvec3_make(c.x + r, c.y + r, c.z + r));
     }
     for (size_t i = 0; i < w->quad_count; i++)
         for (int k = 0; k < 4; k++)
@@ -957,14 +894,14 @@ static bool bounds(const struct ao_scene *s, const struct world *w, struct dvec 
 static const double MIN_CAMERA_DISTANCE = 0x1p-60;
 
 /* The largest side of the box lo..hi. */
-static double largest_side(struct dvec lo, struct dvec hi)
+static double largest_side(struct ao_dvec3 lo, struct ao_dvec3 hi)
 {
     return fmax(hi.x - lo.x, fmax(hi.y - lo.y, hi.z - lo.z));
 }
 
 /* Refuses a scene whose geometry (the box lo..hi, when any) or camera leaves the range derived
  * above, with one line naming the size; false after reporting. */
-static bool check_range(const struct world *w, struct cursor *c, bool any, struct dvec lo, struct dvec hi)
+static bool check_range(const struct world *w, struct cursor *c, bool any, struct ao_dvec3 lo, struct ao_dvec3 hi)
 {
     static const char range[] = "aoview renders scenes from %.3g to %.3g across (docs/stability.md)";
     char message[256];
@@ -982,8 +919,8 @@ static bool check_range(const struct world *w, struct cursor *c, bool any, struc
     grow(&lo, &hi, w->target);
     if (!(largest_side(lo, hi) <= AO_SCENE_MAX_EXTENT))
         return fail(c, "camera: with it the scene is %.3g across; %s", largest_side(lo, hi), message);
-    struct dvec d = dvec_sub(w->target, w->eye), along;
-    double distance = unit(d, &along) ? dvec_dot(d, along) : 0.0;   /* |d|, no square to vanish */
+    struct ao_dvec3 d = ao_dvec3_sub(w->target, w->eye), along;
+    double distance = ao_dvec3_unit(d, &along) ? ao_dvec3_dot(d, along) : 0.0;   /* |d|, no square to vanish */
     if (distance > 0.0 && distance < MIN_CAMERA_DISTANCE)
         return fail(c, "camera: eye and target are %.3g apart, closer than the %.3g aoview can aim by",
                     distance, MIN_CAMERA_DISTANCE);
@@ -1052,7 +989,7 @@ static bool build_instance(struct ao_scene *s, struct world *w, struct cursor *c
 }
 
 /* The quads from w->quads[*next] on that share its albedo, as one flat mesh in the local frame. */
-static bool build_quads(struct ao_scene *s, struct world *w, size_t *next, struct dvec origin)
+static bool build_quads(struct ao_scene *s, struct world *w, size_t *next, struct ao_dvec3 origin)
 {
     size_t first = *next, n = 1;
     while (first + n < w->quad_count && memcmp(&w->quads[first + n].rho, &w->quads[first].rho,
@@ -1075,7 +1012,7 @@ static bool build_quads(struct ao_scene *s, struct world *w, size_t *next, struc
     static const uint32_t tris[6] = {0, 1, 2, 0, 2, 3};
     for (size_t q = 0; q < n; q++) {
         for (int k = 0; k < 4; k++) {
-            m->positions[4 * q + (size_t)k] = narrow(dvec_sub(w->quads[first + q].p[k], origin));
+            m->positions[4 * q + (size_t)k] = ao_dvec3_narrow(ao_dvec3_sub(w->quads[first + q].p[k], origin));
             m->normals[4 * q + (size_t)k] = w->quads[first + q].n;
         }
         for (int k = 0; k < 6; k++)
@@ -1108,7 +1045,7 @@ static bool pad(struct ao_mesh *m)
  * gets one framed on its box. False after reporting (the camera's line) or on short memory. */
 static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
 {
-    struct dvec lo, hi, origin = {0};
+    struct ao_dvec3 lo, hi, origin = {0};
     c->line = 0;
     if (!survey(s, w))
         return fail(c, "out of memory");
@@ -1116,7 +1053,7 @@ static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
     if (!check_range(w, c, any, lo, hi))
         return false;
     if (any && !(lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0 && lo.z <= 0.0 && hi.z >= 0.0))
-        origin = dvec_scale(dvec_add(lo, hi), 0.5);
+        origin = ao_dvec3_scale(ao_dvec3_add(lo, hi), 0.5);
     s->origin[0] = origin.x, s->origin[1] = origin.y, s->origin[2] = origin.z;
     c->line = 0;
     if (!resize(&s->instances, w->placement_count + w->quad_count, sizeof *s->instances))
@@ -1137,10 +1074,10 @@ static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
     for (size_t i = 0; i < s->instance_count; i++)
         s->triangle_count += s->meshes[s->instances[i].mesh].triangle_count;
     for (size_t i = 0; i < s->sphere_count; i++)
-        s->spheres[i].center = narrow(dvec_sub(w->sphere_centers[i], origin));
+        s->spheres[i].center = ao_dvec3_narrow(ao_dvec3_sub(w->sphere_centers[i], origin));
     if (w->has_camera) {
-        s->camera.eye = narrow(dvec_sub(w->eye, origin));
-        s->camera.target = narrow(dvec_sub(w->target, origin));
+        s->camera.eye = ao_dvec3_narrow(ao_dvec3_sub(w->eye, origin));
+        s->camera.target = ao_dvec3_narrow(ao_dvec3_sub(w->target, origin));
         struct ao_view view;
         c->line = w->camera_line;
         if (!ao_camera_view(&s->camera, 1, 1, &view))
@@ -1150,7 +1087,7 @@ static bool place(struct ao_scene *s, struct world *w, struct cursor *c)
     c->line = 0;
     if (!any)
         return fail(c, "no camera and nothing to frame: add a 'camera' line or some geometry");
-    ao_camera_frame_box(&s->camera, narrow(dvec_sub(lo, origin)), narrow(dvec_sub(hi, origin)));
+    ao_camera_frame_box(&s->camera, ao_dvec3_narrow(ao_dvec3_sub(lo, origin)), ao_dvec3_narrow(ao_dvec3_sub(hi, origin)));
     return true;
 }
 
@@ -1248,12 +1185,12 @@ bool ao_scene_parse_with(struct ao_scene *scene, const char *text, const char *p
  * from 1e-6 E up, on both tracers; the bare bunny at 640x480, 256 spp, against the gap 0, darkened
  * its contact shadow (the ground pixels below 0.9 rho) by 0.03 % at 1e-4 E, within the noise of that
  * mean, and by 0.3 % at 1e-3 E, 3 % at 1e-2 E. 1e-4 E keeps a factor 100 on either side. */
-static bool add_ground(struct world *w, struct dvec lo, struct dvec hi)
+static bool add_ground(struct world *w, struct ao_dvec3 lo, struct ao_dvec3 hi)
 {
-    struct dvec mid = dvec_scale(dvec_add(lo, hi), 0.5);
+    struct ao_dvec3 mid = ao_dvec3_scale(ao_dvec3_add(lo, hi), 0.5);
     double extent = largest_side(lo, hi), size = 25.0 * extent, y = lo.y - AO_SCENE_GROUND_GAP * extent;
-    struct dvec p[4] = {dvec_make(mid.x - size, y, mid.z - size), dvec_make(mid.x - size, y, mid.z + size),
-                        dvec_make(mid.x + size, y, mid.z + size), dvec_make(mid.x + size, y, mid.z - size)};
+    struct ao_dvec3 p[4] = {ao_dvec3_make(mid.x - size, y, mid.z - size), ao_dvec3_make(mid.x - size, y, mid.z + size),
+                        ao_dvec3_make(mid.x + size, y, mid.z + size), ao_dvec3_make(mid.x + size, y, mid.z - size)};
     return add_quad(w, p, ao_vec3_make(0, 1, 0), ao_vec3_make(0.5f, 0.5f, 0.5f));
 }
 
@@ -1271,15 +1208,15 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budge
     const struct loaded *f = load_file(&c, s, &w, path, w.crease);
     bool ok = f && (!ground || charge(&c, &w, 2, 4, "the ground")) &&
               place_model(&c, s, &w, f, &identity, ao_vec3_make(DEFAULT_ALBEDO, DEFAULT_ALBEDO, DEFAULT_ALBEDO), path);
-    struct dvec lo, hi;
+    struct ao_dvec3 lo, hi;
     if (ok && !survey(s, &w))
         ok = fail(&c, "out of memory");
     if (ok && bounds(s, &w, &lo, &hi)) {
         /* The camera framed on the mesh about its centre, then kept in world space. */
-        struct dvec mid = dvec_scale(dvec_add(lo, hi), 0.5);
-        ao_camera_frame_box(&s->camera, narrow(dvec_sub(lo, mid)), narrow(dvec_sub(hi, mid)));
-        w.eye = dvec_add(mid, dvec_of(s->camera.eye));
-        w.target = dvec_add(mid, dvec_of(s->camera.target));
+        struct ao_dvec3 mid = ao_dvec3_scale(ao_dvec3_add(lo, hi), 0.5);
+        ao_camera_frame_box(&s->camera, ao_dvec3_narrow(ao_dvec3_sub(lo, mid)), ao_dvec3_narrow(ao_dvec3_sub(hi, mid)));
+        w.eye = ao_dvec3_add(mid, ao_dvec3_of(s->camera.eye));
+        w.target = ao_dvec3_add(mid, ao_dvec3_of(s->camera.target));
         w.has_camera = true;
         if (ground && !add_ground(&w, lo, hi))
             ok = fail(&c, "out of memory");
