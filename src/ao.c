@@ -57,7 +57,7 @@ static inline struct ao_vec3 map_point(const float *a, struct ao_vec3 p)
  * before it is interpolated, as flattening maps them), both turned to the eye; the point recomputed
  * and lifted in the mesh's own frame, where Embree tests the triangle, then mapped. The lift there
  * clears the point's error bound plus how far the origin moves when it is mapped into the local
- * frame and Embree maps it back (the instance's slack, derived in scene.c): at most
+ * frame and Embree maps it back (the instance's slack, derived in scene_place.c): at most
  * slack[0] max|o| + slack[1] per axis for an origin o. With max|o| <= max|p| + d for a lift d, the
  * slack is taken at max|p| + 2 d0, d0 the lift with the slack at max|p|: the final lift exceeds d0
  * by at most sqrt(3) (1 + gamma12) 2 slack[0] d0 <= d0 (slack[0] <= 2^-8), so max|o| stays within. */

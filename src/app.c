@@ -393,9 +393,9 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     app->interrupt.output = opts->output ? opts->output : "aoview.png";
     ao_file_remember_inputs();
     char name[AO_TEXT_SIZE];
-    struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh,
+    struct ao_scene_options load = {.budget = opts->scene_budget, .no_ground = !opts->ground, .bvh = opts->bvh,
                                     .crease = opts->crease, .crease_set = true, .sized = opts->width != 0};
-    if (!ao_scene_load_with(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, &load) ||
+    if (!ao_scene_load(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, &load) ||
         !check_written_not_read(app, opts))
         return AO_EXIT_RUNTIME;
     int width = opts->width ? opts->width : app->scene.width ? app->scene.width : 640;

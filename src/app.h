@@ -13,6 +13,7 @@
 #include "progress.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 #include "window.h"
 

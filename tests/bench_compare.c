@@ -11,6 +11,7 @@
 #include "bench_util.h"
 #include "compare.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 /* The image, the threads in all (this machine's two cores), the samples per pass (small, so that
@@ -78,7 +79,7 @@ int main(int argc, char **argv)
     int runs = argc > 3 ? atoi(argv[3]) : 5;
     runs = runs < 1 ? 1 : runs > MAX_RUNS ? MAX_RUNS : runs;
     struct ao_scene scene;
-    if (!ao_scene_load(&scene, argv[1]))
+    if (!ao_scene_load(&scene, argv[1], NULL))
         return 1;
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     if (!tracer)

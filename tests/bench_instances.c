@@ -20,6 +20,7 @@
 #include "bench_util.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 enum { SIZE = 512, SPPPP = 16, PASSES = 8, MAX_ROUNDS = 21, MAX_FILES = 8, SPHERE_RINGS = 500 };
@@ -114,9 +115,9 @@ int main(int argc, char **argv)
     for (int r = 0; r < rounds; r++)
         for (int f = 0; f < files; f++) {
             struct ao_scene scene;
-            struct ao_scene_options options = {.budget = (uint64_t)1 << 40, .ground = true, .instancing = mode};
+            struct ao_scene_options options = {.budget = (uint64_t)1 << 40, .instancing = mode};
             double start = bench_now();
-            if (!ao_scene_load_with(&scene, argv[first + f], &options))
+            if (!ao_scene_load(&scene, argv[first + f], &options))
                 return 1;
             if (ao_distance > 0.0)
                 scene.ao_distance = (float)ao_distance;

@@ -18,6 +18,7 @@
 #include "mesh.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 enum { SIZE = 512, REPEATS = 5, RECORDED = 1 << 16 };
@@ -358,7 +359,7 @@ int main(int argc, char **argv)
     double bunny = 0, big = 0;
     for (int k = 1; k < argc; k++) {
         struct ao_scene scene;
-        if (!ao_scene_load(&scene, argv[k]))
+        if (!ao_scene_load(&scene, argv[k], NULL))
             return 1;
         bench_scene(&scene, k == 1 ? &bunny : NULL);
         if (k == 1) {

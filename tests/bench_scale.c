@@ -25,6 +25,7 @@
 #include "bench_util.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 /* The sphere: bench_bumpy_sphere of RINGS rings, 4 RINGS (RINGS - 1) = 9,991,920 triangles. */
@@ -100,9 +101,9 @@ static void write_files(const char *dir, const struct bench_mesh *m)
 static int measure(const char *path)
 {
     struct ao_scene scene;
-    struct ao_scene_options options = {.budget = (uint64_t)1 << 40, .ground = true, .bvh = (enum ao_bvh)bvh};
+    struct ao_scene_options options = {.budget = (uint64_t)1 << 40, .bvh = (enum ao_bvh)bvh};
     double start = bench_now();
-    if (!ao_scene_load_with(&scene, path, &options))
+    if (!ao_scene_load(&scene, path, &options))
         return 1;
     double loaded = bench_now();
     struct ao_tracer *tracer = ao_tracer_create(&scene);

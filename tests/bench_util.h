@@ -7,6 +7,7 @@
 
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 /* Seconds on the monotonic clock. */
@@ -35,7 +36,7 @@ static inline double bench_median(double *v, int n)
  * when either fails. */
 static inline struct ao_tracer *bench_load(const char *path, struct ao_scene *scene)
 {
-    if (!ao_scene_load(scene, path))
+    if (!ao_scene_load(scene, path, NULL))
         exit(1);
     struct ao_tracer *tracer = ao_tracer_create(scene);
     if (!tracer)

@@ -1,6 +1,6 @@
 /* The measurement behind docs/stability.md's "Sizes" table: a scene loaded at its own size, then
  * scaled in place by 2^k (every position, sphere and the camera; exact in float), bypassing
- * scene.c's range check, rendered with the same seed and compared value by value with the scene
+ * scene_place.c's range check, rendered with the same seed and compared value by value with the scene
  * at its own size. Run by hand: build/tests/scale_range KIND BACKEND K...; KIND 0 is a sphere of
  * radius 1 on a ground quad 2^15 wide, 1 the default scene on a ground quad 2^7 wide; BACKEND 0
  * the direct loops, 1 Embree. */
@@ -11,6 +11,7 @@
 
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 enum { W = 80, H = 60, SPP = 64 };
@@ -19,7 +20,7 @@ enum { W = 80, H = 60, SPP = 64 };
 static float *render_scaled(const char *text, const char *path, int k, enum ao_backend backend)
 {
     struct ao_scene scene;
-    if (!ao_scene_parse(&scene, text, path))
+    if (!ao_scene_parse(&scene, text, path, NULL))
         return NULL;
     float s = ldexpf(1.0f, k);
     for (size_t m = 0; m < scene.mesh_count; m++)   /* the scenes it scales are flat */

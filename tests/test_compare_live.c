@@ -13,6 +13,7 @@
 
 #include "compare.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 static const char SCENE[] = "camera eye 0 1.5 4 target 0 0.5 0 fov 40\n"
@@ -105,7 +106,7 @@ struct fixture {
  * sample a pass, target spp, time limit and reference (or NULL) as given. */
 static void start(struct fixture *f, uint32_t spp, double time_limit, const float *reference)
 {
-    assert_true(ao_scene_parse(&f->scene, SCENE, "compare.scene"));
+    assert_true(ao_scene_parse(&f->scene, SCENE, "compare.scene", NULL));
     assert_non_null(f->tracer = ao_tracer_create(&f->scene));
     atomic_init(&f->inside, 0);
     for (int k = 0; k < 2; k++) {

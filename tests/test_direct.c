@@ -16,6 +16,7 @@
 #include "render.h"
 #include "rng.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 /* Rays whose outcome turns on less than this (relative) are too close to call and are skipped. */
@@ -406,7 +407,7 @@ static void load_spheres(struct ao_scene *scene)
     char path[4096];
     assert_non_null(root);
     snprintf(path, sizeof path, "%s/assets/scenes/spheres.scene", root);
-    assert_true(ao_scene_load(scene, path));
+    assert_true(ao_scene_load(scene, path, NULL));
 }
 
 static void test_spheres_scene_agrees_with_embree(void **state)
@@ -444,7 +445,7 @@ static void test_random_scenes_agree_with_embree(void **state)
                             l1 * e1[1], l1 * e1[2], l2 * e2[0], l2 * e2[1], l2 * e2[2]);
         }
         struct ao_scene scene;
-        assert_true(ao_scene_parse(&scene, text, "random.scene"));
+        assert_true(ao_scene_parse(&scene, text, "random.scene", NULL));
         compare(&scene, (uint64_t)n + 1000, 1000, &tally);
         ao_scene_finish(&scene);
     }
@@ -466,7 +467,7 @@ static void test_no_self_occlusion(void **state)
     uint64_t rng = 7;
     for (size_t i = 0; i < sizeof scenes / sizeof *scenes; i++) {
         struct ao_scene scene;
-        assert_true(ao_scene_parse(&scene, scenes[i], "lone.scene"));
+        assert_true(ao_scene_parse(&scene, scenes[i], "lone.scene", NULL));
         struct ao_tracer *direct = ao_tracer_create_with(&scene, AO_BACKEND_DIRECT);
         for (int p = 0; p < 2000; p++) {
             struct ao_packet rays = {.count = AO_PACKET_SIZE};
@@ -571,7 +572,7 @@ static void test_images_are_statistically_the_same(void **state)
 static void check_choice(const char *text, const char *backend)
 {
     struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, text, "choice.scene"));
+    assert_true(ao_scene_parse(&scene, text, "choice.scene", NULL));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     assert_non_null(tracer);
     assert_string_equal(ao_tracer_backend(tracer), backend);

@@ -20,6 +20,7 @@
 #include "render.h"
 #include "sampling.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "shaders/ao_shaders.h"
 #include "tracer.h"
 
@@ -258,7 +259,7 @@ static void render_png(const char *scene_name, enum ao_sampling sampling, uint32
     char path[1024];
     snprintf(path, sizeof path, "%s/assets/scenes/%s.scene", root, scene_name);
     struct ao_scene scene;
-    assert_true(ao_scene_load(&scene, path));
+    assert_true(ao_scene_load(&scene, path, NULL));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     assert_non_null(tracer);
     struct ao_render_config config = {

@@ -12,6 +12,7 @@
 #include "ao.h"
 #include "sampling.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 /* A ground plane (2e4 across: infinite as seen from |x| < 3), optionally a sphere of radius R
@@ -29,7 +30,7 @@ struct fixture {
 
 static void setup(struct fixture *f, const char *text)
 {
-    assert_true(ao_scene_parse(&f->scene, text, "estimator.scene"));
+    assert_true(ao_scene_parse(&f->scene, text, "estimator.scene", NULL));
     f->tracer = ao_tracer_create_with(&f->scene, backend);
     assert_non_null(f->tracer);
     f->ctx = (struct ao_context){.scene = &f->scene, .tracer = f->tracer, .ao_distance = INFINITY, .seed = 42};

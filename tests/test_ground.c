@@ -1,4 +1,4 @@
-/* The ground quad added under a bare mesh (scene.c): a flat model on it renders unoccluded, a
+/* The ground quad added under a bare mesh (scene_load.c): a flat model on it renders unoccluded, a
  * resting model keeps its contact shadow, and --ground off (ao_scene_options.ground) leaves it out.
  * Seeds are fixed and the numbers random (not Sobol), so that the binomial variances below hold. */
 #include <stdarg.h>
@@ -16,9 +16,10 @@
 #include "render.h"
 #include "render_image.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
-/* The albedo of a bare mesh and of its ground (scene.c). */
+/* The albedo of a bare mesh and of its ground (scene_load.c). */
 static const float MODEL_RHO = 0.8f, GROUND_RHO = 0.5f;
 
 static char temp_dir[] = "/tmp/aoview-ground-XXXXXX";
@@ -37,8 +38,8 @@ static const char *temp_file(const char *name, const char *text, char *path, siz
 /* Loads path as aoview does, with or without the ground. */
 static void load(struct ao_scene *scene, const char *path, bool ground)
 {
-    struct ao_scene_options options = {.budget = 1u << 30, .ground = ground};
-    assert_true(ao_scene_load_with(scene, path, &options));
+    struct ao_scene_options options = {.budget = 1u << 30, .no_ground = !ground};
+    assert_true(ao_scene_load(scene, path, &options));
 }
 
 /* Renders scene (cosine sampling, AA, one sample a pass, no adaptive sampling, two threads, seed 5)
@@ -124,7 +125,7 @@ static void test_flat_models_render_unoccluded(void **state)
 }
 
 /* The bunny resting on the added ground keeps its contact shadow: rendered with the ground where
- * scene.c puts it (AO_SCENE_GROUND_GAP of its size below its lowest point) and with the same scene's
+ * scene_load.c puts it (AO_SCENE_GROUND_GAP of its size below its lowest point) and with the same scene's
  * ground raised to that point (where it was before the gap), same seed and samples. The shadow is
  * the pixels that see only the ground in both (the normals view gives exactly the ground's normal
  * colour) and are below 0.9 of the ground's albedo with the ground at the lowest point. A pixel is

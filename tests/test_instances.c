@@ -1,4 +1,4 @@
-/* Instancing (scene.c, tracer.c, ao.c): a mesh placed many times is loaded and built once and
+/* Instancing (scene_place.c, tracer.c, ao.c): a mesh placed many times is loaded and built once and
  * traced through Embree's instances, and shades as the same scene flattened does. Each test
  * prints its measured figures; bounds are derived next to each check; seeds are fixed. */
 #include <stdarg.h>
@@ -19,6 +19,7 @@
 #include "render.h"
 #include "render_image.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 /* ------------------------------------------------------------------ files */
@@ -208,9 +209,9 @@ struct fixture {
 static void setup_bvh(struct fixture *f, const char *name, enum ao_instancing instancing, bool ground, enum ao_bvh bvh)
 {
     char path[128];
-    struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT, .ground = ground, .instancing = instancing,
+    struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT, .no_ground = !ground, .instancing = instancing,
                                        .bvh = bvh};
-    assert_true(ao_scene_load_with(&f->scene, in_dir(name, path, sizeof path), &options));
+    assert_true(ao_scene_load(&f->scene, in_dir(name, path, sizeof path), &options));
     f->tracer = ao_tracer_create_with(&f->scene, AO_BACKEND_EMBREE);
     assert_non_null(f->tracer);
 }
@@ -625,7 +626,7 @@ static void test_a_mesh_lines_crease_angle(void **state)
     char path[128];
     struct ao_scene scene;
     struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT};
-    assert_false(ao_scene_load_with(&scene, in_dir("crease_bad.scene", path, sizeof path), &options));
+    assert_false(ao_scene_load(&scene, in_dir("crease_bad.scene", path, sizeof path), &options));
 }
 
 /* A small file placing a mesh 10^5 times loads, instanced: a 600-triangle sphere under 100,000
@@ -667,8 +668,8 @@ static void test_a_mesh_placed_100000_times_loads(void **state)
     free(rgb);
     teardown(&f);
     char path[128];
-    struct ao_scene_options small = {.budget = (uint64_t)COPIES * AO_BUDGET_INSTANCE, .ground = true};
-    assert_false(ao_scene_load_with(&f.scene, in_dir("many.gltf", path, sizeof path), &small));
+    struct ao_scene_options small = {.budget = (uint64_t)COPIES * AO_BUDGET_INSTANCE};
+    assert_false(ao_scene_load(&f.scene, in_dir("many.gltf", path, sizeof path), &small));
 }
 
 /* ---- far from the origin: a sphere mesh resting on a plane, both instanced */

@@ -24,6 +24,7 @@
 #include "load/loader.h"
 #include "mesh.h"
 #include "scene.h"
+#include "scene_load.h"
 
 /* Where the committed fixtures are, and a scratch directory for generated files. */
 static char data_dir[4096];
@@ -1679,27 +1680,27 @@ static void test_scene_budget_covers_every_mesh_line(void **state)
     /* The scene's text, the mesh (and its structures), three placements and two copies, at the MEDIUM
      * BVH's rates. */
     uint64_t need = sizeof text + 3 * medium_charge(1, 3) + AO_BUDGET_MESH + 3 * AO_BUDGET_INSTANCE;
-    struct ao_scene_options medium = {.budget = need, .ground = true, .bvh = AO_BVH_MEDIUM};
+    struct ao_scene_options medium = {.budget = need, .bvh = AO_BVH_MEDIUM};
     struct ao_scene scene;
-    assert_true(ao_scene_load_with(&scene, path, &medium));
+    assert_true(ao_scene_load(&scene, path, &medium));
     assert_int_equal(scene.triangle_count, 3);
     assert_int_equal(scene.mesh_count, 3);
     assert_int_equal(scene.instance_count, 3);
     ao_scene_finish(&scene);
     /* One byte less: the copies do not fit, so the mesh is instanced instead (scene.h's AUTO). */
     medium.budget = need - 1;
-    assert_true(ao_scene_load_with(&scene, path, &medium));
+    assert_true(ao_scene_load(&scene, path, &medium));
     assert_int_equal(scene.mesh_count, 1);
     assert_false(scene.instances[0].flat);
     ao_scene_finish(&scene);
     /* Without room for the copies' rule, the mesh and its placements alone: one byte less refused. */
     uint64_t least = sizeof text + medium_charge(1, 3) + AO_BUDGET_MESH + 3 * AO_BUDGET_INSTANCE;
     medium.budget = least;
-    assert_true(ao_scene_load_with(&scene, path, &medium));
+    assert_true(ao_scene_load(&scene, path, &medium));
     assert_int_equal(scene.bvh, AO_BVH_MEDIUM);
     ao_scene_finish(&scene);
     medium.budget = least - 1;
-    assert_false(ao_scene_load_with(&scene, path, &medium));
+    assert_false(ao_scene_load(&scene, path, &medium));
 }
 
 /* An AUTO budget charges the compact rates and builds the MEDIUM BVH when MEDIUM's charges would
@@ -1715,29 +1716,29 @@ static void test_budget_builds_compact_where_only_that_fits(void **state)
     uint64_t medium = sizeof text + medium_charge(1, 3) + AO_BUDGET_MESH + AO_BUDGET_INSTANCE;
     uint64_t compact = medium - (AO_BUDGET_TRIANGLE - AO_BUDGET_TRIANGLE_COMPACT);
     struct ao_scene scene;
-    assert_true(ao_scene_load_budget(&scene, path, medium));
+    assert_true(ao_scene_load(&scene, path, &(struct ao_scene_options){.budget = medium}));
     assert_int_equal(scene.bvh, AO_BVH_MEDIUM);
     assert_string_equal(scene.notes, "");
     ao_scene_finish(&scene);
-    assert_true(ao_scene_load_budget(&scene, path, medium - 1));
+    assert_true(ao_scene_load(&scene, path, &(struct ao_scene_options){.budget = medium - 1}));
     assert_int_equal(scene.bvh, AO_BVH_COMPACT);
     assert_string_equal(scene.notes, "one.scene: BVH built compact to fit the scene budget (slower rays; "
                                      "a larger --scene-budget gets the faster BVH)");
     ao_scene_finish(&scene);
-    assert_true(ao_scene_load_budget(&scene, path, compact));
+    assert_true(ao_scene_load(&scene, path, &(struct ao_scene_options){.budget = compact}));
     assert_int_equal(scene.bvh, AO_BVH_COMPACT);
     ao_scene_finish(&scene);
-    assert_false(ao_scene_load_budget(&scene, path, compact - 1));
+    assert_false(ao_scene_load(&scene, path, &(struct ao_scene_options){.budget = compact - 1}));
     /* Asked for, each is charged at its own rates, without a note. */
-    struct ao_scene_options asked = {.budget = compact, .ground = true, .bvh = AO_BVH_COMPACT};
-    assert_true(ao_scene_load_with(&scene, path, &asked));
+    struct ao_scene_options asked = {.budget = compact, .bvh = AO_BVH_COMPACT};
+    assert_true(ao_scene_load(&scene, path, &asked));
     assert_int_equal(scene.bvh, AO_BVH_COMPACT);
     assert_string_equal(scene.notes, "");
     ao_scene_finish(&scene);
     asked.bvh = AO_BVH_LOW;
-    assert_false(ao_scene_load_with(&scene, path, &asked));
+    assert_false(ao_scene_load(&scene, path, &asked));
     asked.budget = medium;
-    assert_true(ao_scene_load_with(&scene, path, &asked));
+    assert_true(ao_scene_load(&scene, path, &asked));
     assert_int_equal(scene.bvh, AO_BVH_LOW);
     ao_scene_finish(&scene);
 }

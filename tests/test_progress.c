@@ -13,6 +13,7 @@
 #include "progress.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 static void test_rate_toward_the_work_left(void **state)
@@ -117,7 +118,7 @@ static void test_adaptive_work_left_ends_with_the_run(void **state)
                                "sphere center 0 0.5 0 radius 0.5 albedo 0.9 0.5 0.2\n"
                                "sphere center 1 0.25 0.5 radius 0.25\n";
     struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, text, "progress.scene"));
+    assert_true(ao_scene_parse(&scene, text, "progress.scene", NULL));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     assert_non_null(tracer);
     struct passes *passes = calloc(1, sizeof *passes);

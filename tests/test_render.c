@@ -15,6 +15,7 @@
 #include "ao.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 static const char SCENE[] = "camera eye 0 1.5 4 target 0 0.5 0 fov 40\n"
@@ -60,7 +61,7 @@ static float *render_scene(const char *scene_text, struct ao_render_config confi
                            struct ao_frame_info *info, struct counter *counter)
 {
     struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, scene_text, "render.scene"));
+    assert_true(ao_scene_parse(&scene, scene_text, "render.scene", NULL));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     assert_non_null(tracer);
     config.scene = &scene;
@@ -158,7 +159,7 @@ static void test_restart_resets_and_settings_apply(void **state)
 {
     (void)state;
     struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
+    assert_true(ao_scene_parse(&scene, SCENE, "render.scene", NULL));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     struct counter counter = {0};
     struct ao_render_config config = {.scene = &scene, .tracer = tracer,
@@ -212,7 +213,7 @@ static void test_stop_ends_an_unfinished_render(void **state)
 {
     (void)state;
     struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
+    assert_true(ao_scene_parse(&scene, SCENE, "render.scene", NULL));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     struct ao_render_config config = {.scene = &scene, .tracer = tracer,
                                       .threads = 2, .seed = 1, .target_spp = 1u << 30,
@@ -406,7 +407,7 @@ static void test_flat_is_the_face_normal_and_phong_interpolates(void **state)
     char dir[64], text[256];
     octahedron_scene(dir, sizeof dir, text, sizeof text);
     struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, text, "octahedron.scene"));
+    assert_true(ao_scene_parse(&scene, text, "octahedron.scene", NULL));
     remove_octahedron(dir);
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     assert_non_null(tracer);
@@ -490,7 +491,7 @@ static void test_resize_restarts_at_the_new_size(void **state)
     float *fresh = render_scene(SCENE, config, settings, &info, &counter);
 
     struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
+    assert_true(ao_scene_parse(&scene, SCENE, "render.scene", NULL));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     config = (struct ao_render_config){.scene = &scene, .tracer = tracer, .threads = 2, .seed = 5, .target_spp = 8,
                                        .ao_distance = INFINITY, .reference = fresh, .reference_width = 50,
@@ -602,7 +603,7 @@ static void test_tile_errors_are_not_known_before_both_halves(void **state)
 {
     (void)state;
     struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
+    assert_true(ao_scene_parse(&scene, SCENE, "render.scene", NULL));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     assert_non_null(tracer);
     for (uint32_t spp = 1; spp <= 2; spp++) {
@@ -654,7 +655,7 @@ static void test_navigation_holds_the_previews(void **state)
 {
     (void)state;
     struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, SCENE, "render.scene"));
+    assert_true(ao_scene_parse(&scene, SCENE, "render.scene", NULL));
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     assert_non_null(tracer);
     struct navigation n = {0};

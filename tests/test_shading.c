@@ -18,6 +18,7 @@
 
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 enum { SIZE = 64, SPP = 64 };
@@ -105,7 +106,7 @@ static void test_reflect_keeps_a_convex_mesh_unoccluded(void **state)
     struct ao_scene scene;
     char scene_path[64];
     snprintf(scene_path, sizeof scene_path, "%s/ico.scene", dir);
-    assert_true(ao_scene_parse(&scene, text, scene_path));
+    assert_true(ao_scene_parse(&scene, text, scene_path, NULL));
     assert_int_equal(scene.triangle_count, 80);
     struct ao_tracer *tracer = ao_tracer_create(&scene);
     int hit_reflect, hit_trace;

@@ -21,6 +21,7 @@
 #include "render_image.h"
 #include "sampling.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 /* A scene and its tracer. */
@@ -31,7 +32,7 @@ struct fixture {
 
 static void setup_with(struct fixture *f, const char *text, const char *path, enum ao_backend backend)
 {
-    assert_true(ao_scene_parse(&f->scene, text, path));
+    assert_true(ao_scene_parse(&f->scene, text, path, NULL));
     f->tracer = ao_tracer_create_with(&f->scene, backend);
     assert_non_null(f->tracer);
 }
@@ -460,7 +461,7 @@ static void test_scenes_at_the_ends_of_the_size_range_render_as_at_size_1(void *
 {
     (void)state;
     /* A sphere on a ground quad (both back ends) and the default scene (Embree), scaled by powers
-     * of two to the smallest and the largest size scene.c accepts (AO_SCENE_MIN_EXTENT and
+     * of two to the smallest and the largest size scene_place.c accepts (AO_SCENE_MIN_EXTENT and
      * _MAX_EXTENT across), against the same scene at its own size; same seed. Scaling by 2^k
      * multiplies every coordinate, product and comparison of the tracer and the estimator by an
      * exact power of two while nothing over- or underflows, which is what the range is derived to
@@ -506,7 +507,7 @@ static void test_scenes_at_the_ends_of_the_size_range_render_as_at_size_1(void *
             /* One step further out: refused. */
             scaled_scene(text, sizeof text, cases[c].kind, end ? k + 1 : k - 1, root);
             struct ao_scene refused;
-            assert_false(ao_scene_parse(&refused, text, "sized.scene"));
+            assert_false(ao_scene_parse(&refused, text, "sized.scene", NULL));
         }
         free(at_own_size);
     }
