@@ -7,7 +7,8 @@
 #include <math.h>
 #include <stdbool.h>
 
-#include "dvec3.h"
+#include "vec3.h"
+
 
 /* An affine map, column major as glTF's matrices and Embree's FLOAT3X4_COLUMN_MAJOR lay it out:
  * m[0..2], m[3..5], m[6..8] are the columns of L, m[9..11] the translation t. */

@@ -14,7 +14,6 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
-#include "dvec3.h"
 #include "pool.h"
 #include "text.h"
 

@@ -14,7 +14,6 @@
 
 #include "affine.h"
 #include "budget.h"
-#include "dvec3.h"
 #include "mesh.h"
 #include "scene.h"
 #include "scene_load.h"
