@@ -11,6 +11,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "clock.h"
 #include "config.h"
 #include "file.h"
 #include "headless.h"
@@ -27,20 +28,13 @@ double ao_app_mrays_per_second(const struct ao_frame_info *info)
     return info->seconds > 0.0 ? (double)(info->eye_rays + info->shadow_rays) / info->seconds / 1e6 : 0.0;
 }
 
-static double monotonic_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Redraws the progress bar: filled, and its percentage, by the share of the run done
  * (ao_progress_share: full only once done); the error "--" while not known; at most every
  * BAR_SECONDS, and at the end. */
 static void draw_bar(struct ao_reporter *rep, const struct ao_frame_info *info)
 {
     ao_progress_add(&rep->eta, info);
-    double now = monotonic_seconds();
+    double now = ao_clock_seconds();
     if (!info->done && rep->drawn_at > 0.0 && now - rep->drawn_at < BAR_SECONDS)
         return;
     rep->drawn_at = now;
