@@ -3,7 +3,8 @@
  * window's) to the others. After each pass the ranks combine a few numbers in collectives; a rank
  * whose tiles run out borrows some of another's and sends it their sums; rank 0 gathers the image
  * only for a frame (at most at the window's rate), a safety copy, the end and an interruption.
- * Only this file and main_mpi.c include mpi.h. */
+ * This header includes no MPI: only cluster.c, cluster_loans.c and cluster_faults.c (through
+ * their private cluster_state.h) do. */
 #ifndef AO_CLUSTER_H
 #define AO_CLUSTER_H
 
