@@ -1,6 +1,8 @@
 /* The ranks of an aoview-mpi run (see cluster.h): MPI's life cycle, the cluster's, the share's
  * per-pass collectives (the leader's step, the tally, the sums added up) and the image gathers;
  * the loans are cluster_loans.c's, the faults cluster_faults.c's. */
+#include "cluster.h"
+#include "cluster_faults.h"
 #include "cluster_state.h"
 
 #include <stdio.h>

@@ -1,6 +1,7 @@
 /* The faults and interruptions of an aoview-mpi run (see cluster.h and cluster_state.h): the
  * listener thread that hears another rank stop, and what rank 0 and the others tell each other
  * after an interruption (answers, halts, the salvage gather's deadline, the release). */
+#include "cluster_faults.h"
 #include "cluster_state.h"
 
 #include <stdio.h>

@@ -14,7 +14,6 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "cluster.h"
 #include "share.h"
 
 /* The tags of the cluster's point-to-point messages. */

@@ -15,6 +15,7 @@
 #include "app.h"
 #include "cli.h"
 #include "cluster.h"
+#include "cluster_faults.h"
 #include "config.h"
 #include "image.h"
 #include "window.h"

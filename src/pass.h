@@ -15,7 +15,7 @@
 #include "frame.h"
 #include "frames.h"
 #include "pool.h"
-#include "render.h"
+#include "render_config.h"
 #include "share.h"
 #include "tile.h"
 

@@ -17,6 +17,24 @@
 #include "modes.h"
 #include "vec3.h"
 
+/* The smallest and largest scene, as the largest side of the box around its geometry (and its
+ * camera, for the largest), that the renderer draws as the same scene at size 1; ao_scene_load
+ * and ao_scene_parse (scene_load.h) refuse others (derived in scene_place.c, measured in docs/stability.md). */
+#define AO_SCENE_MIN_EXTENT 0x1p-12
+#define AO_SCENE_MAX_EXTENT 0x1p31
+
+/* Which meshes the scene instances: AUTO those placed more than once with more than
+ * AO_SCENE_FLATTEN_TRIANGLES triangles placed (the rule measured in docs/performance.md) or whose
+ * flattened copies would not fit in the scene budget; ALWAYS every mesh file's mesh (the quads
+ * stay flat), NEVER none (every placement flattened, as copies), for tests and benchmarks. A
+ * transform too ill-conditioned for the tracer's error bound is flattened whatever this says. */
+enum ao_instancing { AO_INSTANCING_AUTO, AO_INSTANCING_ALWAYS, AO_INSTANCING_NEVER };
+
+/* The most triangles that AUTO flattens of a mesh placed several times (all its copies together):
+ * up to about 4M placed triangles one flat BVH traces 13-28 % faster than instances (2.5x for a
+ * 528-triangle mesh placed 1000 times), at 8M instances trace 1.7x faster (docs/performance.md). */
+#define AO_SCENE_FLATTEN_TRIANGLES (1u << 22)
+
 /* An analytic sphere with its diffuse albedo. */
 struct ao_sphere {
     struct ao_vec3 center;

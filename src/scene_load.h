@@ -13,24 +13,6 @@
 #include "modes.h"
 #include "scene.h"
 
-/* The smallest and largest scene, as the largest side of the box around its geometry (and its
- * camera, for the largest), that the renderer draws as the same scene at size 1; ao_scene_load
- * and ao_scene_parse refuse others (derived in scene_place.c, measured in docs/stability.md). */
-#define AO_SCENE_MIN_EXTENT 0x1p-12
-#define AO_SCENE_MAX_EXTENT 0x1p31
-
-/* Which meshes the scene instances: AUTO those placed more than once with more than
- * AO_SCENE_FLATTEN_TRIANGLES triangles placed (the rule measured in docs/performance.md) or whose
- * flattened copies would not fit in the scene budget; ALWAYS every mesh file's mesh (the quads
- * stay flat), NEVER none (every placement flattened, as copies), for tests and benchmarks. A
- * transform too ill-conditioned for the tracer's error bound is flattened whatever this says. */
-enum ao_instancing { AO_INSTANCING_AUTO, AO_INSTANCING_ALWAYS, AO_INSTANCING_NEVER };
-
-/* The most triangles that AUTO flattens of a mesh placed several times (all its copies together):
- * up to about 4M placed triangles one flat BVH traces 13-28 % faster than instances (2.5x for a
- * 528-triangle mesh placed 1000 times), at 8M instances trace 1.7x faster (docs/performance.md). */
-#define AO_SCENE_FLATTEN_TRIANGLES (1u << 22)
-
 /* The gap between a bare mesh's lowest point and the ground quad added under it, as a fraction
  * of the mesh's largest side: a flat model never coincides with the ground, and a resting model
  * keeps its contact shadow (both measured in scene_load.c). */

@@ -16,7 +16,6 @@
 #include "budget.h"
 #include "mesh.h"
 #include "scene.h"
-#include "scene_load.h"
 
 /* The most words a scene file's line may have. */
 enum { AO_CURSOR_TOKENS = 64 };
