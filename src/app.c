@@ -439,23 +439,15 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     return 0;
 }
 
-bool ao_app_run_window(struct ao_app *app, const struct ao_options *opts, const struct ao_window_info *info,
-                       int *status)
+bool ao_app_go_headless(const struct ao_options *opts)
 {
-    enum ao_window_result result = ao_window_run(app->render, info);
-    if (result != AO_WINDOW_NO_DISPLAY) {
-        *status = result == AO_WINDOW_OK ? 0 : AO_EXIT_RUNTIME;
-        return true;
-    }
     const char *output = opts->output ? opts->output : "aoview.png";
     char name[AO_TEXT_SIZE];
-    if (!ao_image_check_output(output)) {
-        *status = AO_EXIT_RUNTIME;
-        return true;
-    }
+    if (!ao_image_check_output(output))
+        return false;
     fprintf(stderr, "aoview: no display available; rendering headless to %s\n",
             ao_text_escape(output, name, sizeof name));
-    return false;
+    return true;
 }
 
 bool ao_app_wait(struct ao_app *app, int *sig)
