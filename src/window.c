@@ -49,7 +49,7 @@ static bool glfw_running;
 /* The finest preview of a run stays on screen until the run's average has this many samples per
  * pixel (mean): from then on the average's RMSE against a converged image, taken at every pixel of
  * the screen as the eye sees them, is below the preview's (the bunny at 1920x1080 and 3840x2160:
- * from 11 spp; tests/bench_preview.c, docs/performance.md). */
+ * from 11 spp; tests/bench/bench_preview.c, docs/performance.md). */
 #define PREVIEW_UNTIL_SPP 11.0
 
 /* A resize restarts the render at the new size once the framebuffer has kept its size this long;

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Test shapes whose surfaces are flat or smooth by construction, as OBJ, for the normals a file
-lacks (docs/formats.md, tests/test_formats.sh):
+lacks (docs/formats.md, tests/sh/test_formats.sh):
 
   shapes.py SHAPE OUT.obj [--normals] [--unwelded]
 

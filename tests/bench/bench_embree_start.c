@@ -1,4 +1,4 @@
-/* The floor for aoview's start-up (tests/bench_startup.sh): a program linked to Embree alone that
+/* The floor for aoview's start-up (tests/bench/bench_startup.sh): a program linked to Embree alone that
  * creates and releases a device, which loads Embree, TBB and the C++ runtime as aoview does. */
 #include <stdio.h>
 

@@ -4,7 +4,7 @@ renders (seeds 1..N, no adaptive sampling), the factor by which the ideal alloca
 would cut the rays (or time) needed for a given image RMSE, with one sample count per pixel or per
 block of pixels, against every pixel taking the same number. Prints a table.
 
-  tests/allocation_bound.py [--aoview BIN] [--size WxH] [--spp N] [--seeds N] [--eye-cost C]
+  tests/tools/allocation_bound.py [--aoview BIN] [--size WxH] [--spp N] [--seeds N] [--eye-cost C]
                             [--work DIR] SCENE
 
 The ideal allocation of a budget of work W minimizes sum_k v_k / n_k (v_k: a block's summed
@@ -48,7 +48,7 @@ def bound(width, height, variance, cost, block):
 
 def main():
     p = argparse.ArgumentParser(usage=__doc__)
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     p.add_argument('--aoview', default=os.path.join(root, 'build', 'aoview'))
     p.add_argument('--size', default='160x120')
     p.add_argument('--spp', type=int, default=128)

@@ -1,12 +1,12 @@
 #!/usr/bin/env bash
 # The file formats end to end. The bunny as binary and ASCII STL, glTF with an external and with
-# an embedded buffer, and GLB (tests/mesh_convert.py; the glTF files nest two transforms that
+# an embedded buffer, and GLB (tests/tools/mesh_convert.py; the glTF files nest two transforms that
 # cancel) renders as the bunny OBJ does, bare and through a scene's mesh line: same seed and
 # settings, so the images differ only where float rounding of the transformed positions moves a
 # hit, and the mean absolute difference must stay within 0.2 % of the mean. None of them gives
 # normals: STL's are made as OBJ's (smooth up to the crease angle), glTF's flat, as its
 # specification says, which the OBJ gives with --crease-angle 0. Then the shapes of
-# tests/shapes.py, flat or smooth by construction, against their exact normals. Then glTF as exporters
+# tests/tools/shapes.py, flat or smooth by construction, against their exact normals. Then glTF as exporters
 # write it (strips, fans, sparse, quantized, meshopt and Draco; tests/gltf_encode for the last two),
 # exactly or within Monte Carlo noise (below), and what aoview says of such files. EXR output carries the
 # settings in its header (checked with exrheader when installed) and reads back as a --reference
@@ -40,7 +40,7 @@ PY
 render() { "$bin" --headless -q --size 96x72 --spp 16 --spppp 4 --seed 3 "$@"; }
 
 obj=$root/assets/bunny.obj
-convert=$root/tests/mesh_convert.py
+convert=$root/tests/tools/mesh_convert.py
 python3 "$convert" "$obj" binary.stl && python3 "$convert" "$obj" ascii.stl --ascii &&
   python3 "$convert" "$obj" external.gltf && python3 "$convert" "$obj" embedded.gltf --embed &&
   python3 "$convert" "$obj" bunny.glb || fail "mesh_convert.py failed"
@@ -121,11 +121,11 @@ sys.exit(0 if got <= noise else 1)
 PY
 done
 
-# The normals a file lacks, on shapes flat or smooth by construction (tests/shapes.py). A cube is
+# The normals a file lacks, on shapes flat or smooth by construction (tests/tools/shapes.py). A cube is
 # flat: the OBJ (its 8 corners shared) and the binary STL render byte for byte as --shading flat;
 # so does the glTF cube without NORMAL, welded (indexed, as gltfpack and Draco write it: it rendered
 # rounded with a dark base, mean difference 0.037) and unwelded (every triangle its own vertices).
-shapes=$root/tests/shapes.py
+shapes=$root/tests/tools/shapes.py
 python3 "$shapes" cube cube.obj && python3 "$shapes" cube cube-unwelded.obj --unwelded &&
   python3 "$convert" cube.obj cube.stl && python3 "$convert" cube.obj cube.glb &&
   python3 "$convert" cube-unwelded.obj cube-unwelded.gltf || fail "no cube"

@@ -5,7 +5,7 @@
 # and CPU seconds (user + system, the ranks' and mpirun's) of each configuration and its throughput
 # relative to one 2-thread aoview by both (the images are the same, so the rays are too): on a
 # machine busy with other work, wall time measures the share of the cores a configuration gets,
-# CPU time what it costs. Run: bash tests/bench_mpi.sh BUILD_DIR [REPS] (docs/mpi.md).
+# CPU time what it costs. Run: bash tests/bench/bench_mpi.sh BUILD_DIR [REPS] (docs/mpi.md).
 set -eu
 build=${1:?build dir}
 reps=${2:-5}

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Analysis half of tests/convergence.sh (plain python3, no third-party modules).
+"""Analysis half of tests/tools/convergence.sh (plain python3, no third-party modules).
 
   convergence.py report --name N --runs DIR --out DIR --methods L... [--reference-pair A B] ...
 

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes the hostile EXR files of tests/test_hostile.sh into the directory given (default: the
+"""Writes the hostile EXR files of tests/sh/test_hostile.sh into the directory given (default: the
 current one): chunks that store fewer or more bytes than their pixels take, each a well-formed
 header and offset table whose chunk sizes lie; and headers naming a compression or a line order
 that OpenEXR does not define, over chunks stored raw. The same files are seeds of the EXR fuzz corpus

@@ -1,6 +1,6 @@
 // Writes the triangles of an OBJ file (v and f lines, polygons fanned) as a GLB whose geometry is
 // compressed by the libraries aoview decodes with, through their own encoders, for the format and
-// hostile tests (tests/test_formats.sh, tests/test_hostile.sh):
+// hostile tests (tests/sh/test_formats.sh, tests/sh/test_hostile.sh):
 //
 //   gltf_encode MODE IN.obj OUT.glb
 //
@@ -17,7 +17,7 @@
 //                      mesh of 60 points or fewer; as the
 //                      Khronos CesiumMilkTruck glTF-Draco sample: 1856 for 1886)
 //
-// and, for tests/test_hostile.sh, streams that lie:
+// and, for tests/sh/test_hostile.sh, streams that lie:
 //
 //   meshopt-range      as meshopt, the last index one past the vertices
 //   draco-claims       as draco, its header claiming 1431655765 triangles (~34 GB of tables)

@@ -41,8 +41,8 @@ EXACT_SPP = 4096
 SPP = 1 << 20          # far more than any run reaches: runs end on SIGINT
 THREADS = 2
 POLL = 0.05            # seconds between reads of a running render's --stats file
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-RESULTS = ('<!-- results: written by tests/time_to_error.py -->', '<!-- end of results -->')
+ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+RESULTS = ('<!-- results: written by tests/tools/time_to_error.py -->', '<!-- end of results -->')
 
 
 def reference_spp(size):

@@ -114,11 +114,11 @@ refuse 1 "exr_size_lies.exr: not a readable OpenEXR file" --reference "$data/exr
 refuse 1 "exr_window_overflow.exr: not a readable OpenEXR file" --reference "$data/exr_window_overflow.exr" "$root/assets/scenes/spheres.scene"
 refuse 1 "exr_chunk_lies.exr: cannot decode the pixels (Corrupt chunk offset table" --size 8x6 \
   --reference "$data/exr_chunk_lies.exr" "$root/assets/scenes/spheres.scene"
-# EXR chunks storing fewer or more bytes than their pixels take (made by tests/exr_hostile.py):
+# EXR chunks storing fewer or more bytes than their pixels take (made by tests/tools/exr_hostile.py):
 # each refused from the chunk headers, before any pixel buffer exists. Without the check the
 # short rows and the short last tile were read from memory never written (status 0), and the
 # one 100-byte tile of 16384x4096 pixels took 1.2 GB before its size was refused.
-python3 "$root/tests/exr_hostile.py" . || fail "tests/exr_hostile.py failed"
+python3 "$root/tests/tools/exr_hostile.py" . || fail "tests/tools/exr_hostile.py failed"
 spheres=$root/assets/scenes/spheres.scene
 refuse 1 "exr_rows_short.exr: the chunk of row 0 stores 12 bytes where its pixels need 96" \
   --size 8x6 --reference exr_rows_short.exr "$spheres"
@@ -142,7 +142,7 @@ for case in "compression_10:'compression' (type 'compression'): Invalid value 10
 done
 # A reference of another size is refused from its header, before its pixels are read (a small ZIP
 # file of 16384x4096 pixels once cost 800 MB before its size was compared).
-python3 -c "import sys; sys.path.insert(0, '$root/tests'); import exr_hostile as e; open('exr_big_zip.exr', 'wb').write(e.scanline_file(16384, 4096, e.HALF, e.ZIP, [(16 * k, b'x' * 64) for k in range(256)]))"
+python3 -c "import sys; sys.path.insert(0, '$root/tests/tools'); import exr_hostile as e; open('exr_big_zip.exr', 'wb').write(e.scanline_file(16384, 4096, e.HALF, e.ZIP, [(16 * k, b'x' * 64) for k in range(256)]))"
 refuse 1 "exr_big_zip.exr: the image is 16384x4096, not the 8x6 needed" --size 8x6 --reference exr_big_zip.exr "$spheres"
 rm -f exr_*.exr
 # One mesh of 600 triangles under 65536 nodes: 39 million triangles placed by a 1 MB file, instanced:
@@ -434,7 +434,7 @@ refuse 1 "meshopt_count.glb: bufferView 0 (EXT_meshopt_compression): the view's 
 refuse 1 "draco-claims.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): libdraco cannot decode it" draco-claims.glb
 refuse 1 "draco-range.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): triangle 0 names point 65535 of 1839" draco-range.glb
 loads "draco-count.glb (its POSITION accessor counting a point more than decodes: read as decoded)" draco-count.glb
-python3 "$root/tests/mesh_convert.py" --grid 300 grid.obj && "$encode" draco grid.obj draco_grid.glb || fail "no Draco grid"
+python3 "$root/tests/tools/mesh_convert.py" --grid 300 grid.obj && "$encode" draco grid.obj draco_grid.glb || fail "no Draco grid"
 refuse 1 "draco_grid.glb: mesh 0 primitive 0 (KHR_draco_mesh_compression): decoding it would take more than the" \
   --scene-budget 4M draco_grid.glb
 rm -f meshopt.glb meshopt-range.glb meshopt_billion.glb meshopt_count.glb draco-claims.glb draco-range.glb \

@@ -32,7 +32,7 @@ fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
 
 # max_diff A.pfm B.pfm: the largest |a - b| over all channels, or "size" if the images differ in size.
 max_diff() {
-  PYTHONPATH=$AO_SOURCE_ROOT/tests python3 - "$1" "$2" <<'PY'
+  PYTHONPATH=$AO_SOURCE_ROOT/tests/tools python3 - "$1" "$2" <<'PY'
 import sys
 from benchlib import read_pfm
 (wa, ha, a), (wb, hb, b) = read_pfm(sys.argv[1]), read_pfm(sys.argv[2])

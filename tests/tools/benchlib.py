@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Pieces shared by tests/convergence.{sh,py} and tests/time_to_error.py (plain python3): PFM
+"""Pieces shared by tests/convergence.{sh,py} and tests/tools/time_to_error.py (plain python3): PFM
 reading and writing, the log-log crossing of an error curve, and cached references.
 
   benchlib.py reference --aoview BIN --exact BIN --size WxH --spp N --exact-spp N --work DIR

@@ -1,13 +1,13 @@
 #!/usr/bin/env python3
 """The measurement behind --crease-angle's default (docs/formats.md, "Normals a file lacks"): each
-test shape without normals (tests/shapes.py: a cube, a coarse sphere, a CAD-like part; and the
+test shape without normals (tests/tools/shapes.py: a cube, a coarse sphere, a CAD-like part; and the
 shipped bunny) rendered bare at a range of crease angles, against what it should look like: the
 cube flat (--shading flat), the sphere and the part with their exact normals (shapes.py --normals),
 the bunny, a scan, smoothed everywhere (crease 180). Prints a Markdown table of the mean
 |difference| over the pixels, per shape and the worst of them, and the noise of one render
 (another seed) for scale:
 
-    tests/crease_angles.py AOVIEW [ao|normals]     (run from anywhere; needs numpy)
+    tests/tools/crease_angles.py AOVIEW [ao|normals]     (run from anywhere; needs numpy)
 """
 import os
 import subprocess
@@ -28,7 +28,7 @@ def main(argv):
             name = shape + ('_exact' if extra else '') + '.obj'
             subprocess.run([sys.executable, os.path.join(HERE, 'shapes.py'), shape, os.path.join(work, name)] + extra,
                            check=True)
-    bunny = os.path.join(HERE, '..', 'assets', 'bunny.obj')
+    bunny = os.path.join(HERE, '..', '..', 'assets', 'bunny.obj')
 
     def render(model, *extra):
         out = os.path.join(work, 'out.pfm')

@@ -5,10 +5,10 @@ passes, no reference) is set beside the true one (rmse / the reference's mean). 
 error-estimate.png (gnuplot) and error-estimate.md into --out, and every row into
 error-estimate.csv in --work.
 
-  tests/error_estimate.py [--aoview BIN] [--exact BIN] [--size WxH] [--spp N] [--work DIR]
+  tests/tools/error_estimate.py [--aoview BIN] [--exact BIN] [--size WxH] [--spp N] [--work DIR]
                           [--out DIR] SCENE...
 
-References are tests/benchlib.py's, as tests/time_to_error.py makes them (and shares through the
+References are tests/tools/benchlib.py's, as tests/tools/time_to_error.py makes them (and shares through the
 default --work): aoview-exact's image where the scene has a closed form, else the mean of two
 16384-spp Sobol runs, whose own error (about 0.04 % of the mean) is far below the errors
 compared here."""
@@ -18,14 +18,14 @@ from benchlib import read_pfm, reference
 
 CONFIGS = [('defaults', []), ('adaptive off', ['--adaptive', 'off']),
            ('random, spppp 1, adaptive off', ['--sampler', 'random', '--spppp', '1', '--adaptive', 'off'])]
-# The references of tests/time_to_error.py at 160x120 (shared through the same work directory).
+# The references of tests/tools/time_to_error.py at 160x120 (shared through the same work directory).
 REFERENCE_ARGS = ['--sampler', 'sobol', '--spppp', '1', '--adaptive', 'off']
 REFERENCE_SPP, EXACT_SPP = 16384, 4096
 
 
 def main():
     p = argparse.ArgumentParser()
-    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
     p.add_argument('--aoview', default=os.path.join(root, 'build', 'aoview'))
     p.add_argument('--exact')
     p.add_argument('--size', default='160x120')

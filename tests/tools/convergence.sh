@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Convergence study: for each scene, every sampling method over several seeds, each run given about
 # the same time budget on one thread, with aoview's per-pass --stats against a reference; then
-# tests/convergence.py writes the CSV, the log-log charts (PNG and SVG) and the table into --out.
+# tests/tools/convergence.py writes the CSV, the log-log charts (PNG and SVG) and the table into --out.
 # See docs/accuracy.md for what the outputs mean and how docs/ was made.
 #
-#   tests/convergence.sh [--aoview BIN] [--exact BIN] [--budget S] [--seeds N] [--size WxH]
+#   tests/tools/convergence.sh [--aoview BIN] [--exact BIN] [--budget S] [--seeds N] [--size WxH]
 #                        [--ref-spp N] [--work DIR] [--out DIR] [--method LABEL[=ARGS]]... SCENE...
 #
 # --budget is the seconds of one run (one method, one seed; default 10): a 64-spp calibration run
@@ -20,7 +20,7 @@
 # machine's other cores alone.
 set -euo pipefail
 
-root=$(cd "$(dirname "$0")/.." && pwd)
+root=$(cd "$(dirname "$0")/../.." && pwd)
 aoview=$root/build/aoview
 exact=
 budget=10
@@ -68,7 +68,7 @@ for scene in "${scenes[@]}"; do
   rm -rf "$runs" && mkdir -p "$runs"
 
   # Reference: exact, or two cached high-spp runs whose difference measures their noise.
-  mapfile -t ref < <(python3 "$root/tests/benchlib.py" reference --aoview "$aoview" --exact "$exact" \
+  mapfile -t ref < <(python3 "$root/tests/tools/benchlib.py" reference --aoview "$aoview" --exact "$exact" \
     --size "$size" --spp "$ref_spp" --exact-spp 4096 --work "$work" --args '--sampling cosine --spppp 1 --sampler random --adaptive off' \
     --out "$runs/reference.pfm" "$scene")
   [ ${#ref[@]} -gt 0 ] || exit 1
@@ -94,6 +94,6 @@ for scene in "${scenes[@]}"; do
     done
   done
 
-  python3 "$root/tests/convergence.py" report --name "$name" --runs "$runs" --out "$out" --seeds "$seeds" \
+  python3 "$root/tests/tools/convergence.py" report --name "$name" --runs "$runs" --out "$out" --seeds "$seeds" \
     --budget "$budget" --size "$size" "${ref_args[@]}" --methods "${labels[@]}"
 done

@@ -8,7 +8,7 @@
 # its excess over BARE's median.
 # Prints figures; asserts nothing. Exits 77 without hyperfine or python3.
 # Run: meson test -C build --benchmark startup -v
-#  or: bash tests/bench_startup.sh build/tests/bench_embree_start build/aoview OTHER/aoview
+#  or: bash tests/bench/bench_startup.sh build/tests/bench_embree_start build/aoview OTHER/aoview
 set -u
 bare=${1:?usage: bench_startup.sh BARE AOVIEW [AOVIEW...]}
 shift
@@ -16,7 +16,7 @@ shift
 for tool in hyperfine python3; do
     command -v $tool >/dev/null || { echo "SKIP: $tool is not installed"; exit 77; }
 done
-scenes=$(cd "$(dirname "$0")/../assets/scenes" && pwd)
+scenes=$(cd "$(dirname "$0")/../../assets/scenes" && pwd)
 rounds=${AO_ROUNDS:-5}
 runs=${AO_RUNS:-10}
 work=$(mktemp -d)

@@ -79,7 +79,7 @@ def gltf_document(positions, triangles, buffer_uri):
     # rotation by 90 degrees about y and back is folded in to exercise the quaternion path).
     half = math.sqrt(0.5)
     doc = {
-        'asset': {'version': '2.0', 'generator': 'aoview tests/mesh_convert.py'},
+        'asset': {'version': '2.0', 'generator': 'aoview tests/tools/mesh_convert.py'},
         'scene': 0,
         'scenes': [{'nodes': [0]}],
         'nodes': [
@@ -186,7 +186,7 @@ def write_form(path, positions, triangles, form):
     for run in runs:
         index = add(struct.pack('<%dI' % len(run), *run), componentType=5125, count=len(run), type='SCALAR')
         primitives.append({'attributes': {'POSITION': position}, 'indices': index, 'mode': mode})
-    doc = {'asset': {'version': '2.0', 'generator': 'aoview tests/mesh_convert.py'},
+    doc = {'asset': {'version': '2.0', 'generator': 'aoview tests/tools/mesh_convert.py'},
            'nodes': [node], 'meshes': [{'primitives': primitives}], 'accessors': accessors, 'bufferViews': views,
            'buffers': [{'byteLength': len(blob),
                         'uri': 'data:application/octet-stream;base64,' + base64.b64encode(blob).decode()}]}

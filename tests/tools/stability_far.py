@@ -2,7 +2,7 @@
 """The sphere-on-ground scene placed at a given distance from the origin, rendered by aoview and
 compared with aoview-exact, pixel by pixel, as docs/stability.md reports it:
 
-    tests/stability_far.py AOVIEW AOVIEW_EXACT SHIFT [SHIFT...]
+    tests/tools/stability_far.py AOVIEW AOVIEW_EXACT SHIFT [SHIFT...]
 
 A sphere of radius 1 resting on a ground quad of +-2e4 at (s, s, s); cosine sampling, 2048 spp,
 no AA, 96x72. Without AA a pixel's value is rho K / N, K ~ binomial(N, q), q = exact / rho; the
