@@ -3,16 +3,8 @@
 # with a label burnt in at the top, per-side stats rows, equal render time within 5 %, a linear
 # file per side, one line with status 2 for every malformed configuration, and the window's
 # comparison where no display exists: one line saying so, then the same headless output.
-set -u
-bin=${AO_BINARY:?AO_BINARY not set}
-root=${AO_SOURCE_ROOT:?AO_SOURCE_ROOT not set}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-failures=0
+. "$(dirname "$0")/lib.sh"
 scene="$root/assets/scenes/bunny.scene"
-
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
 
 # Small fixed passes (160x60 pixels x 8 spp = 76,800 samples, a few ms even on a loaded machine)
 # and no adaptive sampling, so that a side's image is a function of its spp alone; 160 pixels
@@ -102,4 +94,4 @@ status=$?
   fail "--compare without a display: status $status, $(cat err.txt)"
 
 [ "$failures" = 0 ] && echo "all compare checks passed"
-exit $((failures > 0))
+finish

@@ -2,15 +2,7 @@
 # End to end: the built binary on both shipped scenes and on bad input. Every bad input must give
 # exit status 1 (runtime) or 2 (usage), exactly one line on stderr naming the culprit, and no
 # output file.
-set -u
-bin=${AO_BINARY:?AO_BINARY not set}
-root=${AO_SOURCE_ROOT:?AO_SOURCE_ROOT not set}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-failures=0
-
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+. "$(dirname "$0")/lib.sh"
 
 # pfm_check FILE W H: a well-formed PFM of that size with only finite, non-negative values.
 pfm_check() {
@@ -156,4 +148,4 @@ printf 'ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x
 expect_error 1 truncated.ply truncated.ply
 
 echo "$failures failure(s)"
-[ "$failures" = 0 ]
+finish

@@ -2,17 +2,9 @@
 # aoview-exact against aoview: identical images where the estimator is exact (cosine sampling on an
 # open plane gives rho per sample, a closed box 0), the whole analytic image's mean error within
 # 4 predicted standard errors for every sampler, and one-line refusals of scenes without a closed form.
-set -u
-bin=${AO_BINARY:?AO_BINARY not set}
+. "$(dirname "$0")/lib.sh"
 exact=${AO_EXACT:?AO_EXACT not set}
-root=${AO_SOURCE_ROOT:?AO_SOURCE_ROOT not set}
 scenes=$root/assets/scenes
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-failures=0
-
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
 
 # Exact estimators: the same bytes.
 for scene in open-plane closed-box; do
@@ -133,4 +125,4 @@ done
 [ $? -eq 2 ] || fail "a .png output is not a usage error"
 
 [ $failures -eq 0 ] && echo "all passed"
-exit $((failures > 0))
+finish

@@ -11,14 +11,7 @@
 # exactly or within Monte Carlo noise (below), and what aoview says of such files. EXR output carries the
 # settings in its header (checked with exrheader when installed) and reads back as a --reference
 # with RMSE exactly 0; a failed EXR write leaves no file.
-set -u
-bin=${AO_BINARY:?AO_BINARY not set}
-root=${AO_SOURCE_ROOT:?AO_SOURCE_ROOT not set}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+. "$(dirname "$0")/lib.sh"
 
 # compare A B: mean |A - B| over all pixels and channels of two PFMs, relative to A's mean.
 compare() {
@@ -216,4 +209,4 @@ render "$spheres" -o missing/out.exr 2>err.txt && fail "-o into a missing direct
 [ -z "$(ls missing 2>/dev/null)" ] || fail "a failed EXR write left a file"
 
 echo "$failures failure(s)"
-[ "$failures" = 0 ]
+finish

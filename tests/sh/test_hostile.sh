@@ -5,26 +5,18 @@
 # output, finish within 30 s and peak below a small memory bound (GNU time's maximum resident set
 # size), so each is refused before any large allocation. Committed fixtures are in
 # tests/data/hostile; the 100 MB files and the special files are made in a scratch directory.
-set -u
-bin=${AO_BINARY:?AO_BINARY not set}
-root=${AO_SOURCE_ROOT:?AO_SOURCE_ROOT not set}
+. "$(dirname "$0")/lib.sh"
 data=$root/tests/data/hostile
 gnu_time=/usr/bin/time
-if ! "$gnu_time" -f %M true >/dev/null 2>&1; then
-  echo "SKIP: GNU time ($gnu_time, Debian package 'time') is needed to measure peak memory"
-  exit 77
-fi
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
+"$gnu_time" -f %M true >/dev/null 2>&1 ||
+  skip "GNU time ($gnu_time, Debian package 'time') is needed to measure peak memory"
 
 # The bound: a refused input costs the process's baseline (shared libraries, about 60 MB) plus
 # at most the file itself (the loaders read a file whole; the largest here is 100 MB). Sanitizer
 # runtimes add their own shadow memory and quarantine, so their builds get more room.
 limit_mb=200
 if ldd "$bin" 2>/dev/null | grep -qE 'lib(asan|tsan)'; then limit_mb=400; fi
-failures=0 refused=0 peak_kb=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+refused=0 peak_kb=0
 
 # refuse STATUS TEXT ARGS...: aoview --headless ARGS must be refused as described above.
 refuse() {
@@ -814,4 +806,4 @@ assert 0 < int(rows[-1][4]) <= 16 * int(rows[-1][1]), 'shadow rays: at most one 
 PY
 
 echo "$refused hostile inputs refused, peak memory $((peak_kb / 1024)) MB (bound $limit_mb MB); $failures failure(s)"
-[ "$failures" = 0 ]
+finish

@@ -9,7 +9,6 @@
 # and without a display the run goes headless.
 # Usage: test_mpi.sh equal|differ|slow|killed|sigterm|sigint|window
 set -u
-bin=${AO_BINARY:?AO_BINARY not set}
 mpi_bin=${AO_MPI_BINARY:?AO_MPI_BINARY not set}
 command -v mpirun >/dev/null || { echo "SKIP: no mpirun (Debian: openmpi-bin)"; exit 77; }
 [ -x "$mpi_bin" ] || { echo "SKIP: $mpi_bin not built"; exit 77; }
@@ -24,11 +23,7 @@ fi
 export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
 export OMPI_MCA_btl_tcp_if_include=lo OMPI_MCA_oob_tcp_if_include=lo
 mpirun=(timeout -k 5 120 mpirun --oversubscribe)
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+. "$(dirname "$0")/lib.sh"
 
 # max_diff A.pfm B.pfm: the largest |a - b| over all channels, or "size" if the images differ in size.
 max_diff() {
@@ -336,5 +331,5 @@ window)
     fail "no display: $(cat nodisplay.err)"
   ;;
 esac
-[ "$failures" = 0 ] || exit 1
-echo "all passed"
+[ "$failures" = 0 ] && echo "all passed"
+finish

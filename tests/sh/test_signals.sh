@@ -4,14 +4,7 @@
 # long mesh load, a --stats FIFO waiting for its reader) and before the first pass ends they exit
 # at once with one line, writing nothing and leaving existing files alone; a second signal exits
 # at once and removes the temporary file being written; kill -9 never leaves a truncated image.
-set -u
-bin=${AO_BINARY:?AO_BINARY not set}
-root=${AO_SOURCE_ROOT:?AO_SOURCE_ROOT not set}
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work"
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+. "$(dirname "$0")/lib.sh"
 
 # complete_pfm FILE W H: the file is a whole W x H colour PFM.
 complete_pfm() {
@@ -227,4 +220,4 @@ done
 echo "full run ${total_ms} ms; kill -9 outcomes:$outcomes"
 
 echo "$failures failure(s)"
-[ "$failures" = 0 ]
+finish

@@ -5,11 +5,8 @@
 # The evidence is the dynamic loader's own log (LD_DEBUG=libs, written to files by
 # LD_DEBUG_OUTPUT), which has one "calling init: PATH" line for every library it initializes,
 # linked or opened later. Needs AO_BINARY and AO_SOURCE_ROOT.
-set -u
-scene=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-cd "$work" || exit 1
+. "$(dirname "$0")/lib.sh"
+scene=$root/assets/scenes/spheres.scene
 gl='/lib(OSMesa|LLVM|glapi|GL|EGL|GLX)[-.][^/]*$'
 
 fail() {

@@ -14,10 +14,9 @@
 #                                        fails with one line naming the library and the loader's
 #                                        reason, a PFM is still written
 # Needs AO_BINARY and AO_SOURCE_ROOT; the first two exit 77 without Xvfb (and xdotool).
-set -u
+. "$(dirname "$0")/lib.sh"
 mode=${1:?mode}
-scene=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
-work=$(mktemp -d)
+scene=$root/assets/scenes/spheres.scene
 server=
 viewer=
 cleanup() {
@@ -26,7 +25,6 @@ cleanup() {
     rm -rf "$work"
 }
 trap cleanup EXIT
-cd "$work" || exit 1
 
 fail() {
     echo "FAIL: $*"

@@ -52,6 +52,7 @@ if [ -z "${AO_UNDER_XVFB:-}" ]; then
     fi
     AO_UNDER_XVFB=1 exec xvfb-run -a -s "-screen 0 1280x1024x24 -fbdir $AO_FBDIR $noreset" "$0" "$@"
 fi
+. "$(dirname "$0")/lib.sh"
 
 fail() {
     echo "FAIL: $*"
@@ -238,11 +239,9 @@ drag() {
 # at a size that leaves it room and against a reference made first.
 W=160
 H=120
-work=$(mktemp -d)
 trap 'kill "$pid" 2>/dev/null; rm -rf "$work" "$AO_FBDIR"' EXIT
-cd "$work" || exit 1
 args=()
-scene=$AO_SOURCE_ROOT/assets/scenes/spheres.scene
+scene=$root/assets/scenes/spheres.scene
 if [ "$mode" = keys ]; then
     # The spheres and, for F, a coarse mesh: an octahedron whose vertex normals point outwards.
     cat >octahedron.obj <<'EOF'
