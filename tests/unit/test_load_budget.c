@@ -64,92 +64,12 @@ static void test_loaders_keep_to_the_budget(void **state)
     ao_mesh_finish(&mesh);
 }
 
-/* One budget covers the whole scene: a mesh file that three lines name is read and charged once,
- * each of its placements once, and each copy of it that flattening makes (a one-triangle mesh
- * placed three times is flattened: the mesh moved for the last placement, copied for the others);
- * with one byte less it is instanced, and below the mesh and its placements refused. */
-static void test_scene_budget_covers_every_mesh_line(void **state)
-{
-    (void)state;
-    static const char obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-    temp_file("tri.obj", obj, sizeof obj - 1);
-    static const char text[] = "camera eye 0 1 4 target 0 0 0\nmesh tri.obj\nmesh tri.obj translate 1 0 0\n"
-                               "mesh tri.obj translate 2 0 0\n";
-    const char *path = temp_file("three.scene", text, sizeof text - 1);
-    /* The scene's text, the mesh (and its structures), three placements and two copies, at the MEDIUM
-     * BVH's rates. */
-    uint64_t need = sizeof text + 3 * medium_charge(1, 3) + AO_BUDGET_MESH + 3 * AO_BUDGET_INSTANCE;
-    struct ao_scene_options medium = {.budget = need, .bvh = AO_BVH_MEDIUM};
-    struct ao_scene scene;
-    assert_true(ao_scene_load(&scene, path, &medium));
-    assert_int_equal(scene.triangle_count, 3);
-    assert_int_equal(scene.mesh_count, 3);
-    assert_int_equal(scene.instance_count, 3);
-    ao_scene_finish(&scene);
-    /* One byte less: the copies do not fit, so the mesh is instanced instead (scene.h's AUTO). */
-    medium.budget = need - 1;
-    assert_true(ao_scene_load(&scene, path, &medium));
-    assert_int_equal(scene.mesh_count, 1);
-    assert_false(scene.instances[0].flat);
-    ao_scene_finish(&scene);
-    /* Without room for the copies' rule, the mesh and its placements alone: one byte less refused. */
-    uint64_t least = sizeof text + medium_charge(1, 3) + AO_BUDGET_MESH + 3 * AO_BUDGET_INSTANCE;
-    medium.budget = least;
-    assert_true(ao_scene_load(&scene, path, &medium));
-    assert_int_equal(scene.bvh, AO_BVH_MEDIUM);
-    ao_scene_finish(&scene);
-    medium.budget = least - 1;
-    assert_false(ao_scene_load(&scene, path, &medium));
-}
-
-/* An AUTO budget charges the compact rates and builds the MEDIUM BVH when MEDIUM's charges would
- * fit too, else COMPACT with a note; below the compact charges the scene is refused. The budget
- * decides for the whole scene: the placement charged after the mesh counts alike. */
-static void test_budget_builds_compact_where_only_that_fits(void **state)
-{
-    (void)state;
-    static const char obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
-    temp_file("tri.obj", obj, sizeof obj - 1);
-    static const char text[] = "camera eye 0 1 4 target 0 0 0\nmesh tri.obj\n";
-    const char *path = temp_file("one.scene", text, sizeof text - 1);
-    uint64_t medium = sizeof text + medium_charge(1, 3) + AO_BUDGET_MESH + AO_BUDGET_INSTANCE;
-    uint64_t compact = medium - (AO_BUDGET_TRIANGLE - AO_BUDGET_TRIANGLE_COMPACT);
-    struct ao_scene scene;
-    assert_true(ao_scene_load(&scene, path, &(struct ao_scene_options){.budget = medium}));
-    assert_int_equal(scene.bvh, AO_BVH_MEDIUM);
-    assert_string_equal(scene.notes, "");
-    ao_scene_finish(&scene);
-    assert_true(ao_scene_load(&scene, path, &(struct ao_scene_options){.budget = medium - 1}));
-    assert_int_equal(scene.bvh, AO_BVH_COMPACT);
-    assert_string_equal(scene.notes, "one.scene: BVH built compact to fit the scene budget (slower rays; "
-                                     "a larger --scene-budget gets the faster BVH)");
-    ao_scene_finish(&scene);
-    assert_true(ao_scene_load(&scene, path, &(struct ao_scene_options){.budget = compact}));
-    assert_int_equal(scene.bvh, AO_BVH_COMPACT);
-    ao_scene_finish(&scene);
-    assert_false(ao_scene_load(&scene, path, &(struct ao_scene_options){.budget = compact - 1}));
-    /* Asked for, each is charged at its own rates, without a note. */
-    struct ao_scene_options asked = {.budget = compact, .bvh = AO_BVH_COMPACT};
-    assert_true(ao_scene_load(&scene, path, &asked));
-    assert_int_equal(scene.bvh, AO_BVH_COMPACT);
-    assert_string_equal(scene.notes, "");
-    ao_scene_finish(&scene);
-    asked.bvh = AO_BVH_LOW;
-    assert_false(ao_scene_load(&scene, path, &asked));
-    asked.budget = medium;
-    assert_true(ao_scene_load(&scene, path, &asked));
-    assert_int_equal(scene.bvh, AO_BVH_LOW);
-    ao_scene_finish(&scene);
-}
-
 int main(void)
 {
     if (!mesh_fixture_begin("test_load_budget"))
         return 77;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_loaders_keep_to_the_budget),
-        cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
-        cmocka_unit_test(test_budget_builds_compact_where_only_that_fits),
     };
     return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);
 }
