@@ -8,7 +8,7 @@
 
 #include "modes.h"
 
-/* Everything SPEC.md's command line can say; strings point into argv. */
+/* Everything aoview's command line can say (docs/contract.md); strings point into argv. */
 struct ao_options {
     const char *scene_path;   /* NULL: the built-in default scene */
     bool headless;

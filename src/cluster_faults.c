@@ -83,7 +83,8 @@ void ao_cluster_missing(struct ao_cluster *cluster, double seconds, char *out, s
 {
     MPI_Request *pending = cluster->answers;
     int ranks = cluster->size;
-    for (double deadline = ao_clock_seconds() + seconds; ao_clock_seconds() < deadline; ao_cluster_sleep(POLL_MOST_NS)) {
+    for (double deadline = ao_clock_seconds() + seconds; ao_clock_seconds() < deadline;
+         ao_cluster_sleep(POLL_MOST_NS)) {
         int left = 0;
         for (int r = 1; r < ranks; r++) {
             int done = 0;

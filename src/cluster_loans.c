@@ -31,7 +31,8 @@ bool ao_cluster_await(struct ao_cluster *c, int n, MPI_Request *requests, long m
         MPI_Testall(n, requests, &done, MPI_STATUSES_IGNORE);
         if (done)
             return true;
-        if (deadline > 0.0 ? ao_clock_seconds() > deadline : c && atomic_load_explicit(&c->stopping, memory_order_relaxed))
+        if (deadline > 0.0 ? ao_clock_seconds() > deadline
+                           : c && atomic_load_explicit(&c->stopping, memory_order_relaxed))
             return false;
         if (!most || ao_clock_seconds() < spin_until)
             continue;

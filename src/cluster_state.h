@@ -1,4 +1,4 @@
-/* The state of an aoview-mpi run's cluster (struct ao_cluster) and what its rooms share: the loans
+/* The state of an aoview-mpi run's cluster (struct ao_cluster) and what its files share: the loans
  * and the waits that serve them (cluster_loans.c), the faults and interruptions
  * (cluster_faults.c), the life cycle and collectives (cluster.c). Four communicators keep the
  * kinds of traffic apart, since they come from different threads: passes (the render thread's

@@ -1,3 +1,6 @@
+/* The live equal-time comparison (see compare.h): two renderers of one scene taking turns pass by
+ * pass, their settings kept alike but for each side's configuration, their frames and charts; and
+ * the pure pieces its views use (labels, layouts, composing the two images). */
 #include "compare.h"
 
 #include <math.h>

@@ -16,8 +16,8 @@ struct ao_settings {
     int width, height;       /* image size in pixels (the window's, or --size) */
     enum ao_sampling sampling;
     bool aa;
-    int spppp;               /* AO samples per pixel per pass; 0: auto (render.c's schedule) */
-    bool adaptive;           /* samples go where the estimated error is (render.c) */
+    int spppp;               /* AO samples per pixel per pass; 0: auto (pass.c's schedule) */
+    bool adaptive;           /* samples go where the estimated error is (pass.c, tile.c) */
     bool paused;
     bool previews;           /* coarse frames after each restart (preview.h), for a window's eye */
     bool navigating;         /* the camera is being moved (a drag): previews stop at cells of about

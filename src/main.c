@@ -1,5 +1,6 @@
-/* aoview: wiring of options, scene, tracer, renderer and the window or headless output. The only
- * place that exits. */
+/* aoview: wiring of options, scene, tracer, renderer and the window or headless output; main
+ * returns the exit status (docs/contract.md). Nothing else ends the process but the handlers
+ * where no way back is sound (docs/style.md). */
 #include <math.h>
 #include <signal.h>
 #include <stdatomic.h>

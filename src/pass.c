@@ -102,7 +102,7 @@ struct ao_tile_work ao_pass_tile_work(const struct ao_run *r, int t, uint32_t *n
 }
 
 void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, uint32_t next,
-                     const struct ao_vec3 *sums)
+                      const struct ao_vec3 *sums)
 {
     ao_tile_add(&r->tiles[t], &r->accum, r->width, ao_pass_tile_rect(r, t), work, next, sums);
 }
@@ -284,7 +284,7 @@ bool ao_pass_plan(struct ao_run *r, bool adaptive, struct ao_next_pass *plan)
 }
 
 bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive, bool finished, uint64_t rays[2],
-                   double seconds, uint32_t spppp, bool *counts)
+                    double seconds, uint32_t spppp, bool *counts)
 {
     struct ao_share_tally tally;
     memset(&tally, 0, sizeof tally);

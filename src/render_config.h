@@ -1,6 +1,6 @@
 /* How a renderer renders (render.h): the scene and tracer, threads, seed, targets, the estimator's
  * fixed choices, the reference, the callbacks after each published frame and the share. Header
- * only: the renderer's rooms (render.c, pass.c) and its callers include it. */
+ * only: the renderer's files (render.c, pass.c) and its callers include it. */
 #ifndef AO_RENDER_CONFIG_H
 #define AO_RENDER_CONFIG_H
 

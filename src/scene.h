@@ -19,7 +19,8 @@
 
 /* The smallest and largest scene, as the largest side of the box around its geometry (and its
  * camera, for the largest), that the renderer draws as the same scene at size 1; ao_scene_load
- * and ao_scene_parse (scene_load.h) refuse others (derived in scene_place.c, measured in docs/stability.md). */
+ * and ao_scene_parse (scene_load.h) refuse others (derived in scene_place.c, measured in
+ * docs/stability.md). */
 #define AO_SCENE_MIN_EXTENT 0x1p-12
 #define AO_SCENE_MAX_EXTENT 0x1p31
 

@@ -23,7 +23,7 @@ static void settle_bvh(struct ao_scene *s, const struct ao_budget *budget)
     s->bvh = ao_budget_bvh(budget);
     if (budget->bvh == AO_BVH_AUTO && s->bvh == AO_BVH_COMPACT)
         ao_scene_add_note(s, s->name, "BVH built compact to fit the scene budget (slower rays; a larger "
-                             "--scene-budget gets the faster BVH)");
+                                      "--scene-budget gets the faster BVH)");
 }
 
 /* An empty scene named after path's last part, with the defaults a file may change. */
@@ -106,7 +106,8 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budge
     struct ao_affine identity = ao_affine_identity();
     const struct ao_world_file *f = ao_world_load_file(&c, s, &w, path, w.crease);
     bool ok = f && (!ground || ao_world_charge(&c, &w, 2, 4, "the ground")) &&
-              ao_world_place_model(&c, s, &w, f, &identity, ao_vec3_make(AO_WORLD_ALBEDO, AO_WORLD_ALBEDO, AO_WORLD_ALBEDO), path);
+              ao_world_place_model(&c, s, &w, f, &identity,
+                                   ao_vec3_make(AO_WORLD_ALBEDO, AO_WORLD_ALBEDO, AO_WORLD_ALBEDO), path);
     struct ao_dvec3 lo, hi;
     if (ok && !ao_world_survey(s, &w))
         ok = ao_cursor_fail(&c, "out of memory");

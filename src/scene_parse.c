@@ -135,7 +135,7 @@ static bool require(const struct ao_cursor *c, unsigned seen, const char *const 
 
 /* ---- statements ---- */
 
-/* Scale, then rotation about a unit axis, then translation (SPEC.md's order), in double. */
+/* Scale, then rotation about a unit axis, then translation (the scene format's order), in double. */
 struct transform {
     struct ao_dvec3 scale, axis, translate;
     double cos_angle, sin_angle;
@@ -214,7 +214,7 @@ static bool parse_image(struct ao_cursor *c, struct ao_scene *s, struct ao_world
     if (v[0] != floor(v[0]) || v[1] != floor(v[1]) || v[0] < 1 || v[1] < 1 ||
         v[0] > AO_IMAGE_MAX_SIDE || v[1] > AO_IMAGE_MAX_SIDE || v[0] * v[1] > AO_IMAGE_MAX_PIXELS)
         return ao_cursor_fail(c, "'image': expected width and height, whole numbers from 1 to %d with at most "
-                       "%d pixels", AO_IMAGE_MAX_SIDE, AO_IMAGE_MAX_PIXELS);
+                                 "%d pixels", AO_IMAGE_MAX_SIDE, AO_IMAGE_MAX_PIXELS);
     s->width = (int)v[0];
     s->height = (int)v[1];
     if (w->sized)
@@ -287,7 +287,8 @@ static bool parse_quad(struct ao_cursor *c, struct ao_scene *s, struct ao_world 
     if (!ao_world_charge(c, w, 2, 4, "quad"))
         return false;
     (void)s;
-    struct ao_dvec3 p[4] = {corner, ao_dvec3_add(corner, e1), ao_dvec3_add(ao_dvec3_add(corner, e1), e2), ao_dvec3_add(corner, e2)};
+    struct ao_dvec3 p[4] = {corner, ao_dvec3_add(corner, e1), ao_dvec3_add(ao_dvec3_add(corner, e1), e2),
+                            ao_dvec3_add(corner, e2)};
     return ao_world_add_quad(w, p, n, rho) || ao_cursor_fail(c, "out of memory");
 }
 

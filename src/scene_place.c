@@ -33,7 +33,7 @@ bool ao_world_charge(struct ao_cursor *c, struct ao_world *w, uint64_t triangles
     char why[200];
     ao_budget_explain(w->budget, bytes, why, sizeof why);
     return ao_cursor_fail(c, "%s: %llu triangles and %llu vertices %s", what, (unsigned long long)triangles,
-                (unsigned long long)vertices, why);
+                          (unsigned long long)vertices, why);
 }
 
 bool ao_world_take(struct ao_cursor *c, struct ao_world *w, uint64_t bytes, const char *what)
@@ -93,7 +93,8 @@ static bool index_file(struct ao_world *w, size_t index)
         w->file_slots = slots, w->slot_count = count;
         for (size_t i = 0; i < index; i++)
             if (w->files[i].identified)
-                w->file_slots[file_slot(w, w->files[i].device, w->files[i].inode, w->files[i].crease)] = (uint32_t)i + 1;
+                w->file_slots[file_slot(w, w->files[i].device, w->files[i].inode, w->files[i].crease)] =
+                    (uint32_t)i + 1;
     }
     const struct ao_world_file *f = &w->files[index];
     w->file_slots[file_slot(w, f->device, f->inode, f->crease)] = (uint32_t)index + 1;
@@ -116,7 +117,7 @@ const struct ao_world_file *ao_world_find_file(const struct ao_world *w, const c
 }
 
 const struct ao_world_file *ao_world_load_file(struct ao_cursor *c, struct ao_scene *s, struct ao_world *w,
-                                              const char *path, double crease)
+                                               const char *path, double crease)
 {
     struct ao_model model;
     if (!ao_load_model(&model, path, w->budget, crease))
@@ -139,7 +140,7 @@ const struct ao_world_file *ao_world_load_file(struct ao_cursor *c, struct ao_sc
     }
     struct ao_world_file *f = &w->files[w->file_count++];
     *f = (struct ao_world_file){.path = copy, .crease = crease, .first = s->mesh_count, .count = model.mesh_count,
-                         .placements = model.placements, .placement_count = model.placement_count};
+                                .placements = model.placements, .placement_count = model.placement_count};
     if (stat(path, &st) == 0) {
         f->identified = true, f->device = st.st_dev, f->inode = st.st_ino;
         if (!index_file(w, w->file_count - 1)) {
@@ -160,8 +161,9 @@ const struct ao_world_file *ao_world_load_file(struct ao_cursor *c, struct ao_sc
     return f;
 }
 
-bool ao_world_place_model(struct ao_cursor *c, struct ao_scene *s, struct ao_world *w, const struct ao_world_file *f,
-                          const struct ao_affine *line, struct ao_vec3 rho, const char *path)
+bool ao_world_place_model(struct ao_cursor *c, struct ao_scene *s, struct ao_world *w,
+                          const struct ao_world_file *f, const struct ao_affine *line, struct ao_vec3 rho,
+                          const char *path)
 {
     char what[4200];
     snprintf(what, sizeof what, "%s: %zu placements", path, f->placement_count);
@@ -411,12 +413,13 @@ static bool check_range(const struct ao_world *w, struct ao_cursor *c, bool any,
     grow(&lo, &hi, w->eye);
     grow(&lo, &hi, w->target);
     if (!(ao_world_largest_side(lo, hi) <= AO_SCENE_MAX_EXTENT))
-        return ao_cursor_fail(c, "camera: with it the scene is %.3g across; %s", ao_world_largest_side(lo, hi), message);
+        return ao_cursor_fail(c, "camera: with it the scene is %.3g across; %s", ao_world_largest_side(lo, hi),
+                              message);
     struct ao_dvec3 d = ao_dvec3_sub(w->target, w->eye), along;
     double distance = ao_dvec3_unit(d, &along) ? ao_dvec3_dot(d, along) : 0.0;   /* |d|, no square to vanish */
     if (distance > 0.0 && distance < MIN_CAMERA_DISTANCE)
         return ao_cursor_fail(c, "camera: eye and target are %.3g apart, closer than the %.3g aoview can aim by",
-                    distance, MIN_CAMERA_DISTANCE);
+                              distance, MIN_CAMERA_DISTANCE);
     return true;
 }
 
@@ -441,8 +444,8 @@ static bool flatten(struct ao_mesh *dst, const struct ao_mesh *src, const struct
 /* Builds the instance of placement p, whose map into the local frame is to_local: an instanced
  * mesh's map and slack, or the mesh flattened (moved in place at its last placement, copied before:
  * each copy a mesh of its own, charged to the budget). False after reporting. */
-static bool build_instance(struct ao_scene *s, struct ao_world *w, struct ao_cursor *c, const struct ao_world_placement *p,
-                           const struct ao_affine *to_local)
+static bool build_instance(struct ao_scene *s, struct ao_world *w, struct ao_cursor *c,
+                           const struct ao_world_placement *p, const struct ao_affine *to_local)
 {
     struct ao_world_mesh *info = &w->info[p->mesh];
     struct ao_instance *in = &s->instances[s->instance_count];
@@ -568,7 +571,8 @@ bool ao_world_place(struct ao_scene *s, struct ao_world *w, struct ao_cursor *c)
     c->line = 0;
     if (!any)
         return ao_cursor_fail(c, "no camera and nothing to frame: add a 'camera' line or some geometry");
-    ao_camera_frame_box(&s->camera, ao_dvec3_narrow(ao_dvec3_sub(lo, origin)), ao_dvec3_narrow(ao_dvec3_sub(hi, origin)));
+    ao_camera_frame_box(&s->camera, ao_dvec3_narrow(ao_dvec3_sub(lo, origin)),
+                        ao_dvec3_narrow(ao_dvec3_sub(hi, origin)));
     return true;
 }
 

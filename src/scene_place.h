@@ -61,8 +61,8 @@ struct ao_world_quad {
     struct ao_vec3 n, rho;
 };
 
-/* What ao_world_place() needs to know of each mesh: how often it is placed, whether it is instanced, and
- * the box around its vertices in its own frame (for the boxes of its instances). */
+/* What ao_world_place() needs to know of each mesh: how often it is placed, whether it is
+ * instanced, and the box around its vertices in its own frame (for the boxes of its instances). */
 struct ao_world_mesh {
     size_t placements, left;      /* placements in all, and those not yet built into instances */
     bool instanced;
@@ -73,7 +73,7 @@ struct ao_world_mesh {
  * instances, sphere centres and camera are filled from it once the whole scene is known
  * (ao_world_place()). */
 struct ao_world {
-    struct ao_dvec3 *sphere_centers;  /* parallel to scene->spheres */
+    struct ao_dvec3 *sphere_centers; /* parallel to scene->spheres */
     struct ao_world_placement *placements;
     size_t placement_count;
     struct ao_world_quad *quads;
@@ -82,8 +82,8 @@ struct ao_world {
     size_t file_count;
     uint32_t *file_slots;         /* hash table of the identified files: index + 1, or 0 (empty) */
     size_t slot_count;            /* a power of two, at least twice file_count; 0 before the first */
-    struct ao_world_mesh *info;       /* per mesh, from ao_world_survey() */
-    struct ao_dvec3 eye, target;      /* the camera's, when has_camera */
+    struct ao_world_mesh *info;   /* per mesh, from ao_world_survey() */
+    struct ao_dvec3 eye, target;  /* the camera's, when has_camera */
     bool has_camera;
     int camera_line;
     const char *extent_note;      /* what makes up the extent, for its message ("" in scene files) */
@@ -117,8 +117,9 @@ const struct ao_world_file *ao_world_load_file(struct ao_cursor *c, struct ao_sc
 
 /* Places every placement of the loaded file f under the map `line`, with albedo rho: one pending
  * placement each, charged to the budget; false after reporting. */
-bool ao_world_place_model(struct ao_cursor *c, struct ao_scene *s, struct ao_world *w, const struct ao_world_file *f,
-                          const struct ao_affine *line, struct ao_vec3 rho, const char *path);
+bool ao_world_place_model(struct ao_cursor *c, struct ao_scene *s, struct ao_world *w,
+                          const struct ao_world_file *f, const struct ao_affine *line, struct ao_vec3 rho,
+                          const char *path);
 
 /* Fills w->info: how often each mesh is placed, its box in its own frame, and whether it is
  * instanced (w->instancing's rule; never where a placement's map is too ill-conditioned to trace).

@@ -1,6 +1,6 @@
 /* One tile's bookkeeping for the renderer: what it has taken since a restart, the part of its
  * pixels' streams it traces in a pass, the error estimate of its sums, and adaptive sampling's
- * rule for whether it joins the next pass. No threads and no I/O: render.c calls these for the
+ * rule for whether it joins the next pass. No threads and no I/O: pass.c calls these for the
  * tiles it owns. */
 #ifndef AO_TILE_H
 #define AO_TILE_H

@@ -1,5 +1,6 @@
-/* The interactive viewer: a GLFW window on the running renderer, with SPEC.md's keys and mouse,
- * the status overlay and title, screenshots, and the live comparison of two configurations. */
+/* The interactive viewer: a GLFW window on the running renderer, with the keys and mouse of
+ * docs/contract.md, the status overlay and title, screenshots, and the live comparison of two
+ * configurations. */
 #ifndef AO_WINDOW_H
 #define AO_WINDOW_H
 

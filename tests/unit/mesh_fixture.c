@@ -192,8 +192,7 @@ void assert_vec3_near(struct ao_vec3 a, float x, float y, float z)
     assert_float_equal(a.z, z, 1e-5f);
 }
 
-void assert_triangle(const struct ao_mesh *mesh, size_t t, uint32_t a, uint32_t b,
-                            uint32_t c)
+void assert_triangle(const struct ao_mesh *mesh, size_t t, uint32_t a, uint32_t b, uint32_t c)
 {
     assert_int_equal(mesh->indices[3 * t], a);
     assert_int_equal(mesh->indices[3 * t + 1], b);

@@ -72,8 +72,7 @@ void expect_failure(const char *path, const char *location, const char *message)
 void assert_vec3_near(struct ao_vec3 a, float x, float y, float z);
 
 /* Triangle t must be (a, b, c). */
-void assert_triangle(const struct ao_mesh *mesh, size_t t, uint32_t a, uint32_t b,
-                            uint32_t c);
+void assert_triangle(const struct ao_mesh *mesh, size_t t, uint32_t a, uint32_t b, uint32_t c);
 
 /* What every loaded mesh must satisfy: triangles, indices in range, finite positions, and
  * normals that are unit length or zero. */
