@@ -5,17 +5,16 @@
 #include <stdlib.h>
 #include <time.h>
 
+#include "clock.h"
 #include "render.h"
 #include "scene.h"
 #include "scene_load.h"
 #include "tracer.h"
 
-/* Seconds on the monotonic clock. */
+/* Seconds on the monotonic clock (the renderer's own). */
 static inline double bench_now(void)
 {
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+    return ao_clock_seconds();
 }
 
 /* qsort's order of doubles. */

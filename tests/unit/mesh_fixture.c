@@ -97,22 +97,33 @@ unsigned char *slurp(const char *path, size_t *size)
     return data;
 }
 
+struct capture capture_begin(void)
+{
+    struct capture c = {.file = tmpfile()};
+    assert_non_null(c.file);
+    fflush(stderr);
+    c.saved = dup(STDERR_FILENO);
+    assert_true(c.saved >= 0);
+    assert_true(dup2(fileno(c.file), STDERR_FILENO) >= 0);
+    return c;
+}
+
+void capture_end(struct capture c, char *err, size_t err_size)
+{
+    fflush(stderr);
+    assert_true(dup2(c.saved, STDERR_FILENO) >= 0);
+    close(c.saved);
+    rewind(c.file);
+    size_t n = fread(err, 1, err_size - 1, c.file);
+    err[n] = '\0';
+    fclose(c.file);
+}
+
 bool load_captured(struct ao_mesh *mesh, const char *path, char *err, size_t err_size)
 {
-    FILE *capture = tmpfile();
-    assert_non_null(capture);
-    fflush(stderr);
-    int saved = dup(STDERR_FILENO);
-    assert_true(saved >= 0);
-    assert_true(dup2(fileno(capture), STDERR_FILENO) >= 0);
+    struct capture c = capture_begin();
     bool ok = ao_load_mesh(mesh, path, NULL);
-    fflush(stderr);
-    assert_true(dup2(saved, STDERR_FILENO) >= 0);
-    close(saved);
-    rewind(capture);
-    size_t n = fread(err, 1, err_size - 1, capture);
-    err[n] = '\0';
-    fclose(capture);
+    capture_end(c, err, err_size);
     return ok;
 }
 
@@ -129,20 +140,9 @@ uint64_t medium_charge(uint64_t triangles, uint64_t vertices)
 bool load_within(struct ao_mesh *mesh, const char *path, uint64_t limit, char *err, size_t err_size)
 {
     struct ao_budget budget = {.limit = limit, .bvh = AO_BVH_MEDIUM};
-    FILE *capture = tmpfile();
-    assert_non_null(capture);
-    fflush(stderr);
-    int saved = dup(STDERR_FILENO);
-    assert_true(saved >= 0);
-    assert_true(dup2(fileno(capture), STDERR_FILENO) >= 0);
+    struct capture c = capture_begin();
     bool ok = ao_load_mesh(mesh, path, &budget);
-    fflush(stderr);
-    assert_true(dup2(saved, STDERR_FILENO) >= 0);
-    close(saved);
-    rewind(capture);
-    size_t n = fread(err, 1, err_size - 1, capture);
-    err[n] = '\0';
-    fclose(capture);
+    capture_end(c, err, err_size);
     assert_true(budget.used == 0);
     return ok;
 }

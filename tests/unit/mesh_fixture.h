@@ -8,6 +8,7 @@
 #include <stdbool.h>
 #include <stddef.h>
 #include <stdint.h>
+#include <stdio.h>
 
 #include "budget.h"
 #include "load/load.h"
@@ -44,6 +45,18 @@ const char *temp_file(const char *name, const void *bytes, size_t size);
 
 /* Reads a whole file into a malloc'd buffer. */
 unsigned char *slurp(const char *path, size_t *size);
+
+/* stderr captured into a scratch file, from capture_begin to capture_end. */
+struct capture {
+    FILE *file;
+    int saved;             /* the real stderr's descriptor, put back by capture_end */
+};
+
+/* Starts capturing what is written to stderr. */
+struct capture capture_begin(void);
+
+/* Stops capturing and puts what was written, NUL-terminated and cut to err_size, into err. */
+void capture_end(struct capture c, char *err, size_t err_size);
 
 /* Runs ao_load_mesh with stderr redirected, returning what it printed in err. */
 bool load_captured(struct ao_mesh *mesh, const char *path, char *err, size_t err_size);

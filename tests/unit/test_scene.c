@@ -25,20 +25,9 @@ enum entry { FROM_FILE, FROM_TEXT };
 static bool load_captured_scene(struct ao_scene *scene, enum entry entry, const char *path, const char *text,
                                 const struct ao_scene_options *options, char *err, size_t err_size)
 {
-    FILE *capture = tmpfile();
-    assert_non_null(capture);
-    fflush(stderr);
-    int saved = dup(STDERR_FILENO);
-    assert_true(saved >= 0);
-    assert_true(dup2(fileno(capture), STDERR_FILENO) >= 0);
+    struct capture c = capture_begin();
     bool ok = entry == FROM_FILE ? ao_scene_load(scene, path, options) : ao_scene_parse(scene, text, path, options);
-    fflush(stderr);
-    assert_true(dup2(saved, STDERR_FILENO) >= 0);
-    close(saved);
-    rewind(capture);
-    size_t n = fread(err, 1, err_size - 1, capture);
-    err[n] = '\0';
-    fclose(capture);
+    capture_end(c, err, err_size);
     return ok;
 }
 
