@@ -96,10 +96,10 @@ void ao_scene_triangle(const struct ao_scene *scene, size_t instance, size_t pri
 /* Frees everything the scene owns and zeroes it; accepts an empty scene. */
 void ao_scene_finish(struct ao_scene *scene);
 
-/* For the scene's builders (scene_place.c and its callers): resizes *array, a pointer to a malloc'd
- * array, to count elements of size bytes; false when that overflows or memory is short (the array
- * is then left as it was). */
-bool ao_scene_grow(void *array, size_t count, size_t size);
+/* For the scene's builders (scene_place.c and its callers): makes room in *array, a malloc'd array
+ * of had elements of size bytes (or NULL), for count; false when that overflows or memory is short
+ * (the array is then left as it was). */
+bool ao_scene_grow(void *array, size_t had, size_t count, size_t size);
 
 /* Appends an albedo to the scene's table, its index in *index; false when memory or 32-bit indices
  * run out. */

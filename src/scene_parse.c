@@ -252,8 +252,8 @@ static bool parse_sphere(struct ao_cursor *c, struct ao_scene *s, struct ao_worl
         return ao_cursor_fail(c, "'radius' must be positive");
     if (!ao_world_charge(c, w, 1, 0, "sphere"))
         return false;
-    if (!ao_scene_grow(&s->spheres, s->sphere_count + 1, sizeof *s->spheres) ||
-        !ao_scene_grow(&w->sphere_centers, s->sphere_count + 1, sizeof *w->sphere_centers))
+    if (!ao_scene_grow(&s->spheres, s->sphere_count, s->sphere_count + 1, sizeof *s->spheres) ||
+        !ao_scene_grow(&w->sphere_centers, s->sphere_count, s->sphere_count + 1, sizeof *w->sphere_centers))
         return ao_cursor_fail(c, "out of memory");
     w->sphere_centers[s->sphere_count] = center;
     s->spheres[s->sphere_count++] = sp;

@@ -55,7 +55,7 @@ static bool charge_meshes(struct ao_cursor *c, struct ao_world *w, size_t count,
 
 bool ao_world_add_quad(struct ao_world *w, const struct ao_dvec3 p[4], struct ao_vec3 n, struct ao_vec3 rho)
 {
-    if (!ao_scene_grow(&w->quads, w->quad_count + 1, sizeof *w->quads))
+    if (!ao_scene_grow(&w->quads, w->quad_count, w->quad_count + 1, sizeof *w->quads))
         return false;
     struct ao_world_quad *q = &w->quads[w->quad_count++];
     memcpy(q->p, p, sizeof q->p);
@@ -129,8 +129,8 @@ const struct ao_world_file *ao_world_load_file(struct ao_cursor *c, struct ao_sc
     char *copy = strdup(path);
     bool ok = ao_world_charge(c, w, triangles, vertices, path) && charge_meshes(c, w, model.mesh_count, path);
     if (ok && (!copy || s->mesh_count + model.mesh_count >= UINT32_MAX ||
-               !ao_scene_grow(&s->meshes, s->mesh_count + model.mesh_count, sizeof *s->meshes) ||
-               !ao_scene_grow(&w->files, w->file_count + 1, sizeof *w->files))) {
+               !ao_scene_grow(&s->meshes, s->mesh_count, s->mesh_count + model.mesh_count, sizeof *s->meshes) ||
+               !ao_scene_grow(&w->files, w->file_count, w->file_count + 1, sizeof *w->files))) {
         ok = ao_cursor_fail(c, "out of memory adding '%s'", path);
     }
     if (!ok) {
@@ -171,7 +171,8 @@ bool ao_world_place_model(struct ao_cursor *c, struct ao_scene *s, struct ao_wor
         return false;
     uint32_t a;
     if (!ao_scene_add_albedo(s, rho, &a) ||
-        !ao_scene_grow(&w->placements, w->placement_count + f->placement_count, sizeof *w->placements))
+        !ao_scene_grow(&w->placements, w->placement_count, w->placement_count + f->placement_count,
+                       sizeof *w->placements))
         return ao_cursor_fail(c, "out of memory placing '%s'", path);
     for (size_t i = 0; i < f->placement_count; i++)
         w->placements[w->placement_count++] = (struct ao_world_placement){
@@ -471,7 +472,8 @@ static bool build_instance(struct ao_scene *s, struct ao_world *w, struct ao_cur
         const struct ao_mesh *m = &s->meshes[p->mesh];
         if (!ao_world_charge(c, w, m->triangle_count, m->vertex_count, "a flattened copy"))
             return false;
-        if (s->mesh_count >= UINT32_MAX || !ao_scene_grow(&s->meshes, s->mesh_count + 1, sizeof *s->meshes))
+        if (s->mesh_count >= UINT32_MAX ||
+            !ao_scene_grow(&s->meshes, s->mesh_count, s->mesh_count + 1, sizeof *s->meshes))
             return ao_cursor_fail(c, "out of memory");
         dst = s->mesh_count;
         s->meshes[dst] = (struct ao_mesh){0};
@@ -494,7 +496,7 @@ static bool build_quads(struct ao_scene *s, struct ao_world *w, size_t *next, st
     *next = first + n;
     uint32_t a;
     if (!ao_scene_add_albedo(s, w->quads[first].rho, &a) || s->mesh_count >= UINT32_MAX ||
-        !ao_scene_grow(&s->meshes, s->mesh_count + 1, sizeof *s->meshes))
+        !ao_scene_grow(&s->meshes, s->mesh_count, s->mesh_count + 1, sizeof *s->meshes))
         return false;
     struct ao_mesh *m = &s->meshes[s->mesh_count];
     *m = (struct ao_mesh){.vertex_count = 4 * n, .triangle_count = 2 * n};
@@ -540,7 +542,7 @@ bool ao_world_place(struct ao_scene *s, struct ao_world *w, struct ao_cursor *c)
         origin = ao_dvec3_scale(ao_dvec3_add(lo, hi), 0.5);
     s->origin[0] = origin.x, s->origin[1] = origin.y, s->origin[2] = origin.z;
     c->line = 0;
-    if (!ao_scene_grow(&s->instances, w->placement_count + w->quad_count, sizeof *s->instances))
+    if (!ao_scene_grow(&s->instances, s->instance_count, w->placement_count + w->quad_count, sizeof *s->instances))
         return ao_cursor_fail(c, "out of memory");
     struct ao_affine shift = ao_affine_identity();
     shift.m[9] = -origin.x, shift.m[10] = -origin.y, shift.m[11] = -origin.z;
