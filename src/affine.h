@@ -7,6 +7,9 @@
 #include <math.h>
 #include <stdbool.h>
 
+#include "vec3.h"
+
+
 /* An affine map, column major as glTF's matrices and Embree's FLOAT3X4_COLUMN_MAJOR lay it out:
  * m[0..2], m[3..5], m[6..8] are the columns of L, m[9..11] the translation t. */
 struct ao_affine {
@@ -31,11 +34,13 @@ static inline struct ao_affine ao_affine_compose(const struct ao_affine *outer, 
     return r;
 }
 
-/* The image of the point (x, y, z) into out. */
-static inline void ao_affine_point(const struct ao_affine *a, double x, double y, double z, double out[3])
+/* The image of the point (x, y, z). */
+static inline struct ao_dvec3 ao_affine_point(const struct ao_affine *a, double x, double y, double z)
 {
+    double out[3];
     for (int k = 0; k < 3; k++)
         out[k] = a->m[k] * x + a->m[3 + k] * y + a->m[6 + k] * z + a->m[9 + k];
+    return ao_dvec3_make(out[0], out[1], out[2]);
 }
 
 /* True when every entry is finite. */

@@ -9,7 +9,10 @@
  * the uniform sphere) add nothing and are not traced. */
 #include "ao.h"
 
+#include "rng.h"
+#include "sampling.h"
 #include "simd.h"
+#include "tracer.h"
 
 /* Keys of a pixel's eye-ray stream (indexed by eye ray) and AO stream (indexed by sample), in the
  * pass slot of the key, where no real pass number reaches. */
@@ -19,7 +22,7 @@ static const uint64_t EYE_STREAM = UINT64_MAX - 1, AO_STREAM = UINT64_MAX;
  * any split, so both halves share one stream and its numbering; an Owen-scrambled Sobol sequence
  * split by parity would leave each half on its own part of the square, so the odd half draws from
  * a second, independently scrambled sequence and the two halves are independent estimates. Half 2
- * is the even half's first sample under auto passes (render.c), from a third sequence, so that the
+ * is the even half's first sample under auto passes (pass.c), from a third sequence, so that the
  * even half's own sequence is taken in aligned blocks from its start. */
 static uint64_t stream_for_half(const struct ao_context *ctx, uint64_t stream, int half)
 {
@@ -54,7 +57,7 @@ static inline struct ao_vec3 map_point(const float *a, struct ao_vec3 p)
  * before it is interpolated, as flattening maps them), both turned to the eye; the point recomputed
  * and lifted in the mesh's own frame, where Embree tests the triangle, then mapped. The lift there
  * clears the point's error bound plus how far the origin moves when it is mapped into the local
- * frame and Embree maps it back (the instance's slack, derived in scene.c): at most
+ * frame and Embree maps it back (the instance's slack, derived in scene_place.c): at most
  * slack[0] max|o| + slack[1] per axis for an origin o. With max|o| <= max|p| + d for a lift d, the
  * slack is taken at max|p| + 2 d0, d0 the lift with the slack at max|p|: the final lift exceeds d0
  * by at most sqrt(3) (1 + gamma12) 2 slack[0] d0 <= d0 (slack[0] <= 2^-8), so max|o| stays within. */

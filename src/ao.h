@@ -6,32 +6,14 @@
 #include <stdint.h>
 
 #include "camera.h"
-#include "rng.h"
-#include "sampling.h"
+#include "modes.h"
+#include "ray.h"
 #include "scene.h"
-#include "tracer.h"
+#include "tile.h"
 #include "vec3.h"
 
-/* What happens to sampled directions that point below the geometric surface (possible where the
- * interpolated shading normal differs from it). */
-enum ao_below {
-    AO_BELOW_REFLECT,        /* mirrored across the geometric surface, then traced */
-    AO_BELOW_TRACE,          /* traced as they are: they hit the surface itself and count occluded */
-};
-
-/* What a pixel sample's value is: the AO estimate, or the shading normal n the estimate uses
- * (turned to face the eye) as the colour (n + 1) / 2, black where the eye ray misses. */
-enum ao_output {
-    AO_OUTPUT_AO,
-    AO_OUTPUT_NORMALS,
-};
-
-/* The shading normal of a mesh point: the vertex normals Phong-interpolated, or the face normal.
- * Spheres use their exact normal either way. */
-enum ao_shading {
-    AO_SHADING_PHONG,
-    AO_SHADING_FLAT,
-};
+/* The tracer (tracer.h) a pass's rays go to; the estimator holds a pointer. */
+struct ao_tracer;
 
 /* Everything one pass's pixel samples share; read-only while a pass runs. */
 struct ao_context {
@@ -131,22 +113,6 @@ void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, 
 struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao_surface *s,
                                    uint64_t pixel, uint64_t first_sample, int count,
                                    uint64_t *shadow_rays);
-
-/* A rectangle of pixels [x0, x1) x [y0, y1) holding at most AO_TILE_PIXELS. */
-enum { AO_TILE_PIXELS = 256 };
-struct ao_tile {
-    int x0, y0, x1, y1;
-};
-
-/* Which part of its pixels' random streams a tile traces in one pass: `rounds` eye rays per pixel
- * (numbered from first_ray), each with `count` AO samples (numbered on from first_sample). `half`
- * is the pass's half of the accumulation (0 even, 1 odd); with Sobol numbers each half has streams
- * of its own, numbered within the half, so that the halves are independent estimates (2: streams
- * of a third sequence, for a sample of the even half outside its own sequence). */
-struct ao_tile_work {
-    uint64_t first_ray, first_sample;
-    int rounds, count, half;
-};
 
 /* One pass over a tile: per pixel `rounds` eye rays (jittered with AA), each with `count` AO
  * samples (with AO_OUTPUT_NORMALS, `count` samples of the normal's colour and no AO rays); writes

@@ -11,6 +11,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "clock.h"
 #include "config.h"
 #include "file.h"
 #include "headless.h"
@@ -27,20 +28,13 @@ double ao_app_mrays_per_second(const struct ao_frame_info *info)
     return info->seconds > 0.0 ? (double)(info->eye_rays + info->shadow_rays) / info->seconds / 1e6 : 0.0;
 }
 
-static double monotonic_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Redraws the progress bar: filled, and its percentage, by the share of the run done
  * (ao_progress_share: full only once done); the error "--" while not known; at most every
  * BAR_SECONDS, and at the end. */
 static void draw_bar(struct ao_reporter *rep, const struct ao_frame_info *info)
 {
     ao_progress_add(&rep->eta, info);
-    double now = monotonic_seconds();
+    double now = ao_clock_seconds();
     if (!info->done && rep->drawn_at > 0.0 && now - rep->drawn_at < BAR_SECONDS)
         return;
     rep->drawn_at = now;
@@ -393,9 +387,9 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     app->interrupt.output = opts->output ? opts->output : "aoview.png";
     ao_file_remember_inputs();
     char name[AO_TEXT_SIZE];
-    struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh,
+    struct ao_scene_options load = {.budget = opts->scene_budget, .no_ground = !opts->ground, .bvh = opts->bvh,
                                     .crease = opts->crease, .crease_set = true, .sized = opts->width != 0};
-    if (!ao_scene_load_with(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, &load) ||
+    if (!ao_scene_load(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, &load) ||
         !check_written_not_read(app, opts))
         return AO_EXIT_RUNTIME;
     int width = opts->width ? opts->width : app->scene.width ? app->scene.width : 640;
@@ -445,23 +439,15 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     return 0;
 }
 
-bool ao_app_run_window(struct ao_app *app, const struct ao_options *opts, const struct ao_window_info *info,
-                       int *status)
+bool ao_app_go_headless(const struct ao_options *opts)
 {
-    enum ao_window_result result = ao_window_run(app->render, info);
-    if (result != AO_WINDOW_NO_DISPLAY) {
-        *status = result == AO_WINDOW_OK ? 0 : AO_EXIT_RUNTIME;
-        return true;
-    }
     const char *output = opts->output ? opts->output : "aoview.png";
     char name[AO_TEXT_SIZE];
-    if (!ao_image_check_output(output)) {
-        *status = AO_EXIT_RUNTIME;
-        return true;
-    }
+    if (!ao_image_check_output(output))
+        return false;
     fprintf(stderr, "aoview: no display available; rendering headless to %s\n",
             ao_text_escape(output, name, sizeof name));
-    return false;
+    return true;
 }
 
 bool ao_app_wait(struct ao_app *app, int *sig)

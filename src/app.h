@@ -13,8 +13,8 @@
 #include "progress.h"
 #include "render.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
-#include "window.h"
 
 /* Exit statuses besides 0 and 128 + signal. */
 enum { AO_EXIT_RUNTIME = 1, AO_EXIT_USAGE = 2 };
@@ -132,12 +132,10 @@ void ao_app_watch(struct ao_app *app, struct ao_render *render);
 bool ao_app_write_output(const char *path, const struct ao_frame *frame, const char *scene, uint64_t seed,
                          const float *difference);
 
-/* Runs the window on app->render with info until the user quits: true, *status the exit status.
- * False where no window can be opened, after one line saying that the run goes on headless to -o
- * (aoview.png by default), as SPEC.md wants of a machine without a display; true with *status
- * AO_EXIT_RUNTIME after one line when that -o cannot be written. Main thread. */
-bool ao_app_run_window(struct ao_app *app, const struct ao_options *opts, const struct ao_window_info *info,
-                       int *status);
+/* Where no window could be opened (ao_window_run: no display): says on one line that the run goes
+ * on headless to -o (aoview.png by default), as a front end does on a machine without a display;
+ * false after one line when that -o cannot be written. Main thread. */
+bool ao_app_go_headless(const struct ao_options *opts);
 
 /* Waits for app->render to finish; true when it did, false when interrupted (*sig the signal) or
  * stopped otherwise (*sig 0). Main thread. */

@@ -8,6 +8,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "modes.h"
+
 /* The default budget in bytes, 1 GiB: about 6 million triangles of an indexed mesh with the MEDIUM
  * BVH, 10 million of a binary one with the COMPACT BVH; every small file that asked for gigabytes
  * is refused (docs/reliability.md). */
@@ -31,13 +33,6 @@ enum { AO_BUDGET_MESH = 1280, AO_BUDGET_PIXEL = 76 };
  * triangle by which Embree's compact BVH lowers the peak of a 10M-triangle GLB or binary PLY
  * (docs/reliability.md). */
 enum { AO_BUDGET_TRIANGLE_COMPACT = 56 };
-
-/* How the tracer builds the scene's BVHs (measured in docs/formats.md): MEDIUM, Embree's SAH build,
- * traces fastest; COMPACT, the same build with leaves that index the shared vertices, takes half
- * the memory and reaches 1 % RMSE 18-35 % later; LOW, Embree's Morton build, builds 3x sooner and
- * reaches 1 % up to 14 % later. AUTO is MEDIUM where the whole scene fits the budget so, else
- * COMPACT. */
-enum ao_bvh { AO_BVH_AUTO, AO_BVH_MEDIUM, AO_BVH_COMPACT, AO_BVH_LOW };
 
 /* A budget: its limit, what is charged now (never more than the limit), the BVH whose rates it
  * charges (AUTO charges COMPACT's) and, for AUTO, what MEDIUM's rates would charge more. The

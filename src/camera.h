@@ -1,4 +1,5 @@
-/* Pinhole camera (SPEC.md's convention) and the orbit / pan / zoom moves of the viewer. */
+/* Pinhole camera (the convention of docs/contract.md: pixel (i, j) from the top left, vertical fov)
+ * and the orbit / pan / zoom moves of the viewer. */
 #ifndef AO_CAMERA_H
 #define AO_CAMERA_H
 

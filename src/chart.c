@@ -1,3 +1,5 @@
+/* The live error chart's data (see chart.h): a curve per run of (log seconds, log RMSE) points,
+ * thinned to log-spaced ones when full, and axes with ticks at 1, 2 and 5 times powers of ten. */
 #include "chart.h"
 
 #include <math.h>

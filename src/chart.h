@@ -6,8 +6,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "render.h"
-#include "sampling.h"
+#include "frame.h"
+#include "modes.h"
 
 /* How many runs the chart keeps, and how many points each run keeps. */
 #define AO_CHART_CURVES 6

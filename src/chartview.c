@@ -1,7 +1,11 @@
+/* The live error chart on screen (see chartview.h): the panel, the log-log axes with their
+ * labelled ticks, a line per run in its sampling mode's colour, and the legend. */
 #include "chartview.h"
 
 #include <math.h>
 #include <stdio.h>
+
+#include "sampling.h"
 
 /* Saturated colours that no AO image (grey times an albedo) shows, one per sampling mode, in the
  * order of enum ao_sampling; the window test looks for them on screen. */

@@ -4,6 +4,7 @@
 #include "budget.h"
 #include "image.h"
 #include "mesh.h"
+#include "sampling.h"
 #include "text.h"
 
 #include <ctype.h>

@@ -6,27 +6,9 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "ao.h"
-#include "rng.h"
-#include "sampling.h"
+#include "modes.h"
 
-/* What --view shows: the AO image, the shading normals (both estimates the renderer accumulates),
- * or |AO - reference| as a heat map (a display of the AO image; needs --reference). */
-enum ao_view_mode {
-    AO_VIEW_MODE_AO,
-    AO_VIEW_MODE_NORMALS,
-    AO_VIEW_MODE_DIFFERENCE,
-};
-
-/* One side of --compare: a sampling mode with the sampler and AA it names, the rest from the
- * other options. */
-struct ao_compare_side {
-    enum ao_sampling sampling;
-    enum ao_sequence sequence;
-    bool aa;
-};
-
-/* Everything SPEC.md's command line can say; strings point into argv. */
+/* Everything aoview's command line can say (docs/contract.md); strings point into argv. */
 struct ao_options {
     const char *scene_path;   /* NULL: the built-in default scene */
     bool headless;

@@ -3,7 +3,8 @@
  * window's) to the others. After each pass the ranks combine a few numbers in collectives; a rank
  * whose tiles run out borrows some of another's and sends it their sums; rank 0 gathers the image
  * only for a frame (at most at the window's rate), a safety copy, the end and an interruption.
- * Only this file and main_mpi.c include mpi.h. */
+ * This header includes no MPI: only cluster.c, cluster_loans.c and cluster_faults.c (through
+ * their private cluster_state.h) do. */
 #ifndef AO_CLUSTER_H
 #define AO_CLUSTER_H
 
@@ -11,7 +12,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "render.h"
+#include "share.h"
 
 /* The cluster; opaque. */
 struct ao_cluster;
@@ -40,47 +41,9 @@ const struct ao_render_share *ao_cluster_share(struct ao_cluster *cluster);
  * headless the safety copy; 0: only at the end and when the renderer idles). */
 void ao_cluster_set_interval(struct ao_cluster *cluster, double seconds);
 
-/* Calls stopped(user) once, from the cluster's listener thread, when another rank stopped the run:
- * on rank 0 a rank that was interrupted (or failed), elsewhere rank 0's request to stop. */
-void ao_cluster_listen(struct ao_cluster *cluster, void (*stopped)(void *user), void *user);
-
-/* Makes the share's waits give up (loans, collectives and gathers return "none" and false) and
- * ends the listener: the run is ending. Main thread. */
-void ao_cluster_stop(struct ao_cluster *cluster);
-
 /* After the render thread ended without an interruption: true when rank 0 ended the run (its
  * last step), false when this rank's own renderer stopped. */
 bool ao_cluster_ended(struct ao_cluster *cluster);
-
-/* After an interruption, ranks other than 0: tells rank 0 that this rank is alive and stopped,
- * by signal sig (0: at rank 0's request, or its renderer failed). */
-void ao_cluster_answer(struct ao_cluster *cluster, int sig);
-
-/* After an interruption, rank 0: asks the ranks that did not stop by themselves to stop. */
-void ao_cluster_halt(struct ao_cluster *cluster);
-
-/* After an interruption, rank 0: waits up to `seconds` for every other rank's answer and writes
- * the ranks that did not answer ("2", "1, 3") into out, "" when all did. */
-void ao_cluster_missing(struct ao_cluster *cluster, double seconds, char *out, size_t size);
-
-/* After ao_cluster_missing, rank 0: the ranks that answered with a signal into out ("2", "1, 3"),
- * and the first of their signals (0: none did). */
-int ao_cluster_signalled(struct ao_cluster *cluster, char *out, size_t size);
-
-/* After an interruption: the gather of ao_render_resolve_stopped waits at most `seconds` from now
- * (on rank 0, for the others' tiles; elsewhere, for its own to leave). */
-void ao_cluster_salvage(struct ao_cluster *cluster, double seconds);
-
-/* Rank 0: seconds since the last image gather ended (the newest frame or safety copy); negative
- * when there was none. */
-double ao_cluster_copy_age(struct ao_cluster *cluster);
-
-/* After an interruption, rank 0: tells the ranks that answered to end, with the run's status. */
-void ao_cluster_release(struct ao_cluster *cluster, int status);
-
-/* After an interruption, ranks other than 0: waits up to `seconds` for rank 0's release; true with
- * its status in *status. */
-bool ao_cluster_await_release(struct ao_cluster *cluster, double seconds, int *status);
 
 /* At the end of a finished run (a collective): on rank 0, writes the tiles each rank traced, the
  * bytes through rank 0 per pass (and of them the loans'), the image gathers and the seconds rank 0

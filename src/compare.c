@@ -1,3 +1,6 @@
+/* The live equal-time comparison (see compare.h): two renderers of one scene taking turns pass by
+ * pass, their settings kept alike but for each side's configuration, their frames and charts; and
+ * the pure pieces its views use (labels, layouts, composing the two images). */
 #include "compare.h"
 
 #include <math.h>
@@ -6,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "cli.h"
 #include "sampling.h"
 
 /* One side: its renderer and configuration, what the turns know of its current run, and what the

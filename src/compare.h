@@ -8,15 +8,9 @@
 #include <stddef.h>
 
 #include "chart.h"
-#include "cli.h"
+#include "frame.h"
+#include "modes.h"
 #include "render.h"
-
-/* How the window shows the two sides: one image split at a divider (A left of it, B right), or
- * the two images side by side (A left, B right), twice as wide. */
-enum ao_compare_layout {
-    AO_COMPARE_SPLIT,
-    AO_COMPARE_SIDE_BY_SIDE,
-};
 
 /* The comparison; opaque. */
 struct ao_compare;

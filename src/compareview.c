@@ -1,3 +1,5 @@
+/* The comparison's overlay on screen (see compareview.h): the split layout's divider and its
+ * handle, and each side's label in its corner. */
 #include "compareview.h"
 
 /* The divider: a light line two pixels wide, with a handle half way down to show it can be dragged. */

@@ -3,9 +3,9 @@
 #ifndef AO_COMPAREVIEW_H
 #define AO_COMPAREVIEW_H
 
-#include "compare.h"
 #include "display.h"
 #include "hud.h"
+#include "modes.h"
 
 /* Draws, over the image drawn into the rectangle image (as ao_display_fit gives it) of a fb_width x
  * fb_height framebuffer: in the split layout the divider at the share split of its width; then,

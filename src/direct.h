@@ -7,8 +7,8 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "ray.h"
 #include "scene.h"
-#include "tracer.h"
 
 /* A copy of a scene's spheres and triangles laid out for the packet loops; opaque. */
 struct ao_direct;

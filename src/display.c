@@ -1,3 +1,6 @@
+/* The image on screen and in PNG files (see display.h): the screen's image encoded to sRGB on the
+ * CPU and blitted letterboxed, each shown frame's cost measured; the files' drawn at 1:1 through
+ * the display shader into an offscreen framebuffer and read back. */
 #include "display.h"
 
 #include <stdio.h>
@@ -5,6 +8,7 @@
 #include <string.h>
 #include <time.h>
 
+#include "clock.h"
 #include "image.h"
 #include "shaders/ao_shaders.h"
 
@@ -36,18 +40,11 @@ struct ao_display {
     int cost_count[2];              /* how many were measured of each */
 };
 
-static double now_seconds(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Starts the frame's clock, unless it runs. */
 static void open_frame(struct ao_display *d)
 {
     if (d->frame_start == 0.0)
-        d->frame_start = now_seconds();
+        d->frame_start = ao_clock_seconds();
 }
 
 struct ao_display *ao_display_create(const struct ao_glapi *gl)
@@ -320,7 +317,7 @@ void ao_display_presented(struct ao_display *d)
 {
     d->gl->Finish();
     int kind = d->frame_uploads;
-    d->costs[kind][d->cost_count[kind]++ % AO_DISPLAY_COSTS] = now_seconds() - d->frame_start;
+    d->costs[kind][d->cost_count[kind]++ % AO_DISPLAY_COSTS] = ao_clock_seconds() - d->frame_start;
     d->frame_start = 0.0;
     d->frame_uploads = false;
 }

@@ -57,6 +57,7 @@
 #include "config.h"
 #include "image.h"
 #include "scene.h"
+#include "scene_load.h"
 #include "tracer.h"
 
 enum { EXIT_RUNTIME = 1, EXIT_USAGE = 2 };
@@ -478,9 +479,9 @@ static int run(struct app *app, const struct ao_options *opts)
         fprintf(stderr, "aoview-exact: no SCENE given (try --help)\n");
         return EXIT_USAGE;
     }
-    struct ao_scene_options load = {.budget = opts->scene_budget, .ground = opts->ground, .bvh = opts->bvh,
+    struct ao_scene_options load = {.budget = opts->scene_budget, .no_ground = !opts->ground, .bvh = opts->bvh,
                                     .crease = opts->crease, .crease_set = true, .sized = opts->width != 0};
-    if (!ao_scene_load_with(&app->scene, opts->scene_path, &load))
+    if (!ao_scene_load(&app->scene, opts->scene_path, &load))
         return EXIT_RUNTIME;
 
     /* The closed form, or a refusal. */

@@ -6,7 +6,7 @@
 #include <stdbool.h>
 #include <stdio.h>
 
-#include "image.h"
+#include "image_types.h"
 
 /* Writes rgb (3 linear floats per pixel, top row first) to the seekable file f as a ZIP-compressed
  * 32-bit float RGB scanline EXR whose header carries the notes as string attributes; path only

@@ -114,7 +114,7 @@ static bool read_file(const char *path, struct ao_budget *budget, bool *mapped, 
     /* Non-blocking, so that opening a FIFO returns at once (to be refused below). */
     int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (fd < 0) {
-        ao_file_report("%s: cannot open: %s", path, strerror(errno));
+        ao_text_report("%s: cannot open: %s", path, strerror(errno));
         return false;
     }
     struct stat st;
@@ -135,9 +135,9 @@ static bool read_file(const char *path, struct ao_budget *budget, bool *mapped, 
         ao_budget_give(budget, charge);
     close(fd);
     if (reason == why)
-        ao_file_report("%s: %llu bytes %s", path, (unsigned long long)st.st_size, why);
+        ao_text_report("%s: %llu bytes %s", path, (unsigned long long)st.st_size, why);
     else if (reason)
-        ao_file_report("%s: %s", path, reason);
+        ao_text_report("%s: %s", path, reason);
     return !reason;
 }
 
@@ -222,18 +222,6 @@ char *ao_file_input_name(unsigned long long dev, unsigned long long ino)
             name = strdup(inputs[i].name);
     pthread_mutex_unlock(&inputs_lock);
     return name;
-}
-
-void ao_file_report(const char *format, ...)
-{
-    /* Formatted, then escaped, and written with one call so that lines of several threads do not
-     * interleave. */
-    char text[1024], line[4 * sizeof text + 2];
-    va_list args;
-    va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
-    va_end(args);
-    fprintf(stderr, "%s\n", ao_text_escape(text, line, sizeof line));
 }
 
 /* One attempt at opening path for writing without blocking: created exclusively (*created), else

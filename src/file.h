@@ -1,5 +1,5 @@
-/* Whole-file reading shared by the scene and mesh loaders, the one-line reports they print, and
- * opening a stream output (--stats). */
+/* Whole-file reading shared by the scene and mesh loaders (charged to the scene budget, the files
+ * read remembered as inputs), and opening a stream output (--stats). */
 #ifndef AO_FILE_H
 #define AO_FILE_H
 
@@ -58,10 +58,5 @@ void ao_file_note_input(int fd, const char *path);
 /* The name of the input read (ao_file_note_input) that is the file of identity (dev, ino), or NULL
  * when none is: the caller frees it. Any thread. */
 char *ao_file_input_name(unsigned long long dev, unsigned long long ino);
-
-/* Prints the printf-formatted text and a newline to stderr as one line: control characters (a
- * newline in a file name or a JSON string, an escape sequence in a scene token) are written as
- * \n, \r, \t or \xNN, so that a report never spans lines or drives the terminal. Any thread. */
-void ao_file_report(const char *format, ...);
 
 #endif

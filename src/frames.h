@@ -7,7 +7,7 @@
 #include <stdatomic.h>
 #include <stddef.h>
 
-#include "render.h"
+#include "frame.h"
 
 /* How many published frames' facts the log keeps for its consumer. */
 enum { AO_FRAMES_LOG = 256 };

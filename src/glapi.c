@@ -1,3 +1,5 @@
+/* The OpenGL 3.3 core entry points aoview calls (see glapi.h), looked up through the context's
+ * loader, each checked present, so that a context without one fails in one line. */
 #include "glapi.h"
 
 #include <stdio.h>

@@ -1,3 +1,6 @@
+/* Screenshots without a display server (see headless.h): libOSMesa opened at the first PNG, a
+ * core-profile context made, the display code drawing into it, the pixels read back and written;
+ * the room such a context needs checked first under a limit on the address space. */
 #include "headless.h"
 
 #include <dlfcn.h>

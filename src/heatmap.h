@@ -5,8 +5,8 @@
 
 #include <stdbool.h>
 
+#include "frame.h"
 #include "hud.h"
-#include "render.h"
 
 /* A log scale from 10^low to 10^high, labelled per decade as percentages or as plain numbers. */
 struct ao_heatmap_scale {

@@ -1,3 +1,5 @@
+/* The on-screen overlay (see hud.h): stb_easy_font's text drawn as quads, boxes and lines in GL
+ * core through the hud shader, and the status text the overlay and the window title share. */
 #include "hud.h"
 
 #include <math.h>

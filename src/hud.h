@@ -6,8 +6,8 @@
 #include <stdbool.h>
 #include <stddef.h>
 
+#include "frame.h"
 #include "glapi.h"
-#include "render.h"
 
 /* What the status line tells: the facts of the frame on screen plus the viewer's own state. */
 struct ao_hud_status {

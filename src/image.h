@@ -9,8 +9,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-/* Largest image side and pixel count accepted anywhere (so buffers stay far from size_t limits). */
-enum { AO_IMAGE_MAX_SIDE = 16384, AO_IMAGE_MAX_PIXELS = 16384 * 16384 / 4 };
+#include "image_types.h"
 
 /* The sRGB encoding of one linear value, clamped to [0, 1]. */
 float ao_image_srgb_encode(float linear);
@@ -49,11 +48,6 @@ bool ao_image_write_pfm(const char *path, const float *rgb, int width, int heigh
 /* Reads a colour PFM (either endianness) into a malloc'd top-to-bottom RGB float buffer the
  * caller frees; on failure prints one line naming path and returns false. */
 bool ao_image_read_pfm(const char *path, float **rgb, int *width, int *height);
-
-/* A string attribute of a linear image's header (EXR keeps them; PFM has no place for them). */
-struct ao_image_note {
-    const char *key, *value;
-};
 
 /* Writes a linear image chosen by path's extension: .exr (32-bit float RGB, the notes as header
  * attributes) or else PFM; via a temporary file renamed into place; on failure prints one line

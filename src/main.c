@@ -1,5 +1,6 @@
-/* aoview: wiring of options, scene, tracer, renderer and the window or headless output. The only
- * place that exits. */
+/* aoview: wiring of options, scene, tracer, renderer and the window or headless output; main
+ * returns the exit status (docs/contract.md). Nothing else ends the process but the handlers
+ * where no way back is sound (docs/style.md). */
 #include <math.h>
 #include <signal.h>
 #include <stdatomic.h>
@@ -211,9 +212,11 @@ static int run(struct app *app, const struct ao_options *opts)
                                       .config = &single, .compare = opts->compare != NULL,
                                       .sides = {opts->sides[0], opts->sides[1]},
                                       .users = {&app->side_reporters[0], &app->side_reporters[1]}};
-        int status;
-        if (ao_app_run_window(base, opts, &info, &status))
-            return status;
+        enum ao_window_result result = ao_window_run(base->render, &info);
+        if (result != AO_WINDOW_NO_DISPLAY)
+            return result == AO_WINDOW_OK ? 0 : AO_EXIT_RUNTIME;
+        if (!ao_app_go_headless(opts))
+            return AO_EXIT_RUNTIME;
         base->reporter.progress = !opts->quiet && isatty(STDERR_FILENO);
         if (opts->compare) {
             ao_render_destroy(base->render);

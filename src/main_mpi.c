@@ -15,6 +15,7 @@
 #include "app.h"
 #include "cli.h"
 #include "cluster.h"
+#include "cluster_faults.h"
 #include "config.h"
 #include "image.h"
 #include "window.h"
@@ -257,8 +258,11 @@ static bool show_window(struct ao_app *app, const struct ao_options *opts, int *
                                   .reference_width = app->reference_width,
                                   .reference_height = app->reference_height, .pixel_size = opts->pixel_size,
                                   .difference = opts->view == AO_VIEW_MODE_DIFFERENCE};
-    if (ao_app_run_window(app, opts, &info, status))
+    enum ao_window_result result = ao_window_run(app->render, &info);
+    if (result != AO_WINDOW_NO_DISPLAY || !ao_app_go_headless(opts)) {
+        *status = result == AO_WINDOW_OK ? 0 : AO_EXIT_RUNTIME;
         return true;
+    }
     app->reporter.progress = !opts->quiet && watched_on_terminal();
     return false;
 }

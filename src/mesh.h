@@ -1,5 +1,7 @@
-/* Triangle meshes from OBJ, PLY, STL and glTF files: indexed triangles with one normal per vertex.
- * The loaders live in src/load/, one file per format. */
+/* Triangle meshes: indexed triangles with one normal per vertex, and the models that place them;
+ * what is done to a mesh whatever file it came from: zero-area triangles dropped, the normals it
+ * lacks made (angle-weighted, across the edges flatter than a crease angle), placed by an affine
+ * map, freed. The loaders (src/load/, one file per format) fill meshes and call these. */
 #ifndef AO_MESH_H
 #define AO_MESH_H
 
@@ -19,7 +21,7 @@
  * and the sharper edges stay sharp (chosen by the measurement in docs/formats.md). */
 #define AO_MESH_CREASE_DEFAULT 40.0
 
-/* An indexed triangle mesh; the caller owns it (ao_mesh_load fills it, ao_mesh_finish frees it). */
+/* An indexed triangle mesh; the caller owns it (ao_load_mesh fills it, ao_mesh_finish frees it). */
 struct ao_mesh {
     struct ao_vec3 *positions;  /* vertex_count positions */
     struct ao_vec3 *normals;    /* vertex_count unit normals (zero where none can be defined, and where
@@ -46,7 +48,7 @@ struct ao_placement {
  * STL hold one mesh placed once by the identity; a glTF file one mesh per glTF mesh that its scene's
  * nodes name (that mesh's triangle primitives together), placed by every node naming it under the
  * node's world matrix. Nothing is flattened: a mesh under a thousand nodes is held once. The caller
- * owns it (ao_model_load_budget fills it, ao_model_finish frees it). */
+ * owns it (ao_load_model fills it, ao_model_finish frees it). */
 struct ao_model {
     struct ao_mesh *meshes;
     size_t mesh_count;
@@ -59,34 +61,6 @@ struct ao_model {
     char note[AO_MESH_NOTE_SIZE];   /* as ao_mesh's */
 };
 
-/* True when path's extension names a mesh format ao_mesh_load reads. */
-bool ao_mesh_is_mesh_path(const char *path);
-
-/* Loads an .obj, .ply, .stl, .gltf or .glb file (chosen by extension, any case) into mesh, with
- * every placement of a glTF file's meshes applied (positions in float, normals through the inverse
- * transpose, mirrored triangles turned round: the model flattened, for tools and tests; scenes keep
- * models as they are, scene.h); makes the normals the file lacks as ao_model_load_budget does at
- * AO_MESH_CREASE_DEFAULT. On failure prints one "path:line: message" (or "path: message") line to
- * stderr, leaves mesh empty and returns false. Any thread. */
-bool ao_mesh_load(struct ao_mesh *mesh, const char *path);
-
-/* ao_mesh_load within budget (ao_mesh_load's is AO_BUDGET_DEFAULT): the file is charged while it is
- * read and parsed, and a mesh whose ao_budget_charge does not fit what is left is refused
- * before its arrays are allocated. Nothing stays charged: the caller charges the mesh it keeps. */
-bool ao_mesh_load_budget(struct ao_mesh *mesh, const char *path, struct ao_budget *budget);
-
-/* Loads a mesh file as ao_mesh_load_budget does, into model: its unique meshes and their placements
- * (the unique triangles and vertices and every placement charged against what budget has left
- * before they are allocated; nothing stays charged). The normals the file lacks, or gives as zero
- * or not finite (noted), are made as its format means them: flat for glTF (its specification's
- * rule), else smooth across the edges flatter than crease degrees (0: flat; 180: smooth across
- * every edge), vertices split along the sharper ones. On failure prints one line, leaves model
- * empty and returns false. Any thread. */
-bool ao_model_load_budget(struct ao_model *model, const char *path, struct ao_budget *budget, double crease);
-
-/* Frees what ao_model_load_budget allocated and zeroes model; accepts an empty model. */
-void ao_model_finish(struct ao_model *model);
-
 /* Writes src moved by map into dst's arrays from vertex vertex_base and triangle triangle_base on
  * (dst may be src with both bases 0: moved in place): positions in double, narrowed once; normals
  * through ao_affine_normals; a mirroring map's triangles turned round, indices raised by
@@ -94,15 +68,65 @@ void ao_model_finish(struct ao_model *model);
 size_t ao_mesh_place(struct ao_mesh *dst, size_t vertex_base, size_t triangle_base, const struct ao_mesh *src,
                      const struct ao_affine *map);
 
+/* Frees what the mesh holds and zeroes it; accepts an empty mesh. */
+void ao_mesh_finish(struct ao_mesh *mesh);
+
+/* Frees what the model holds (its meshes too) and zeroes it; accepts an empty model. */
+void ao_model_finish(struct ao_model *model);
+
+/* One past the largest vertex index a mesh's 32-bit indices can use. */
+#define AO_MESH_INDEX_LIMIT UINT32_MAX
+
+/* True when a mesh of so many triangles and vertices fits in what budget has left (ao_budget_charge);
+ * else reports "path:line: T triangles and V vertices need about ..." ("path: ..." at line 0) and
+ * returns false. Any thread. */
+bool ao_mesh_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, const char *path,
+                  size_t line);
+
+/* Arrays of at least this many bytes are advised into huge pages (ao_mesh_advise_huge). */
+#define AO_MESH_HUGE_ARRAY ((size_t)4 << 20)
+
+/* Asks the system to back the array [data, data + size) (malloc'd, not yet filled) with huge pages
+ * when it is AO_MESH_HUGE_ARRAY bytes or more: filling 240 MB of fresh 4 KiB pages costs 0.8 s of
+ * page faults in a virtual machine, of 2 MiB pages 0.02 s. Does nothing where the system cannot.
+ * For the big arrays of meshes and of the loaders that fill them. */
+void ao_mesh_advise_huge(void *data, size_t size);
+
+/* Removes the zero-area triangles (a repeated index included), counting them in
+ * mesh->degenerate_count; a mesh may be left with none. Any thread. */
+void ao_mesh_drop_degenerate(struct ao_mesh *mesh);
+
+/* The unit vector along (x, y, z) in single precision, or zero when it is zero or not finite;
+ * exact-enough for any finite double components (no square overflows or vanishes). */
+struct ao_vec3 ao_mesh_unit(double x, double y, double z);
+
+/* A normal that a file does not give (or gives as zero or not finite), as the loaders store it
+ * until ao_mesh_complete_normals makes it: NaN. */
+struct ao_vec3 ao_mesh_missing_normal(void);
+
+/* True when n is ao_mesh_missing_normal's marker. */
+bool ao_mesh_normal_is_missing(struct ao_vec3 n);
+
+/* A normal as a file gives it, as the loaders store it: made unit, or the missing marker when it is
+ * zero or not finite (counted in *invalid). */
+struct ao_vec3 ao_mesh_given_normal(double x, double y, double z, size_t *invalid);
+
+/* Makes the normals a loaded mesh lacks (mesh->normals NULL: all; else those with the missing
+ * marker): with crease 0 or less flat (the zero vector, which shading replaces by the triangle's
+ * own normal); from 180 on angle-weighted over every triangle at the vertex; between, angle-weighted
+ * over the triangles joined to the vertex's through edges flatter than crease degrees, the vertex
+ * split into one per side of the sharper edges (new vertices at the end, charged to budget first).
+ * A mesh without such an edge keeps its vertices and gets the normals 180 gives, bit for bit.
+ * False (reported, naming path) when memory or the budget runs out. Any thread. */
+bool ao_mesh_complete_normals(struct ao_mesh *mesh, const char *path, double crease, const struct ao_budget *budget);
+
 /* Recomputes mesh->normals from the triangles (angle-weighted face normals, smooth across every
- * edge), on one thread per core for a big mesh; false (reported) when memory runs out. Any thread. */
+ * edge; allocated when NULL), on one thread per core for a big mesh; false (reported) when memory
+ * runs out. Any thread. */
 bool ao_mesh_compute_normals(struct ao_mesh *mesh);
 
 /* ao_mesh_compute_normals on so many threads (0: its choice); the normals are the same, bit for
  * bit, whatever the number. */
 bool ao_mesh_compute_normals_on(struct ao_mesh *mesh, int threads);
-
-/* Frees what ao_mesh_load allocated and zeroes mesh; accepts an empty mesh. */
-void ao_mesh_finish(struct ao_mesh *mesh);
 
 #endif

@@ -5,8 +5,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "image.h"
-#include "render.h"
+#include "frame.h"
+#include "image_types.h"
 
 enum { AO_NOTES_MAX = 9 };
 

@@ -17,7 +17,7 @@ struct ao_pool {
     void *user;
     void (*thread_init)(void);
     atomic_int started;              /* numbers the workers */
-    int threads, workers;
+    int workers;
     pthread_t *ids;
 };
 
@@ -55,7 +55,6 @@ struct ao_pool *ao_pool_create(int threads, void (*thread_init)(void))
         free(p);
         return NULL;
     }
-    p->threads = threads;
     p->thread_init = thread_init;
     atomic_init(&p->started, 0);
     pthread_mutex_init(&p->lock, NULL);
@@ -102,9 +101,4 @@ void ao_pool_run(struct ao_pool *p, ao_pool_job *job, void *user)
     while (p->busy > 0)
         pthread_cond_wait(&p->end, &p->lock);
     pthread_mutex_unlock(&p->lock);
-}
-
-int ao_pool_threads(const struct ao_pool *p)
-{
-    return p->threads;
 }

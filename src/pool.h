@@ -22,7 +22,4 @@ void ao_pool_destroy(struct ao_pool *pool);
  * One thread at a time (the render thread). */
 void ao_pool_run(struct ao_pool *pool, ao_pool_job *job, void *user);
 
-/* The team's size, the caller of ao_pool_run included. */
-int ao_pool_threads(const struct ao_pool *pool);
-
 #endif

@@ -6,7 +6,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "render.h"
+#include "frame.h"
 
 /* What the estimate remembers of the full frames fed to it; zero-initialise. */
 struct ao_progress {

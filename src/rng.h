@@ -5,6 +5,7 @@
 
 #include <stdint.h>
 
+#include "modes.h"
 #include "simd.h"
 
 /* A 64-bit finalizer with full avalanche (the splitmix64 output function). */
@@ -32,12 +33,6 @@ static inline void ao_rng_pair(uint64_t key, uint64_t sample, float *u1, float *
     *u2 = (float)((bits >> 16) & 0xffffffu) * 0x1.0p-24f;
 }
 
-/* How a stream's numbers are drawn: independent random pairs, or an Owen-scrambled Sobol sequence
- * whose first 2^k points (of any pixel, from index 0) stratify the unit square. */
-enum ao_sequence {
-    AO_SEQUENCE_RANDOM,
-    AO_SEQUENCE_SOBOL,
-};
 
 /* The bits of x in reverse order. */
 static inline uint32_t ao_rng_reverse(uint32_t x)

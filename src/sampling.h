@@ -4,14 +4,8 @@
 
 #include <stdbool.h>
 
+#include "modes.h"
 #include "vec3.h"
-
-/* Which distribution occlusion directions are drawn from. */
-enum ao_sampling {
-    AO_SAMPLING_UNIFORM,     /* uniform over the whole sphere, p = 1/4pi */
-    AO_SAMPLING_HEMISPHERE,  /* uniform over the hemisphere about n, p = 1/2pi */
-    AO_SAMPLING_COSINE,      /* cosine-weighted about n, p = cos(theta)/pi */
-};
 
 /* The mode's command-line name ("uniform", "hemisphere", "cosine"). */
 const char *ao_sampling_name(enum ao_sampling mode);

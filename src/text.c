@@ -1,7 +1,8 @@
-/* Escaping user text for one-line messages; see text.h. */
+/* Escaping user text for one-line messages, and the reports made of them; see text.h. */
 #include "text.h"
 
 #include <assert.h>
+#include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -56,4 +57,16 @@ const char *ao_text_escape(const char *s, char *out, size_t size)
     }
     strcpy(out + n, *p ? "..." : "");
     return out;
+}
+
+void ao_text_report(const char *format, ...)
+{
+    /* Formatted, then escaped, and written with one call so that lines of several threads do not
+     * interleave. */
+    char text[1024], line[4 * sizeof text + 2];
+    va_list args;
+    va_start(args, format);
+    vsnprintf(text, sizeof text, format, args);
+    va_end(args);
+    fprintf(stderr, "%s\n", ao_text_escape(text, line, sizeof line));
 }

@@ -1,6 +1,6 @@
 /* One tile's bookkeeping for the renderer: what it has taken since a restart, the part of its
  * pixels' streams it traces in a pass, the error estimate of its sums, and adaptive sampling's
- * rule for whether it joins the next pass. No threads and no I/O: render.c calls these for the
+ * rule for whether it joins the next pass. No threads and no I/O: pass.c calls these for the
  * tiles it owns. */
 #ifndef AO_TILE_H
 #define AO_TILE_H
@@ -9,11 +9,25 @@
 #include <stdint.h>
 
 #include "accum.h"
-#include "ao.h"
+#include "vec3.h"
 
-/* Tiles are AO_TILE x AO_TILE pixels, numbered row by row. */
-enum { AO_TILE = 16 };
-_Static_assert(AO_TILE * AO_TILE <= AO_TILE_PIXELS, "a tile must fit ao_estimate_tile");
+/* Tiles are AO_TILE x AO_TILE pixels, numbered row by row; AO_TILE_PIXELS of them. */
+enum { AO_TILE = 16, AO_TILE_PIXELS = AO_TILE * AO_TILE };
+
+/* A rectangle of pixels [x0, x1) x [y0, y1) holding at most AO_TILE_PIXELS. */
+struct ao_tile {
+    int x0, y0, x1, y1;
+};
+
+/* Which part of its pixels' random streams a tile traces in one pass: `rounds` eye rays per pixel
+ * (numbered from first_ray), each with `count` AO samples (numbered on from first_sample). `half`
+ * is the pass's half of the accumulation (0 even, 1 odd); with Sobol numbers each half has streams
+ * of its own, numbered within the half, so that the halves are independent estimates (2: streams
+ * of a third sequence, for a sample of the even half outside its own sequence). */
+struct ao_tile_work {
+    uint64_t first_ray, first_sample;
+    int rounds, count, half;
+};
 
 /* What a tile has taken since the last restart; written by the thread that traces it. */
 struct ao_tile_state {

@@ -8,6 +8,7 @@
 
 #include <embree3/rtcore.h>
 
+#include "clock.h"
 #include "direct.h"
 #if defined(__SSE__)
 #include <pmmintrin.h>
@@ -351,13 +352,6 @@ static inline void to_single4(const struct ao_batch *rays, int first, struct RTC
 }
 #endif
 
-static double seconds_now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
 /* Offers the recorder the batch; it keeps every stride-th whole, in order, 16 rays to a packet (so
  * that a ceiling traced on the sample sees rays as coherent as aoview's batches). */
 static void record(struct ao_ray_recorder *rec, const struct ao_batch *rays)
@@ -401,10 +395,10 @@ void ao_tracer_occluded(const struct ao_tracer *tracer, struct ao_batch *rays)
                   rays->tfar[k], &stream[k]);
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
-    double start = rec ? seconds_now() : 0.0;
+    double start = rec ? ao_clock_seconds() : 0.0;
     rtcOccluded1M(tracer->scene, &context, stream, (unsigned)n, sizeof *stream);
     if (rec) {
-        rec->embree_seconds += seconds_now() - start;
+        rec->embree_seconds += ao_clock_seconds() - start;
         rec->embree_rays += (uint64_t)n;
     }
     for (k = 0; k < n; k++)
@@ -443,9 +437,9 @@ double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packe
         double seconds = 0.0;
         for (size_t next = 0; next < count;) {
             unsigned n = fill_stream(packets, count, &next, stream);
-            double start = seconds_now();
+            double start = ao_clock_seconds();
             rtcOccluded1M(tracer->scene, &context, stream, n, sizeof *stream);
-            seconds += seconds_now() - start;
+            seconds += ao_clock_seconds() - start;
         }
         return seconds;
     }
@@ -455,7 +449,7 @@ double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packe
     if (converted && valid) {
         for (size_t p = 0; p < count; p++)
             to_embree_hit(&packets[p], &converted[p], valid[p]);
-        double start = seconds_now();
+        double start = ao_clock_seconds();
         if (how == AO_BARE_INTERSECT16) {
             context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
             for (size_t p = 0; p < count; p++)
@@ -464,7 +458,7 @@ double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packe
             for (size_t p = 0; p < count; p++)
                 rtcOccluded16(valid[p], tracer->scene, &context, &converted[p].ray);
         }
-        seconds = seconds_now() - start;
+        seconds = ao_clock_seconds() - start;
     }
     free(converted);
     free(valid);

@@ -7,31 +7,11 @@
 #include <stdbool.h>
 #include <stdint.h>
 
+#include "ray.h"
 #include "scene.h"
-#include "vec3.h"
 
 /* An Embree device with the committed scene; opaque. */
 struct ao_tracer;
-
-/* Rays traced together: up to AO_PACKET_SIZE in structure-of-arrays layout, lanes 0..count-1. */
-enum { AO_PACKET_SIZE = 16 };
-struct ao_packet {
-    float org_x[AO_PACKET_SIZE], org_y[AO_PACKET_SIZE], org_z[AO_PACKET_SIZE];
-    float dir_x[AO_PACKET_SIZE], dir_y[AO_PACKET_SIZE], dir_z[AO_PACKET_SIZE];
-    float tfar[AO_PACKET_SIZE];
-    int count;
-};
-
-/* What an eye ray hit: enough for ao.c to shade it from the scene's arrays. */
-struct ao_hit {
-    float t;                /* distance along the unit ray; INFINITY on a miss */
-    float u, v;             /* barycentrics of vertices 1 and 2 on triangles */
-    uint32_t prim;          /* triangle index in its instance's mesh, or sphere index */
-    uint32_t instance;      /* on triangles, the scene's instance */
-    bool sphere;            /* true for a sphere, false for a triangle */
-    struct ao_vec3 ng;      /* on triangles, the unnormalized geometric normal (p1 - p0) x (p2 - p0)
-                               of the mesh's own vertices (in its own frame when instanced) */
-};
 
 /* Builds the tracer for `scene` (which must outlive it), Embree or direct as measured faster; NULL
  * with one message on stderr on failure. Call from one thread; the result is then shared read-only. */
@@ -67,17 +47,6 @@ void ao_tracer_thread_init(void);
 
 /* Closest hits of the packet's rays (coherent eye rays), t in (0, tfar]. Any thread. */
 void ao_tracer_intersect(const struct ao_tracer *tracer, const struct ao_packet *rays, struct ao_hit *hits);
-
-/* Occlusion rays traced together, in structure-of-arrays layout, rays 0..count-1: Embree's stream
- * sorts a batch into packets of one direction octant, faster the longer the batch (docs/performance.md). */
-enum { AO_BATCH_RAYS = 1024 };
-struct ao_batch {
-    _Alignas(64) float org_x[AO_BATCH_RAYS];
-    float org_y[AO_BATCH_RAYS], org_z[AO_BATCH_RAYS];
-    float dir_x[AO_BATCH_RAYS], dir_y[AO_BATCH_RAYS], dir_z[AO_BATCH_RAYS];
-    float tfar[AO_BATCH_RAYS];
-    int count;
-};
 
 /* Traces the batch's rays as incoherent occlusion rays and sets tfar to -INFINITY on each one that
  * something blocks within t in [0, tfar] (Embree's convention); open rays keep theirs. Any thread. */

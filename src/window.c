@@ -1,6 +1,8 @@
+/* The interactive viewer (see window.h): the GLFW window and its GL context, the keys and mouse,
+ * the frames taken from the renderer (or the comparison) and presented when they change and the
+ * presentation's cost allows, resizes, screenshots, and the loop that sleeps between events. */
 #include "window.h"
 
-#include <ctype.h>
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
@@ -11,48 +13,24 @@
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
-#include <X11/Xlib.h>   /* the IO error handler: GLFW 3.3 leaves Xlib's in place */
 
 #include "buffer.h"
 #include "chart.h"
-#include "chartview.h"
 #include "compare.h"
-#include "compareview.h"
 #include "display.h"
+#include "gestures.h"
 #include "glapi.h"
 #include "heatmap.h"
 #include "hud.h"
-#include "image.h"
-#include "notes.h"
+#include "keys.h"
+#include "overlay.h"
 #include "progress.h"
+#include "screenshot.h"
+#include "x11.h"
 
 /* glfwPostEmptyEvent is legal from any thread, but only between glfwInit and glfwTerminate. */
 static pthread_mutex_t wake_lock = PTHREAD_MUTEX_INITIALIZER;
 static bool glfw_running;
-
-static const char HELP[] =
-    "U  uniform sphere sampling\n"
-    "H  uniform hemisphere sampling\n"
-    "C  cosine sampling\n"
-    "A  anti-aliasing on/off\n"
-    "Space  pause/resume\n"
-    "R  restart accumulation\n"
-    "+ -  double/halve samples per pass (leaves auto)\n"
-    "G  adaptive sampling on/off\n"
-    "E  estimated error map on/off\n"
-    "D  difference from --reference on/off\n"
-    "N  normals view on/off (restarts)\n"
-    "F  flat/Phong mesh normals (restarts)\n"
-    "V  compare with a second configuration at equal time\n"
-    "B  split / side-by-side comparison\n"
-    "S  save aoview-N.png and aoview-N.pfm (or .exr)\n"
-    "[ ]  halve/double the pixel size (restarts)\n"
-    "left drag  orbit (on the divider: move it)\n"
-    "right drag  pan\n"
-    "wheel  zoom\n"
-    "F1 or ?  this help\n"
-    "F2  hide/show the overlay and error chart\n"
-    "Esc or Q  quit";
 
 /* The status's clock (elapsed seconds, time left) changes the overlay and the title at most this
  * often between frames. */
@@ -71,7 +49,7 @@ static const char HELP[] =
 /* The finest preview of a run stays on screen until the run's average has this many samples per
  * pixel (mean): from then on the average's RMSE against a converged image, taken at every pixel of
  * the screen as the eye sees them, is below the preview's (the bunny at 1920x1080 and 3840x2160:
- * from 11 spp; tests/bench_preview.c, docs/performance.md). */
+ * from 11 spp; tests/bench/bench_preview.c, docs/performance.md). */
 #define PREVIEW_UNTIL_SPP 11.0
 
 /* A resize restarts the render at the new size once the framebuffer has kept its size this long;
@@ -95,9 +73,6 @@ struct look {
     bool hud, help;
     char status[512];                /* ao_hud_format's text, as in the title */
 };
-
-/* viewer.drag while the mouse drags the comparison's divider. */
-#define DRAG_DIVIDER (GLFW_MOUSE_BUTTON_LAST + 1)
 
 struct viewer {
     struct ao_render *render;        /* the single view's; paused while comparing */
@@ -140,9 +115,7 @@ struct viewer {
     bool reference_fits;             /* the frame on screen has the reference's size (else no RMSE
                                         or difference view: said once on stderr) */
     struct ao_progress progress;     /* the time-left estimate, fed the frames taken */
-    int drag;                        /* mouse button held over the window, DRAG_DIVIDER, or -1 */
-    double cursor_x, cursor_y;
-    double orbit_x, orbit_y, pan_x, pan_y, wheel;   /* mouse input not yet applied */
+    struct ao_gestures gestures;     /* the mouse's drag and the moves not applied yet */
     struct ao_chart chart;           /* RMSE against time of the frames taken (with --reference) */
     struct look drawn;               /* as last drawn */
     bool dirty;                      /* redraw even if the look is the same: new frame, expose */
@@ -197,39 +170,17 @@ static struct ao_display_rect image_in_window(const struct viewer *v)
     return ao_display_fit(v->image_width ? v->image_width : 1, v->image_height ? v->image_height : 1, width, height);
 }
 
-/* Doubles (factor 2) or halves (factor 0) the samples per pass within 1..65536; from auto (0),
- * those of the pass on screen, so that the keys switch to manual where auto stood. */
-static int scale_spppp(const struct viewer *v, int spppp, int factor)
-{
-    const struct ao_frame *f = current_frame(v);
-    if (spppp == 0)
-        spppp = f && f->info.spppp ? (int)f->info.spppp : 1;
-    long next = factor ? 2L * spppp : spppp / 2;
-    return next < 1 ? 1 : next > 65536 ? 65536 : (int)next;
-}
-
-/* Printable keys, by character so that they follow the keyboard layout ('+' from either the main
- * keyboard or the keypad, '=' as the unshifted '+'). */
+/* Printable keys (keys.h): a change of the settings on screen, or the viewer's own action. */
 static void on_char(GLFWwindow *window, unsigned int codepoint)
 {
     struct viewer *v = glfwGetWindowUserPointer(window);
-    if (codepoint > 127)
-        return;
     struct ao_settings s;
     get_settings(v, &s);
-    switch (tolower((int)codepoint)) {
-    case 'u': s.sampling = AO_SAMPLING_UNIFORM; break;
-    case 'h': s.sampling = AO_SAMPLING_HEMISPHERE; break;
-    case 'c': s.sampling = AO_SAMPLING_COSINE; break;
-    case 'a': s.aa = !s.aa; break;
-    case ' ': s.paused = !s.paused; break;
-    case '+': case '=': s.spppp = scale_spppp(v, s.spppp, 2); break;
-    case '-': s.spppp = scale_spppp(v, s.spppp, 0); break;
-    case 'g': s.adaptive = !s.adaptive; break;
-    case 'n': s.output = s.output == AO_OUTPUT_NORMALS ? AO_OUTPUT_AO : AO_OUTPUT_NORMALS; break;
-    case 'f': s.shading = s.shading == AO_SHADING_FLAT ? AO_SHADING_PHONG : AO_SHADING_FLAT; break;
-    case 'e': v->show = v->show == SHOW_ERROR ? SHOW_IMAGE : SHOW_ERROR; v->reupload = true; return;
-    case 'd':
+    const struct ao_frame *f = current_frame(v);
+    switch (ao_keys_typed(codepoint, &s, f ? f->info.spppp : 0)) {
+    case AO_KEY_SETTINGS: set_settings(v, &s); return;
+    case AO_KEY_ERROR_VIEW: v->show = v->show == SHOW_ERROR ? SHOW_IMAGE : SHOW_ERROR; v->reupload = true; return;
+    case AO_KEY_DIFFERENCE_VIEW:
         if (!v->info->reference) {
             if (!v->info->quiet) {
                 printf("aoview: D shows the difference from --reference; none was given\n");
@@ -240,34 +191,36 @@ static void on_char(GLFWwindow *window, unsigned int codepoint)
         v->show = v->show == SHOW_DIFFERENCE ? SHOW_IMAGE : SHOW_DIFFERENCE;
         v->reupload = true;
         return;
-    case 'r':
+    case AO_KEY_RESTART:
         if (v->compare)
             ao_compare_restart(v->compare);
         else
             ao_render_restart(v->render);
         return;
-    case 'v':
+    case AO_KEY_COMPARE:
         if (!v->info->config && !v->info->quiet) {
             printf("aoview: V compares two configurations; not available here\n");
             fflush(stdout);
         }
         v->toggle_compare = v->info->config != NULL;
         return;
-    case 'b':
+    case AO_KEY_LAYOUT:
         v->layout = v->layout == AO_COMPARE_SPLIT ? AO_COMPARE_SIDE_BY_SIDE : AO_COMPARE_SPLIT;
         v->reupload = true;
         return;
-    case 's': v->save = true; return;
-    case '[': case ']':
-        v->pixel_size = codepoint == '[' ? (v->pixel_size > 1 ? v->pixel_size / 2 : 1)
-                                         : (v->pixel_size < MAX_PIXEL_SIZE ? v->pixel_size * 2 : MAX_PIXEL_SIZE);
+    case AO_KEY_SAVE: v->save = true; return;
+    case AO_KEY_FINER:
+        v->pixel_size = v->pixel_size > 1 ? v->pixel_size / 2 : 1;
         v->resized_at = -1.0;
         return;
-    case '?': v->show_help = !v->show_help; return;
-    case 'q': glfwSetWindowShouldClose(window, GLFW_TRUE); return;
-    default: return;
+    case AO_KEY_COARSER:
+        v->pixel_size = v->pixel_size < MAX_PIXEL_SIZE ? v->pixel_size * 2 : MAX_PIXEL_SIZE;
+        v->resized_at = -1.0;
+        return;
+    case AO_KEY_HELP: v->show_help = !v->show_help; return;
+    case AO_KEY_QUIT: glfwSetWindowShouldClose(window, GLFW_TRUE); return;
+    case AO_KEY_NONE: return;
     }
-    set_settings(v, &s);
 }
 
 /* Keys without a character. */
@@ -286,41 +239,33 @@ static void on_key(GLFWwindow *window, int key, int scancode, int action, int mo
         v->show_hud = !v->show_hud;
 }
 
+/* Mouse buttons: the left one orbits (or takes the comparison's divider), the right one pans. */
 static void on_button(GLFWwindow *window, int button, int action, int mods)
 {
     (void)mods;
     struct viewer *v = glfwGetWindowUserPointer(window);
-    if (action == GLFW_PRESS && v->drag < 0 &&
-        (button == GLFW_MOUSE_BUTTON_LEFT || button == GLFW_MOUSE_BUTTON_RIGHT)) {
-        v->drag = button;
-        glfwGetCursorPos(window, &v->cursor_x, &v->cursor_y);
-        /* A left press within 6 pixels of the split view's divider takes the divider. */
+    if (button != GLFW_MOUSE_BUTTON_LEFT && button != GLFW_MOUSE_BUTTON_RIGHT)
+        return;
+    enum ao_drag drag = button == GLFW_MOUSE_BUTTON_LEFT ? AO_DRAG_ORBIT : AO_DRAG_PAN;
+    if (action == GLFW_PRESS && v->gestures.drag == AO_DRAG_NONE) {
+        double x, y;
+        glfwGetCursorPos(window, &x, &y);
         struct ao_display_rect r = image_in_window(v);
-        if (button == GLFW_MOUSE_BUTTON_LEFT && v->compare && v->layout == AO_COMPARE_SPLIT &&
-            fabs(v->cursor_x - (r.x + v->split * r.width)) <= 6.0)
-            v->drag = DRAG_DIVIDER;
-    } else if (action == GLFW_RELEASE && (button == v->drag || (v->drag == DRAG_DIVIDER && button == GLFW_MOUSE_BUTTON_LEFT))) {
-        v->drag = -1;
+        bool divider = v->compare && v->layout == AO_COMPARE_SPLIT;
+        ao_gestures_press(&v->gestures, drag, x, y, divider ? r.x + v->split * r.width : NAN);
+    } else if (action == GLFW_RELEASE) {
+        ao_gestures_release(&v->gestures, drag);
     }
 }
 
 static void on_cursor(GLFWwindow *window, double x, double y)
 {
     struct viewer *v = glfwGetWindowUserPointer(window);
-    if (v->drag < 0)
+    if (!ao_gestures_move(&v->gestures, x, y))
         return;
-    if (v->drag == DRAG_DIVIDER) {
-        struct ao_display_rect r = image_in_window(v);
-        v->split = r.width > 0 ? fmin(1.0, fmax(0.0, (x - r.x) / r.width)) : 0.5;
-        v->reupload = true;
-        return;
-    }
-    double *dx = v->drag == GLFW_MOUSE_BUTTON_LEFT ? &v->orbit_x : &v->pan_x;
-    double *dy = v->drag == GLFW_MOUSE_BUTTON_LEFT ? &v->orbit_y : &v->pan_y;
-    *dx += x - v->cursor_x;
-    *dy += y - v->cursor_y;
-    v->cursor_x = x;
-    v->cursor_y = y;
+    struct ao_display_rect r = image_in_window(v);
+    v->split = r.width > 0 ? fmin(1.0, fmax(0.0, (x - r.x) / r.width)) : 0.5;
+    v->reupload = true;
 }
 
 /* The framebuffer changed size: the render follows once it keeps it (follow_size). */
@@ -343,27 +288,20 @@ static void on_scroll(GLFWwindow *window, double dx, double dy)
 {
     (void)dx;
     struct viewer *v = glfwGetWindowUserPointer(window);
-    v->wheel += dy;
+    ao_gestures_scroll(&v->gestures, dy);
 }
 
-/* Applies the mouse moves gathered since the last frame as one camera change (one restart):
- * a drag across the image's height orbits half a turn or pans the image along with the cursor,
- * a wheel step up zooms in by 15 %. */
+/* Applies the mouse moves gathered since the last frame as one camera change (one restart). */
 static void apply_mouse(struct viewer *v)
 {
-    if (v->orbit_x == 0 && v->orbit_y == 0 && v->pan_x == 0 && v->pan_y == 0 && v->wheel == 0)
+    if (!ao_gestures_pending(&v->gestures))
         return;
     struct ao_display_rect image = image_in_window(v);
-    double size = image.height > 0 ? image.height : 1;
     struct ao_settings s;
     get_settings(v, &s);
-    const double pi = 3.14159265358979323846;
-    ao_camera_orbit(&s.camera, (float)(pi * v->orbit_x / size), (float)(pi * v->orbit_y / size));
-    ao_camera_pan(&s.camera, (float)(v->pan_x / size), (float)(v->pan_y / size));
-    ao_camera_zoom(&s.camera, (float)pow(0.85, v->wheel));
+    ao_gestures_apply(&v->gestures, &s.camera, image.height > 0 ? image.height : 1);
     s.navigating = true;
     set_settings(v, &s);
-    v->orbit_x = v->orbit_y = v->pan_x = v->pan_y = v->wheel = 0;
     v->navigated_at = glfwGetTime();
 }
 
@@ -413,44 +351,14 @@ static void save(struct viewer *v)
     float *both = v->compare ? compose_images(v) : NULL;
     if (v->compare && !both)
         return;
-    char png[32], linear[32];
-    for (int n = 1;; n++) {
-        snprintf(png, sizeof png, "aoview-%d.png", n);
-        snprintf(linear, sizeof linear, "aoview-%d.%s", n, v->info->save_exr ? "exr" : "pfm");
-        if (access(png, F_OK) != 0 && access(linear, F_OK) != 0)
-            break;
-    }
-    struct ao_notes notes;
-    ao_notes_make(&notes, &f->info, v->info->scene_name, v->info->seed);
-    if (ao_display_write_png(v->display, png) &&
-        ao_image_write_linear(linear, both ? both : f->rgb, v->image_width, v->image_height, notes.notes,
-                              notes.count) &&
-        !v->info->quiet) {
-        printf("aoview: saved %s and %s (%u spp)\n", png, linear, f->info.spp);
-        fflush(stdout);
-    }
+    struct ao_screenshot shot = {.linear = both ? both : f->rgb, .width = v->image_width, .height = v->image_height,
+                                 .info = &f->info, .scene = v->info->scene_name, .seed = v->info->seed,
+                                 .exr = v->info->save_exr, .quiet = v->info->quiet};
+    ao_screenshot_save(v->display, &shot);
     free(both);
 }
 
 /* ---- life cycle ---- */
-
-/* Xlib's handler for a broken connection (the X server died or went away), on whichever thread's
- * Xlib call noticed it (the GL thread's, or the render thread's glfwPostEmptyEvent): one line, and
- * exit status 1 at once. This is the one exit outside main.c, because no way back is sound: after
- * the handler returns Xlib calls exit(1) itself, from under the running threads, after printing
- * its own message; and an exit handler (XSetIOErrorExitHandler) that returns resumes the Xlib
- * call with the display's lock released twice (libX11 1.8 _XIOError; ThreadSanitizer reports it),
- * while GLFW 3.3's glfwWaitEvents spins for ever on the dead connection. Nothing is lost: stats
- * rows are flushed per pass, screenshots are renamed into place whole. */
-static int on_io_error(Display *display)
-{
-    static atomic_flag reported = ATOMIC_FLAG_INIT;
-    if (atomic_flag_test_and_set(&reported))
-        for (;;)
-            pause();   /* another thread is exiting */
-    fprintf(stderr, "aoview: lost the connection to the X display %s\n", DisplayString(display));
-    _exit(1);
-}
 
 /* The smallest window that keeps the overlay and the error chart readable. */
 #define READABLE_WIDTH 640
@@ -500,7 +408,7 @@ static enum ao_window_result open_window(struct viewer *v)
         const char *why = NULL;
         if (glfwGetError(&why) == GLFW_VERSION_UNAVAILABLE) {
             fprintf(stderr, "aoview: the X display %s offers no OpenGL 3.3 core context (%s); "
-                    "--headless renders without a window\n", XDisplayName(NULL), why);
+                    "--headless renders without a window\n", ao_x11_display_name(), why);
             return AO_WINDOW_FAILED;
         }
         fprintf(stderr, "aoview: cannot open an OpenGL 3.3 window: %s\n", why ? why : "unknown error");
@@ -735,69 +643,6 @@ static struct ao_hud_status status_of(const struct viewer *v, const struct ao_se
     return s;
 }
 
-/* The error chart's panel in the bottom right corner, in font pixels at its text scale. */
-#define CHART_WIDTH 200
-#define CHART_HEIGHT 130
-
-/* Draws the error chart, when there is one, in the bottom right corner: its text at twice the
- * content scale where the panel then fits into a quarter of the window, else at the content scale
- * with the panel at most half the window wide and tall. */
-static void draw_chart(struct viewer *v, const struct ao_chart *chart, const struct look *look, float content_scale)
-{
-    float scale = content_scale;
-    if (2 * CHART_WIDTH * scale <= 0.5f * (float)look->width && 2 * CHART_HEIGHT * scale <= 0.5f * (float)look->height)
-        scale *= 2;
-    int margin = (int)(8 * content_scale);
-    int width = (int)fminf(CHART_WIDTH * scale, 0.5f * (float)look->width);
-    int height = (int)fminf(CHART_HEIGHT * scale, 0.5f * (float)look->height);
-    ao_chartview_draw(v->hud, chart, look->width - margin - width, look->height - margin - height,
-                      width, height, scale, look->width, look->height);
-}
-
-/* Lays the status items ('\n' between them) out for the overlay into out, items two spaces apart
- * in lines no wider than 45 % of the framebuffer, and returns their text scale: twice the content
- * scale, or less (down to 1) while the box would cover more than a sixth of the framebuffer. */
-static float status_layout(struct viewer *v, const char *items, const struct look *look, float content_scale,
-                           char *out, size_t size)
-{
-    float scale = 2.0f * content_scale;
-    for (;; scale -= 0.5f * content_scale) {
-        float pad = 2.0f * AO_HUD_PADDING * scale;
-        size_t used = 0, line = 0; /* where the current line starts in out */
-        out[0] = '\0';
-        for (const char *item = items; *item;) {
-            size_t length = strcspn(item, "\n");
-            if (used + length + 3 >= size)
-                break;
-            if (used == 0) {
-                memcpy(out, item, length);
-                used = length;
-            } else { /* on this line if it fits, else on the next */
-                int w, h;
-                memcpy(out + used, "  ", 2);
-                memcpy(out + used + 2, item, length);
-                out[used + 2 + length] = '\0';
-                ao_hud_measure(v->hud, out + line, scale, &w, &h);
-                if ((float)w + pad > 0.45f * (float)look->width) {
-                    out[used] = '\n';
-                    memcpy(out + used + 1, item, length);
-                    line = used + 1;
-                    used += 1 + length;
-                } else {
-                    used += 2 + length;
-                }
-            }
-            out[used] = '\0';
-            item += length + (item[length] == '\n');
-        }
-        int w, h;
-        ao_hud_measure(v->hud, out, scale, &w, &h);
-        if (((float)w + pad) * ((float)h + pad) <= (float)look->width * (float)look->height / 6.0f ||
-            scale - 0.5f * content_scale < 1.0f)
-            return scale;
-    }
-}
-
 /* Draws the image, then the overlay (the status items, '\n' between them, or while comparing the
  * divider and the sides' labels) and the chart or the help, into the framebuffer look describes. */
 static void draw(struct viewer *v, const struct look *look, const char *items)
@@ -805,49 +650,26 @@ static void draw(struct viewer *v, const struct look *look, const char *items)
     ao_display_draw(v->display, look->width, look->height);
     float content_scale;
     glfwGetWindowContentScale(v->window, &content_scale, NULL);
-    content_scale = content_scale > 0.0f ? content_scale : 1.0f;
-    float scale = content_scale * (look->height >= 360 ? 2.0f : 1.0f);
-    int bar_top = (int)(8 * scale);
+    struct ao_overlay o = {.width = look->width, .height = look->height,
+                           .content_scale = content_scale > 0.0f ? content_scale : 1.0f, .hud = look->hud,
+                           .help = look->help, .items = items, .compare = v->compare != NULL, .layout = v->layout,
+                           .split = v->split, .chart = &v->chart};
+    char labels[2][AO_COMPARE_LABEL];
+    struct ao_chart both;
     if (v->compare) {
-        char labels[2][AO_COMPARE_LABEL];
         ao_compare_labels(v->compare, "\n", labels);
-        const char *const sides[2] = {labels[0], labels[1]};
-        struct ao_display_rect image = ao_display_fit(v->image_width, v->image_height, look->width, look->height);
-        bar_top = ao_compareview_draw(v->hud, v->layout, v->split, image, look->hud && !look->help ? sides : NULL,
-                                      scale, look->width, look->height) + (int)(8 * scale);
+        o.labels[0] = labels[0];
+        o.labels[1] = labels[1];
+        o.image = ao_display_fit(v->image_width, v->image_height, look->width, look->height);
+        ao_compare_chart(v->compare, &both);
+        o.chart = &both;
     }
-    if (look->help) {
-        /* At the overlay's scale, or at the content scale where that does not fit the height. */
-        float help_scale = scale;
-        int w, h;
-        for (;;) {
-            ao_hud_measure(v->hud, HELP, help_scale, &w, &h);
-            w += (int)(2 * AO_HUD_PADDING * help_scale);
-            h += (int)(2 * AO_HUD_PADDING * help_scale);
-            if (h <= look->height || help_scale <= content_scale)
-                break;
-            help_scale = content_scale;
-        }
-        ao_hud_draw(v->hud, HELP, (look->width - w) / 2, (look->height - h) / 2, help_scale, look->width,
-                    look->height);
-    } else if (look->hud) {
-        if (!v->compare) {
-            char lines[512];
-            float text_scale = status_layout(v, items, look, content_scale, lines, sizeof lines);
-            ao_hud_draw(v->hud, lines, (int)(8 * content_scale), (int)(8 * content_scale), text_scale, look->width,
-                        look->height);
-            bar_top = (int)(8 * content_scale);
-        }
-        if (v->show != SHOW_IMAGE)
-            ao_heatmap_draw_bar(v->hud, v->show == SHOW_ERROR ? &ao_heatmap_error : &ao_heatmap_difference,
-                                v->show == SHOW_ERROR ? "estimated error" : "|image - reference|",
-                                v->show == SHOW_ERROR, look->width - (int)(8 * scale), bar_top, scale, look->width,
-                                look->height);
-        struct ao_chart both;
-        if (v->compare)
-            ao_compare_chart(v->compare, &both);
-        draw_chart(v, v->compare ? &both : &v->chart, look, content_scale);
+    if (v->show != SHOW_IMAGE) {
+        o.bar = v->show == SHOW_ERROR ? &ao_heatmap_error : &ao_heatmap_difference;
+        o.bar_title = v->show == SHOW_ERROR ? "estimated error" : "|image - reference|";
+        o.bar_unknown = v->show == SHOW_ERROR;
     }
+    ao_overlay_draw(v->hud, &o);
 }
 
 /* Shows what changed: uploads the newest frame when image is set, makes the status (and the title
@@ -896,7 +718,7 @@ static double update(struct viewer *v, const struct ao_settings *settings, bool 
         return -1.0;
     double now = glfwGetTime();
     bool runs = running(v, settings);
-    bool navigating = v->drag >= 0 || now - v->navigated_at < NAVIGATION_SECONDS;
+    bool navigating = v->gestures.drag != AO_DRAG_NONE || now - v->navigated_at < NAVIGATION_SECONDS;
     bool image = v->reupload || (v->taken != v->uploaded && !keeps_preview(v, settings));
     bool ticks = runs && !v->compare && v->shown->info.pass > 0;
     bool clock = v->taken != v->status_image || (ticks && now - v->status_at >= CLOCK_SECONDS);
@@ -905,7 +727,7 @@ static double update(struct viewer *v, const struct ao_settings *settings, bool 
     bool look = v->dirty || width != v->drawn.width || height != v->drawn.height || v->show_hud != v->drawn.hud ||
                 v->show_help != v->drawn.help;
     if (!image && !look && clock && navigating) /* the status waits for the navigation's end */
-        return v->drag >= 0 ? -1.0 : v->navigated_at + NAVIGATION_SECONDS;
+        return v->gestures.drag != AO_DRAG_NONE ? -1.0 : v->navigated_at + NAVIGATION_SECONDS;
     if (!image && !look && !clock)
         return ticks ? v->status_at + CLOCK_SECONDS : -1.0;
     bool preview = !v->compare && v->shown->block > 1;
@@ -994,18 +816,19 @@ static enum ao_window_result loop(struct viewer *v)
 
 enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_window_info *info)
 {
-    XIOErrorHandler xlib_handler = XSetIOErrorHandler(on_io_error);
+    ao_x11_catch_lost_display();
     if (!glfwInit()) {
         /* With a display named, say why it could not be used before main falls back to headless. */
         const char *why = NULL, *display = getenv("DISPLAY");
         glfwGetError(&why);
         if (display && display[0])
             fprintf(stderr, "aoview: cannot use the X display %s: %s\n", display, why ? why : "unknown error");
-        XSetIOErrorHandler(xlib_handler);
+        ao_x11_restore();
         return AO_WINDOW_NO_DISPLAY;
     }
     set_glfw_running(true);
-    struct viewer v = {.render = render, .info = info, .show_hud = true, .drag = -1, .split = 0.5, .pixel_size = 1,
+    struct viewer v = {.render = render, .info = info, .show_hud = true, .gestures = {.drag = AO_DRAG_NONE},
+                       .split = 0.5, .pixel_size = 1,
                        .reference_fits = true,
                        .show = info->difference && info->reference ? SHOW_DIFFERENCE : SHOW_IMAGE};
     enum ao_window_result result = open_window(&v);
@@ -1022,6 +845,6 @@ enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_wi
     free(v.composite);
     set_glfw_running(false);
     glfwTerminate();
-    XSetIOErrorHandler(xlib_handler);
+    ao_x11_restore();
     return result;
 }

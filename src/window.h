@@ -1,12 +1,13 @@
-/* The interactive viewer: a GLFW window on the running renderer, with SPEC.md's keys and mouse,
- * the status overlay and title, screenshots, and the live comparison of two configurations. */
+/* The interactive viewer: a GLFW window on the running renderer, with the keys and mouse of
+ * docs/contract.md, the status overlay and title, screenshots, and the live comparison of two
+ * configurations. */
 #ifndef AO_WINDOW_H
 #define AO_WINDOW_H
 
 #include <stdbool.h>
 #include <stdint.h>
 
-#include "cli.h"
+#include "modes.h"
 #include "render.h"
 
 /* What the window shows besides the frames; strings owned by the caller for the whole run. */

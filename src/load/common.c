@@ -1,7 +1,5 @@
-/* What the mesh loaders share (see load.h): growth arrays, line tokens, numbers, error lines. */
-/* Linux's madvise and MADV_HUGEPAGE, which POSIX lacks, for ao_load_advise_huge alone. */
-#define _DEFAULT_SOURCE
-#include "load/load.h"
+/* What the mesh loaders share (see loader.h): growth arrays, line tokens, numbers, error lines. */
+#include "load/loader.h"
 
 #include <float.h>
 #include <math.h>
@@ -9,10 +7,9 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/mman.h>
-#include <unistd.h>
 
 #include "file.h"
+#include "text.h"
 
 /* Makes room for n more elements (storage exists after any call, even for n = 0, so that no null
  * pointer meets an offset); false when memory or size_t runs out. */
@@ -31,7 +28,7 @@ bool ao_load_reserve(struct ao_load_array *a, size_t n)
         return false;
     a->data = data;
     a->capacity = want;
-    ao_load_advise_huge(data, want * a->size);
+    ao_mesh_advise_huge(data, want * a->size);
     return true;
 }
 
@@ -69,22 +66,9 @@ void ao_load_report(const char *path, size_t line, const char *format, ...)
     vsnprintf(message, sizeof message, format, args);
     va_end(args);
     if (line)
-        ao_file_report("%s:%zu: %s", path, line, message);
+        ao_text_report("%s:%zu: %s", path, line, message);
     else
-        ao_file_report("%s: %s", path, message);
-}
-
-bool ao_load_fits(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, const char *path,
-                  size_t line)
-{
-    uint64_t charge = ao_budget_charge(budget, triangles, vertices, 0);
-    if (ao_budget_fits(budget, charge))
-        return true;
-    char why[200];
-    ao_budget_explain(budget, charge, why, sizeof why);
-    ao_load_report(path, line, "%llu triangles and %llu vertices %s", (unsigned long long)triangles,
-                   (unsigned long long)vertices, why);
-    return false;
+        ao_text_report("%s: %s", path, message);
 }
 
 bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements,
@@ -263,52 +247,4 @@ bool ao_load_fan(struct ao_load_array *triangles, const struct ao_load_array *fa
         memcpy(out + size, face->data + i * size, 2 * size);
     }
     return true;
-}
-
-/* The unit vector along (x, y, z) in single precision, or zero when it is zero or not finite.
- * Divided first by its largest component, so that squares neither overflow nor vanish. */
-struct ao_vec3 ao_load_unit(double x, double y, double z)
-{
-    double big = fmax(fabs(x), fmax(fabs(y), fabs(z)));
-    if (!(big > 0.0) || !isfinite(x) || !isfinite(y) || !isfinite(z))
-        return ao_vec3_make(0.0f, 0.0f, 0.0f);
-    x /= big, y /= big, z /= big;
-    double length = sqrt(x * x + y * y + z * z);
-    return ao_vec3_make((float)(x / length), (float)(y / length), (float)(z / length));
-}
-
-struct ao_vec3 ao_load_missing_normal(void)
-{
-    return ao_vec3_make(NAN, NAN, NAN);
-}
-
-bool ao_load_normal_is_missing(struct ao_vec3 n)
-{
-    return isnan(n.x);
-}
-
-struct ao_vec3 ao_load_given_normal(double x, double y, double z, size_t *invalid)
-{
-    struct ao_vec3 n = ao_load_unit(x, y, z);
-    if (n.x != 0.0f || n.y != 0.0f || n.z != 0.0f)
-        return n;
-    ++*invalid;
-    return ao_load_missing_normal();
-}
-
-/* Advises the pages that [data, data + size) touches into transparent huge pages, where the system
- * has them (Linux's "madvise" mode) and the array is big enough to gain. The advice covers all of
- * a big block that malloc mapped by itself (from its page-aligned header to its end), so that its
- * mapping stays whole and realloc can still move it without copying; pages shared with other
- * blocks only change how they are backed. */
-void ao_load_advise_huge(void *data, size_t size)
-{
-#ifdef MADV_HUGEPAGE
-    uintptr_t page = (uintptr_t)sysconf(_SC_PAGESIZE), start = (uintptr_t)data;
-    uintptr_t begin = start / page * page, end = (start + size + page - 1) / page * page;
-    if (size >= AO_LOAD_HUGE_ARRAY)
-        madvise((void *)begin, end - begin, MADV_HUGEPAGE);
-#else
-    (void)data, (void)size;
-#endif
 }

@@ -1,5 +1,6 @@
-/* What the glTF loader's files share (gltf.c: the file, its nodes and meshes; gltf_data.c: JSON
- * access, the GLB container, buffers and accessors). Only src/load/gltf*.c include this. */
+/* What the glTF loader's files share (gltf.c: the file, its meshes and their placements;
+ * gltf_nodes.c: the node tree; gltf_data.c: JSON access, the GLB container, buffers and
+ * accessors). Only src/load/gltf*.c include this. */
 #ifndef AO_LOAD_GLTF_H
 #define AO_LOAD_GLTF_H
 
@@ -10,7 +11,7 @@
 #include <json.h>
 
 #include "load/draco.h"
-#include "load/load.h"
+#include "load/loader.h"
 
 /* The deepest node tree aoview reads: a node under more ancestors than this is refused (real files
  * nest a few dozen deep; the tree is walked without recursion, so this bounds nothing but trust). */
@@ -175,6 +176,13 @@ struct ao_vec3 ao_gltf_position(const struct ao_gltf_elements *e, size_t i);
 /* A triangle list's indices plus base into out (e->count of them); false at the first index at or
  * above limit, its place in *bad. */
 bool ao_gltf_list_indices(const struct ao_gltf_elements *e, uint32_t base, size_t limit, uint32_t *out, size_t *bad);
+
+/* The node tree of g->nodes (node_count of them): each node's parent into g->parent, refusing bad
+ * child indices, a node with two parents and cycles; the roots (the default scene's nodes, scene
+ * 0's, or every node without a parent) marked in is_root; the world matrix of each node under
+ * them into g->world and its depth into g->depth, marked in placed, refusing a node deeper than
+ * AO_GLTF_MAX_NODE_DEPTH or whose matrix overflows. False after one report (gltf_nodes.c). */
+bool ao_gltf_place_nodes(struct ao_gltf *g, size_t node_count, bool *is_root, bool *placed);
 
 /* Frees what the data layer holds (buffers, decoded views). */
 void ao_gltf_free_data(struct ao_gltf *g);

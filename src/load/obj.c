@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load/load.h"
+#include "load/loader.h"
 
 /* Parsed indices saturate here, far above any possible vertex count. */
 #define INDEX_SATURATION 1000000000000000LL
@@ -95,7 +95,7 @@ static bool parse_obj_normal(struct obj_reader *o, struct ao_load_tokens *t)
     struct ao_vec3 *normal = ao_load_append(&o->normals, 1);
     if (!normal)
         return ao_load_out_of_memory(o->path);
-    *normal = ao_load_given_normal(f[0], f[1], f[2], &o->invalid_normals);
+    *normal = ao_mesh_given_normal(f[0], f[1], f[2], &o->invalid_normals);
     return true;
 }
 
@@ -224,7 +224,7 @@ static bool parse_obj_face(struct obj_reader *o, struct ao_load_tokens *t)
  * that adds positions, normals (both held like vertices) or triangles. */
 static bool within_budget(const struct obj_reader *o)
 {
-    return ao_load_fits(o->budget, o->corner_positions.count / 3, o->positions.count + o->normals.count, o->path,
+    return ao_mesh_fits(o->budget, o->corner_positions.count / 3, o->positions.count + o->normals.count, o->path,
                         o->line);
 }
 
@@ -325,7 +325,7 @@ static bool split_vertex(struct obj_reader *o, struct vertex_map *map, struct sp
                          struct corner c, uint32_t *vertex)
 {
     const struct ao_vec3 *normals = (const struct ao_vec3 *)o->normals.data;
-    if (c.normal != AO_LOAD_NO_INDEX && ao_load_normal_is_missing(normals[c.normal]))
+    if (c.normal != AO_LOAD_NO_INDEX && ao_mesh_normal_is_missing(normals[c.normal]))
         c.normal = AO_LOAD_NO_INDEX;
     uint64_t key = (uint64_t)c.position << 32 | c.normal;
     bool over = false;
@@ -341,13 +341,13 @@ static bool split_vertex(struct obj_reader *o, struct vertex_map *map, struct sp
         ao_load_report(o->path, 0, "too many distinct vertices for 32-bit indices");
         return false;
     }
-    if (!ao_load_fits(o->budget, o->corner_positions.count / 3, map->count + 1, o->path, 0))
+    if (!ao_mesh_fits(o->budget, o->corner_positions.count / 3, map->count + 1, o->path, 0))
         return false;
     struct ao_vec3 *p = ao_load_append(&out->positions, 1), *n = ao_load_append(&out->normals, 1);
     if (!p || !n)
         return ao_load_out_of_memory(o->path);
     *p = ((const struct ao_vec3 *)o->positions.data)[c.position];
-    *n = c.normal == AO_LOAD_NO_INDEX ? ao_load_missing_normal() : normals[c.normal];
+    *n = c.normal == AO_LOAD_NO_INDEX ? ao_mesh_missing_normal() : normals[c.normal];
     slot->key = key;
     slot->vertex = *vertex = (uint32_t)map->count++;
     return true;

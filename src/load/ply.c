@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load/load.h"
+#include "load/loader.h"
 
 /* PLY scalar types, indexing ply_types. */
 enum ply_type { PLY_INT8, PLY_UINT8, PLY_INT16, PLY_UINT16, PLY_INT32, PLY_UINT32, PLY_FLOAT32,
@@ -490,7 +490,7 @@ static bool add_vertex(struct ply_reader *r, const double v[ROLE_COUNT])
         return true;
     if (!(slot = ao_load_append(&r->normals, 1)))
         return ao_load_out_of_memory(r->path);
-    *slot = ao_load_given_normal(v[ROLE_NX], v[ROLE_NY], v[ROLE_NZ], &r->invalid_normals);
+    *slot = ao_mesh_given_normal(v[ROLE_NX], v[ROLE_NY], v[ROLE_NZ], &r->invalid_normals);
     return true;
 }
 
@@ -556,7 +556,7 @@ static bool read_vertex_rows(struct ply_reader *r, const size_t offset[ROLE_COUN
             return ply_error(r, "vertex position is not a finite float");
         if (!n)
             continue;
-        n[i] = ao_load_given_normal(f[ROLE_NX], f[ROLE_NY], f[ROLE_NZ], &r->invalid_normals);
+        n[i] = ao_mesh_given_normal(f[ROLE_NX], f[ROLE_NY], f[ROLE_NZ], &r->invalid_normals);
     }
     r->cur = (const char *)bytes;
     return true;

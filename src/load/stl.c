@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load/load.h"
+#include "load/loader.h"
 
 /* Bytes of the binary header, of its triangle count and of one triangle record. */
 enum { BINARY_HEADER = 80, BINARY_PREFIX = 84, BINARY_RECORD = 50 };
@@ -80,7 +80,7 @@ static bool weld_vertex(struct weld *w, struct ao_vec3 p, struct ao_load_array *
             ao_load_report(path, line, "too many distinct vertices for 32-bit indices");
             return false;
         }
-        if (!ao_load_fits(w->budget, w->corners->count / 3 + 1, w->positions.count + 1, path, line))
+        if (!ao_mesh_fits(w->budget, w->corners->count / 3 + 1, w->positions.count + 1, path, line))
             return false;
         struct ao_vec3 *stored = ao_load_append(&w->positions, 1);
         if (!stored)
@@ -225,7 +225,7 @@ static bool ascii_line(struct ascii_reader *r, struct ao_load_tokens *t, struct 
         r->in_loop = false;
         r->facet_loops++;
         r->polygons += r->loop.count > 3;
-        if (!ao_load_fits(w->budget, indices->count / 3 + r->loop.count - 2, w->positions.count, r->path,
+        if (!ao_mesh_fits(w->budget, indices->count / 3 + r->loop.count - 2, w->positions.count, r->path,
                           r->line))
             return false;
         return ao_load_fan(indices, &r->loop) || ao_load_out_of_memory(r->path);
@@ -289,7 +289,7 @@ bool ao_load_stl(struct ao_mesh *mesh, const char *path, const char *text, size_
     bool ok;
     if (binary) {
         /* The header's count is real (the file's size matches it): check it before reading. */
-        ok = ao_load_fits(budget, n, 0, path, 0) && read_binary(&w, &indices, path, text, n);
+        ok = ao_mesh_fits(budget, n, 0, path, 0) && read_binary(&w, &indices, path, text, n);
     } else if (starts_with_solid(text, size) && strlen(text) == size) {
         ok = read_ascii(&w, &indices, path, text, size, mesh->note);
     } else if (size < BINARY_PREFIX) {

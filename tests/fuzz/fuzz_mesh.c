@@ -1,6 +1,6 @@
 /* libFuzzer target for one mesh loader: the input is written to a scratch file whose extension
  * (AO_FUZZ_EXT: ".obj", ".ply", ".stl", ".gltf" or ".glb") picks the loader, since
- * ao_model_load_budget reads a path. A model that loads must be consistent: at least one mesh and
+ * ao_load_model reads a path. A model that loads must be consistent: at least one mesh and
  * one placement, each mesh with indices in range, finite positions, unit or zero normals, each
  * placement naming a mesh through a finite matrix. The scene budget is 256 MiB, a quarter of the 1 GB that tests/fuzz/run.sh lets
  * the fuzzer's process hold: an input the budget allows (a Draco stream decoding to millions of
@@ -10,6 +10,7 @@
 #include <stdlib.h>
 
 #include "fuzz.h"
+#include "load/load.h"
 #include "mesh.h"
 
 #ifndef AO_FUZZ_EXT
@@ -60,7 +61,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     fuzz_write_file(path, data, size);
     struct ao_model model;
     struct ao_budget budget = {.limit = (uint64_t)256 << 20};
-    if (ao_model_load_budget(&model, path, &budget, AO_MESH_CREASE_DEFAULT))
+    if (ao_load_model(&model, path, &budget, AO_MESH_CREASE_DEFAULT))
         check(&model);
     ao_model_finish(&model);
     return 0;

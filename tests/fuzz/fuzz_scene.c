@@ -4,7 +4,7 @@
  * exercise loading, sharing, transforms, flattening and instancing without reaching outside it
  * (absolute paths aside); each input is parsed twice, instancing as AUTO decides and instancing
  * every mesh file's mesh. A scene that parses must be consistent: indices, meshes and albedos in
- * range, finite positions and eye within the range scene.c accepts (an instance's triangles mapped
+ * range, finite positions and eye within the range scene_place.c accepts (an instance's triangles mapped
  * into the local frame too), unit or zero normals, finite instance maps and slack. */
 #include <math.h>
 #include <stdio.h>
@@ -13,6 +13,7 @@
 
 #include "fuzz.h"
 #include "scene.h"
+#include "scene_load.h"
 
 /* Writes the meshes that seed scenes refer to; once per process. */
 static void write_meshes(void)
@@ -49,13 +50,13 @@ static void write_meshes(void)
     fuzz_write_file(fuzz_temp_path("nodes.gltf"), gltf, sizeof gltf - 1);
 }
 
-/* A message when a point of the local frame lies beyond what scene.c accepts, else NULL. */
+/* A message when a point of the local frame lies beyond what scene_place.c accepts, else NULL. */
 static const char *check_point(struct ao_vec3 p)
 {
     if (!ao_vec3_is_finite(p))
         return "non-finite position";
     if (fmaxf(fabsf(p.x), fmaxf(fabsf(p.y), fabsf(p.z))) > AO_SCENE_MAX_EXTENT)
-        return "position beyond the range scene.c accepts";
+        return "position beyond the range scene_place.c accepts";
     return NULL;
 }
 
@@ -105,7 +106,7 @@ static void check(const struct ao_scene *s)
             broken = "sphere without a positive radius";
     struct ao_vec3 eye = s->camera.eye;
     if (!broken && !(fmaxf(fabsf(eye.x), fmaxf(fabsf(eye.y), fabsf(eye.z))) <= AO_SCENE_MAX_EXTENT))
-        broken = "eye beyond the range scene.c accepts";
+        broken = "eye beyond the range scene_place.c accepts";
     if (!broken && !(s->ao_distance > 0.0f))
         broken = "ao-distance not positive";
     if (!broken && (s->width < 0 || s->height < 0))
@@ -133,7 +134,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
         struct ao_scene scene;
         struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT,
                                            .instancing = pass ? AO_INSTANCING_ALWAYS : AO_INSTANCING_AUTO};
-        if (ao_scene_parse_with(&scene, text, path, &options))
+        if (ao_scene_parse(&scene, text, path, &options))
             check(&scene);
         ao_scene_finish(&scene);
     }

@@ -1,0 +1,172 @@
+/* A run of the renderer and its passes: the accumulation between two restarts with its tiles, work
+ * list and frames (struct ao_run), and one pass over it, planned from the last one's survey, traced
+ * by the thread team, surveyed (the error estimate, RMSE, whether the run is done) and published.
+ * Private to the renderer: render.c drives passes from its thread, render_share.c runs them with a
+ * share; neither the frames' consumers nor the share see this header. */
+#ifndef AO_PASS_H
+#define AO_PASS_H
+
+#include <stdatomic.h>
+#include <stdbool.h>
+#include <stdint.h>
+
+#include "accum.h"
+#include "ao.h"
+#include "frame.h"
+#include "frames.h"
+#include "pool.h"
+#include "render_config.h"
+#include "share.h"
+#include "tile.h"
+
+/* A thread's share of a pass: the tiles of the pass's work list in tile rows k, k + threads,
+ * k + 2 threads, ... for thread k, taken in order from `next`. Each thread keeps the same pixels
+ * pass after pass, so their sums stay in its own cache (handed round between threads, they crossed
+ * caches on every pass); a thread that has finished its lane helps with the others'. */
+struct ao_lane {
+    _Alignas(64) atomic_int next;        /* a line of its own: the other threads take from it too */
+    int begin, end;                      /* its tiles in the work list */
+};
+
+/* The next pass as planned: the pixels it traces, and the AO samples its tiles lack of the
+ * target (the work that remains while adaptive sampling keeps them). */
+struct ao_next_pass {
+    uint64_t pixels, lack;
+};
+
+/* One tile of the image as a gather moves it (struct ao_render_share's gather): its running average
+ * (its pixels row by row, clipped to the image), its error estimate (as struct ao_frame's), the
+ * most samples a pixel of it has and their sum over its pixels. */
+struct ao_tile_record {
+    float rgb[3 * AO_TILE * AO_TILE];
+    float error;
+    uint32_t most;
+    uint64_t samples;
+};
+
+/* What the passes of a run read and write: owned by the render thread, which writes the pass's
+ * fields before the team runs it; the team's threads write disjoint tiles, counters atomically. */
+struct ao_run {
+    struct ao_render_config config;
+    int width, height;                   /* of the accumulation: the size of the current run */
+    struct ao_accum accum;               /* render thread (and its team, pixel-disjoint) only */
+    struct ao_frames frames;             /* to the consumer */
+    atomic_uint_fast64_t live_restarts;  /* the renderer's restarts and stop, for the tile loop */
+    atomic_bool live_stop;
+
+    /* The pass in flight: written by the render thread before the team runs it. */
+    struct ao_pool *pool;
+    uint64_t pass_serial;                /* numbers the passes */
+    struct ao_context ctx;
+    uint64_t pass_restarts;              /* the restarts it was begun at: another count aborts it */
+    struct ao_tile_pass tile_pass;       /* what the pass gives each tile */
+    int tiles_x, tiles_y;
+    struct ao_tile_state *tiles;         /* tiles_x * tiles_y, row by row */
+    double image_mean;                   /* of the running average, as of the last survey */
+    int *work;                           /* the pass's tiles, grouped by lane */
+    struct ao_lane *lanes;               /* one per thread, the render thread's first */
+    atomic_uint_fast64_t eye_rays, shadow_rays;
+
+    /* What the last survey planned (or a restart: nothing sampled yet), for ao_pass_select and the
+     * next pass's size: the busiest tile's spp and the largest gain among the tiles short of the
+     * target, and the pixels the next pass traces without and with adaptive sampling and the
+     * samples its tiles lack of the target (known[k]: counted; with adaptive sampling off the
+     * survey counts only the first). */
+    uint32_t busiest;
+    double fastest;
+    struct ao_next_pass next[2];
+    bool next_known[2];
+
+    /* With a share (aoview-mpi): the tiles this process owns; its work list as one span of entries
+     * [front, back) (front in the low half) that its threads take from the front and the share
+     * lends from the back; the lent entries' sums (AO_TILE x AO_TILE an entry); whether the share
+     * gave the pass up; the records of a gather (this process's tiles', and the leader's of every
+     * tile); the leader's passes not gathered yet; seconds in the share's waits since the last
+     * pass, which count in the next. */
+    unsigned char *mine;                 /* per tile; every tile without a share */
+    atomic_uint_fast64_t span;
+    struct ao_vec3 *pass_sums;
+    atomic_bool given_up;
+    struct ao_share_pass share_pass;
+    struct ao_tile_record *records, *all_records;
+    bool ungathered;
+    double share_seconds;
+};
+
+/* Allocates the accumulation, tile states and work lists of a run of r->width x r->height; false
+ * with one message when memory is short (ao_pass_free frees what was made). */
+bool ao_pass_allocate(struct ao_run *r);
+
+/* Frees what ao_pass_allocate allocated; accepts what it left half done. */
+void ao_pass_free(struct ao_run *r);
+
+/* Begins a run at width x height (the accumulation reallocated when the size changed): every tile
+ * state cleared (the sums follow, tile by tile: ao_pass_add_tile) and every tile planned into the
+ * first pass; false with one message when memory is short. Render thread. */
+bool ao_pass_restart(struct ao_run *r, int width, int height);
+
+/* True once the pass in flight is aborted: the renderer stops, or restarted since it was begun.
+ * Any thread of the team. */
+bool ao_pass_aborted(const struct ao_run *r);
+
+/* The pixels of tile t, clipped to the image. */
+struct ao_tile ao_pass_tile_rect(const struct ao_run *r, int t);
+
+/* The part of its pixels' streams tile t traces in this pass; *next (unless NULL) gets the half's
+ * next sample number after it. */
+struct ao_tile_work ao_pass_tile_work(const struct ao_run *r, int t, uint32_t *next);
+
+/* Adds tile t's sums of one pass (the work it was given, after which its half's next sample is
+ * `next`) to the accumulation and brings its state up to date. The thread that traced it. */
+void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, uint32_t next,
+                      const struct ao_vec3 *sums);
+
+/* Traces entry n of the work list and adds its sums; adds the rays traced to *eye and *shadow. */
+void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shadow);
+
+/* Readies the pass's counters (every lane from its first entry, this process's list whole, nothing
+ * given up) and numbers it; returns the entries of the work list. Render thread. */
+int ao_pass_begin(struct ao_run *r);
+
+/* Runs one pass on every thread of the team, without a share; false when it was aborted. Render
+ * thread. */
+bool ao_pass_run(struct ao_run *r);
+
+/* The next pass with adaptive sampling (`adaptive`) or without: as the last survey planned it, or
+ * planned here (over the processes: every one takes the same path). False when the share stops.
+ * Render thread. */
+bool ao_pass_plan(struct ao_run *r, bool adaptive, struct ao_next_pass *plan);
+
+/* After a pass this process ran (finished or not), with the pass's rays, seconds and largest share
+ * of samples: combines the tally over the processes (with a share), adds the pass's rays and
+ * seconds to info and, when every process finished it, fills in info's per-pixel counts, error
+ * estimate, RMSE, converged share and whether the run is done, keeps the image mean and plans the
+ * next pass. *counts: whether the pass counts; false when the share stops. Render thread. */
+bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive, bool finished, uint64_t rays[2],
+                    double seconds, uint32_t spppp, bool *counts);
+
+/* Readies the planned pass of `pixels` pixels (ao_pass_plan) with settings s: fills the work list
+ * with the tiles of this process's (every tile without a share) that it traces, the tiles
+ * ao_tile_wanted picks with the busiest tile's spp and the largest gain the last survey found,
+ * dealt to the lanes by tile row, and sets what it gives each tile (its samples: the setting, or
+ * --spppp auto's schedule). Returns the most samples per pixel a tile of it takes. Render thread. */
+uint32_t ao_pass_prepare(struct ao_run *r, const struct ao_settings *s, uint64_t pixels);
+
+/* Whether the reference (if any) has the image's size: the RMSE is taken only then. */
+bool ao_pass_has_reference(const struct ao_run *r);
+
+/* Tile t's estimated error, as struct ao_frame's tile_error holds it: NAN until both halves of the
+ * tile have a pass. */
+float ao_pass_tile_error(const struct ao_run *r, int t);
+
+/* Frame f's facts for a whole image of this run, info's included. */
+void ao_pass_frame_facts(const struct ao_run *r, struct ao_frame *f, const struct ao_frame_info *info);
+
+/* Resolves the running average into the back frame with its tile errors and info; the frame, or
+ * NULL when memory is short. Render thread (or main once it joined it). */
+struct ao_frame *ao_pass_resolve(struct ao_run *r, const struct ao_frame_info *info);
+
+/* Publishes the pass just surveyed; false when memory is short. Render thread. */
+bool ao_pass_publish(struct ao_run *r, const struct ao_frame_info *info);
+
+#endif

@@ -1,0 +1,226 @@
+/* Benchmark: a big mesh from file to first image. Writes a bumpy sphere (bench_meshes.h) of
+ * 9,991,920 triangles and 4,995,962 vertices, without normals (so the loader computes them; the
+ * GLB's are flat, as glTF says, and computed no more), into
+ * DIR as binary PLY, ASCII PLY, OBJ and GLB; then loads each as a bare mesh (ground added, as
+ * `aoview FILE` does) in a process of its own per round, rounds interleaved across the files, and
+ * prints the medians of: load (read, parse, normals, the scene's setup), normals alone (recomputed
+ * on the loaded mesh), Embree's build (ao_tracer_create), the first pass at 640x480 with 1 sample a
+ * pixel (2 threads, cosine, AA), their sum (time to first image), AO Mrays/s over 4 more passes of
+ * 4 samples, peak RSS (getrusage) and peak RSS per triangle. Asserts nothing; docs/formats.md has
+ * the figures.
+ * Run: build/tests/bench_scale [--rounds N] [--reuse] [--bvh B] DIR   (writes about 1 GB into DIR;
+ *      --reuse keeps files written by an earlier run; --bvh as aoview's, default medium)
+ *      build/tests/bench_scale [--bvh B] --one FILE   (one measurement, one line: what each round runs) */
+#include <errno.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "bench_meshes.h"
+#include "bench_util.h"
+#include "render.h"
+#include "scene.h"
+#include "scene_load.h"
+#include "tracer.h"
+
+/* The sphere: bench_bumpy_sphere of RINGS rings, 4 RINGS (RINGS - 1) = 9,991,920 triangles. */
+enum { RINGS = 1581 };
+enum { WIDTH = 640, HEIGHT = 480, RATE_SPPPP = 4, RATE_PASSES = 4, MAX_ROUNDS = 21, FILES = 4, PHASES = 8 };
+
+static const char *const names[FILES] = {"sphere.ply", "sphere_ascii.ply", "sphere.obj", "sphere.glb"};
+/* --bvh's names, in budget.h's order, and the one asked for. */
+static const char *const bvh_names[] = {"auto", "medium", "compact", "low"};
+static int bvh = AO_BVH_MEDIUM;
+
+static const char *const phase_names[PHASES] = {"load s", "normals s", "build s", "first s", "total s",
+                                                "Mrays/s", "peak MB", "B/tri"};
+
+/* fopen for writing with a big buffer, or exit. */
+static FILE *create(const char *dir, const char *name)
+{
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, name);
+    FILE *f = fopen(path, "wb");
+    if (!f || setvbuf(f, NULL, _IOFBF, 1 << 22) != 0) {
+        fprintf(stderr, "bench_scale: cannot write %s: %s\n", path, strerror(errno));
+        exit(1);
+    }
+    return f;
+}
+
+/* fclose, or exit. */
+static void close_file(FILE *f)
+{
+    if (ferror(f) | fclose(f)) {
+        fprintf(stderr, "bench_scale: write error\n");
+        exit(1);
+    }
+}
+
+/* Writes the four files of m into dir. */
+static void write_files(const char *dir, const struct bench_mesh *m)
+{
+    const float *p = m->positions;
+    FILE *ply = create(dir, names[0]), *ascii = create(dir, names[1]), *obj = create(dir, names[2]);
+    for (int k = 0; k < 2; k++)
+        fprintf(k ? ascii : ply,
+                "ply\nformat %s 1.0\nelement vertex %zu\nproperty float x\nproperty float y\nproperty float z\n"
+                "element face %zu\nproperty list uchar int vertex_indices\nend_header\n",
+                k ? "ascii" : "binary_little_endian", m->vertex_count, m->triangle_count);
+    fwrite(p, sizeof *p, m->vertex_count * 3, ply);
+    for (size_t v = 0; v < m->vertex_count; v++) {
+        char line[80];
+        int n = snprintf(line, sizeof line, "%.9g %.9g %.9g\n", p[3 * v], p[3 * v + 1], p[3 * v + 2]);
+        fwrite(line, 1, (size_t)n, ascii);
+        fputs("v ", obj);
+        fwrite(line, 1, (size_t)n, obj);
+    }
+    for (size_t k = 0; k < m->triangle_count; k++) {
+        const uint32_t *c = m->indices + 3 * k;
+        unsigned char three = 3;
+        fwrite(&three, 1, 1, ply);
+        fwrite(c, sizeof *c, 3, ply);
+        fprintf(ascii, "3 %u %u %u\n", c[0], c[1], c[2]);
+        fprintf(obj, "f %u %u %u\n", c[0] + 1, c[1] + 1, c[2] + 1);
+    }
+    close_file(ply), close_file(ascii), close_file(obj);
+    char glb[4096];
+    snprintf(glb, sizeof glb, "%s/%s", dir, names[3]);
+    if (!bench_write_placed_glb(glb, m, 1, 1)) {
+        fprintf(stderr, "bench_scale: cannot write %s\n", glb);
+        exit(1);
+    }
+}
+
+/* One measurement of path in this process; prints the PHASES figures on one line. */
+static int measure(const char *path)
+{
+    struct ao_scene scene;
+    struct ao_scene_options options = {.budget = (uint64_t)1 << 40, .bvh = (enum ao_bvh)bvh};
+    double start = bench_now();
+    if (!ao_scene_load(&scene, path, &options))
+        return 1;
+    double loaded = bench_now();
+    struct ao_tracer *tracer = ao_tracer_create(&scene);
+    if (!tracer)
+        return 1;
+    double built = bench_now();
+    bench_render(&scene, tracer, WIDTH, HEIGHT, 1, 1);
+    double first = bench_now();
+    struct ao_frame_info info =
+        bench_render(&scene, tracer, WIDTH, HEIGHT, RATE_SPPPP, RATE_SPPPP * RATE_PASSES);
+    struct ao_mesh *big = &scene.meshes[0];
+    for (size_t m = 1; m < scene.mesh_count; m++)
+        big = scene.meshes[m].triangle_count > big->triangle_count ? &scene.meshes[m] : big;
+    double before = bench_now();
+    if (!ao_mesh_compute_normals(big))
+        return 1;
+    double normals = bench_now() - before;
+    struct rusage usage;
+    getrusage(RUSAGE_SELF, &usage);
+    double peak = (double)usage.ru_maxrss * 1024.0;
+    printf("%.6f %.6f %.6f %.6f %.6f %.3f %.1f %.1f\n", loaded - start, normals, built - loaded, first - built,
+           first - start, (double)(info.eye_rays + info.shadow_rays) / info.seconds / 1e6, peak / 1e6,
+           peak / (double)big->triangle_count);
+    ao_tracer_destroy(tracer);
+    ao_scene_finish(&scene);
+    return 0;
+}
+
+/* Runs `--one path` in a child process (this program, exec'd afresh) and reads its figures. */
+static void run_child(const char *path, double out[PHASES])
+{
+    int fds[2];
+    if (pipe(fds) != 0)
+        exit(1);
+    pid_t pid = fork();
+    if (pid == 0) {
+        dup2(fds[1], 1);
+        close(fds[0]);
+        close(fds[1]);
+        execl("/proc/self/exe", "bench_scale", "--bvh", bvh_names[bvh], "--one", path, (char *)NULL);
+        _exit(127);
+    }
+    close(fds[1]);
+    FILE *in = fdopen(fds[0], "r");
+    int status, got = 0;
+    for (int k = 0; in && k < PHASES; k++)
+        got += fscanf(in, "%lf", &out[k]) == 1;
+    if (in)
+        fclose(in);
+    if (pid < 0 || waitpid(pid, &status, 0) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0 ||
+        got != PHASES) {
+        fprintf(stderr, "bench_scale: measuring %s failed\n", path);
+        exit(1);
+    }
+}
+
+/* The index of --bvh's name, or -1. */
+static int bvh_of(const char *name)
+{
+    for (int k = 0; k < (int)(sizeof bvh_names / sizeof bvh_names[0]); k++)
+        if (strcmp(name, bvh_names[k]) == 0)
+            return k;
+    return -1;
+}
+
+int main(int argc, char **argv)
+{
+    int first = 1, rounds = 5;
+    bool reuse = false, one = false;
+    for (; first < argc - 1; first++) {
+        if (strcmp(argv[first], "--rounds") == 0 && first + 2 < argc)
+            rounds = atoi(argv[++first]);
+        else if (strcmp(argv[first], "--reuse") == 0)
+            reuse = true;
+        else if (strcmp(argv[first], "--bvh") == 0 && first + 2 < argc)
+            bvh = bvh_of(argv[++first]);
+        else if (strcmp(argv[first], "--one") == 0)
+            one = true;
+        else
+            break;
+    }
+    if (first != argc - 1 || rounds < 1 || rounds > MAX_ROUNDS || bvh < 0) {
+        fprintf(stderr, "usage: bench_scale [--rounds 1..%d] [--reuse] [--bvh auto|medium|compact|low] DIR | "
+                        "bench_scale [--bvh B] --one FILE\n", MAX_ROUNDS);
+        return 2;
+    }
+    if (one)
+        return measure(argv[first]);
+    const char *dir = argv[first];
+    if (!reuse) {
+        double start = bench_now();
+        struct bench_mesh sphere;
+        bench_bumpy_sphere(&sphere, RINGS);
+        write_files(dir, &sphere);
+        printf("wrote %zu triangles, %zu vertices in %.1f s\n", sphere.triangle_count, sphere.vertex_count,
+               bench_now() - start);
+        bench_mesh_free(&sphere);
+    }
+    static double figures[FILES][PHASES][MAX_ROUNDS];
+    for (int r = 0; r < rounds; r++)
+        for (int f = 0; f < FILES; f++) {
+            char path[4096];
+            double one[PHASES];
+            snprintf(path, sizeof path, "%s/%s", dir, names[f]);
+            run_child(path, one);
+            for (int k = 0; k < PHASES; k++)
+                figures[f][k][r] = one[k];
+        }
+    printf("medians of %d rounds, one process per file per round\n%-18s", rounds, "file");
+    for (int k = 0; k < PHASES; k++)
+        printf(" %10s", phase_names[k]);
+    printf("\n");
+    for (int f = 0; f < FILES; f++) {
+        printf("%-18s", names[f]);
+        for (int k = 0; k < PHASES; k++)
+            printf(" %10.3f", bench_median(figures[f][k], rounds));
+        printf("\n");
+    }
+    return 0;
+}

@@ -1,0 +1,157 @@
+/* The frames' triple buffer (frames.c): the consumer takes the newest frame published, never one
+ * twice and never one the producer is still writing; the log hands over every published frame's
+ * facts in order until AO_FRAMES_LOG wait unread; and under contention, a producer publishing as
+ * fast as it can against a consumer taking as fast as it can, every frame taken is whole and newer
+ * than the last (the threads suite runs this under ThreadSanitizer too). */
+#include <stdarg.h>
+#include <stddef.h>
+#include <setjmp.h>
+#include <stdint.h>
+#include <cmocka.h>
+
+#include <pthread.h>
+#include <stdlib.h>
+
+#include "frames.h"
+
+/* Fills the back frame, width x height pixels, with every value `serial`, and publishes it. */
+static void publish(struct ao_frames *fs, uint32_t serial, int width, int height)
+{
+    struct ao_frame *f = ao_frames_back(fs, width, height, 1);
+    assert_non_null(f);
+    for (size_t k = 0; k < 3 * (size_t)width * (size_t)height; k++)
+        f->rgb[k] = (float)serial;
+    f->tile_error[0] = (float)serial;
+    f->info = (struct ao_frame_info){.pass = serial};
+    ao_frames_publish(fs);
+}
+
+/* The frame is whole: every value is its serial. */
+static void assert_whole(const struct ao_frame *f)
+{
+    for (size_t k = 0; k < 3 * (size_t)f->width * (size_t)f->height; k++)
+        if (f->rgb[k] != (float)f->info.pass)
+            fail_msg("frame %u holds %g at %zu: torn", f->info.pass, f->rgb[k], k);
+    assert_true(f->tile_error[0] == (float)f->info.pass);
+}
+
+/* Nothing before the first publish; then the newest, once; frames in between are skipped. */
+static void test_take_newest(void **state)
+{
+    (void)state;
+    struct ao_frames fs;
+    ao_frames_init(&fs);
+    assert_null(ao_frames_take(&fs));
+    publish(&fs, 1, 4, 3);
+    publish(&fs, 2, 4, 3);
+    const struct ao_frame *f = ao_frames_take(&fs);
+    assert_non_null(f);
+    assert_int_equal(f->info.pass, 2);
+    assert_int_equal(f->width, 4);
+    assert_int_equal(f->height, 3);
+    assert_whole(f);
+    assert_null(ao_frames_take(&fs));
+    publish(&fs, 3, 2, 2);   /* another size: the back frame is resized */
+    f = ao_frames_take(&fs);
+    assert_non_null(f);
+    assert_int_equal(f->info.pass, 3);
+    assert_int_equal(f->width, 2);
+    assert_whole(f);
+    /* The frame taken stays as it is while the producer goes on (two more publishes touch only the
+     * two other frames). */
+    publish(&fs, 4, 2, 2);
+    publish(&fs, 5, 2, 2);
+    assert_int_equal(f->info.pass, 3);
+    assert_whole(f);
+    assert_int_equal(ao_frames_take(&fs)->info.pass, 5);
+    ao_frames_finish(&fs);
+}
+
+/* The log: every frame's facts, oldest first, in as many takes as the consumer likes; while
+ * AO_FRAMES_LOG wait unread, newer ones are not logged (the frames themselves still pass). */
+static void test_log(void **state)
+{
+    (void)state;
+    struct ao_frames fs;
+    ao_frames_init(&fs);
+    struct ao_frame_info out[AO_FRAMES_LOG];
+    assert_int_equal(ao_frames_take_log(&fs, out, AO_FRAMES_LOG), 0);
+    for (uint32_t s = 1; s <= 5; s++)
+        publish(&fs, s, 1, 1);
+    assert_int_equal(ao_frames_take_log(&fs, out, 2), 2);
+    assert_int_equal(out[0].pass, 1);
+    assert_int_equal(out[1].pass, 2);
+    assert_int_equal(ao_frames_take_log(&fs, out, AO_FRAMES_LOG), 3);
+    assert_int_equal(out[2].pass, 5);
+    for (uint32_t s = 6; s < 6 + AO_FRAMES_LOG + 10; s++)
+        publish(&fs, s, 1, 1);
+    assert_int_equal(ao_frames_take_log(&fs, out, AO_FRAMES_LOG), AO_FRAMES_LOG);
+    for (int k = 0; k < AO_FRAMES_LOG; k++)
+        assert_int_equal(out[k].pass, 6 + k);
+    assert_int_equal(ao_frames_take_log(&fs, out, AO_FRAMES_LOG), 0);
+    assert_int_equal(ao_frames_take(&fs)->info.pass, 6 + AO_FRAMES_LOG + 9);
+    ao_frames_finish(&fs);
+}
+
+/* The producer's side of the contention test: FRAMES frames of 16 x 16 pixels (a frame's values
+ * take long enough to write that the consumer often takes while one is being written). */
+enum { FRAMES = 100000 };
+
+static void *produce(void *arg)
+{
+    struct ao_frames *fs = arg;
+    for (uint32_t s = 1; s <= FRAMES; s++)
+        publish(fs, s, 16, 16);
+    return NULL;
+}
+
+/* A producer and a consumer at full speed on two threads: every frame taken is whole and newer
+ * than the one before; the log's facts come in order (some left out while it was full); the last
+ * frame is taken in the end. */
+static void test_handoff_under_contention(void **state)
+{
+    (void)state;
+    struct ao_frames fs;
+    ao_frames_init(&fs);
+    pthread_t producer;
+    assert_int_equal(pthread_create(&producer, NULL, produce, &fs), 0);
+    uint32_t last = 0, last_logged = 0;
+    size_t taken = 0, logged = 0;
+    struct ao_frame_info out[64];
+    while (last < FRAMES) {
+        const struct ao_frame *f = ao_frames_take(&fs);
+        if (f) {
+            assert_true(f->info.pass > last);
+            assert_whole(f);
+            last = f->info.pass;
+            taken++;
+        }
+        for (int n = ao_frames_take_log(&fs, out, 64), k = 0; k < n; k++) {
+            assert_true(out[k].pass > last_logged);
+            last_logged = out[k].pass;
+            logged++;
+        }
+    }
+    assert_int_equal(pthread_join(producer, NULL), 0);
+    assert_null(ao_frames_take(&fs));
+    for (int n; (n = ao_frames_take_log(&fs, out, 64)) > 0;)
+        for (int k = 0; k < n; k++) {
+            assert_true(out[k].pass > last_logged);
+            last_logged = out[k].pass;
+            logged++;
+        }
+    print_message("%zu of %d frames taken, %zu logged\n", taken, FRAMES, logged);
+    assert_true(taken > 1);
+    assert_true(logged > 0);
+    ao_frames_finish(&fs);
+}
+
+int main(void)
+{
+    const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_take_newest),
+        cmocka_unit_test(test_log),
+        cmocka_unit_test(test_handoff_under_contention),
+    };
+    return cmocka_run_group_tests(tests, NULL, NULL);
+}
