@@ -248,12 +248,12 @@ def _start(scene, settings, reference, every_pass, where):
     _check_scene(scene)
     argv = _argv(settings, _VALUED + ('size', 'aa', 'adaptive'), where)
     ref = _reference(reference)
-    run = _core.start(scene._scene, argv, ref, every_pass)
-    w, h = run.size()
+    _core.parse(argv)
+    w, h = settings.get('size') or scene.size
     if isinstance(ref, np.ndarray) and ref.shape != (h, w, 3):
-        run.close()
         raise ValueError(f'reference: expected the image size {w}x{h}, got {ref.shape[1]}x{ref.shape[0]}')
-    return run, w, h
+    run = _core.start(scene._scene, argv, ref, every_pass)
+    return (run, *run.size())
 
 
 def _image(rgb, scene):
