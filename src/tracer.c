@@ -479,34 +479,31 @@ struct arrays_job {
     atomic_size_t next;
 };
 
-/* Each thread takes streams of rays until none are left, traced as incoherent rtcIntersect1M
- * streams (the rays of such a batch come in any order). */
+/* Each thread takes runs of rays until none are left, traced one by one with rtcIntersect1: on 1M
+ * random rays at the bunny it measured as fast as rtcIntersect1M streams of 256 and rtcIntersect16
+ * packets of the same rays, or faster (interleaved runs; the rays of a run share nothing). */
 static void intersect_arrays_job(void *user, int self)
 {
     (void)self;
-    enum { STREAM = 256 };
+    enum { RUN = 256 };
     struct arrays_job *job = user;
-    _Alignas(64) struct RTCRayHit stream[STREAM];
     struct RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     for (;;) {
-        size_t first = atomic_fetch_add(&job->next, STREAM);
+        size_t first = atomic_fetch_add(&job->next, RUN);
         if (first >= job->count)
             return;
-        unsigned n = (unsigned)(job->count - first < STREAM ? job->count - first : STREAM);
-        const float *o = job->origins + 3 * first, *d = job->directions + 3 * first;
-        for (unsigned k = 0; k < n; k++) {
-            to_single(o[3 * k], o[3 * k + 1], o[3 * k + 2], d[3 * k], d[3 * k + 1], d[3 * k + 2], INFINITY,
-                      &stream[k].ray);
-            stream[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        }
-        rtcIntersect1M(job->scene, &context, stream, n, sizeof *stream);
-        for (unsigned k = 0; k < n; k++) {
-            size_t i = first + k;
-            bool hit = stream[k].hit.geomID != RTC_INVALID_GEOMETRY_ID;
-            float u = hit ? stream[k].hit.u : 0.0f, v = hit ? stream[k].hit.v : 0.0f;
-            job->t[i] = hit ? stream[k].ray.tfar : INFINITY;
-            job->ids[i] = hit ? (int32_t)stream[k].hit.primID : -1;
+        size_t end = job->count - first < RUN ? job->count : first + RUN;
+        for (size_t i = first; i < end; i++) {
+            const float *o = job->origins + 3 * i, *d = job->directions + 3 * i;
+            _Alignas(16) struct RTCRayHit rh;
+            to_single(o[0], o[1], o[2], d[0], d[1], d[2], INFINITY, &rh.ray);
+            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rtcIntersect1(job->scene, &context, &rh);
+            bool hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            float u = hit ? rh.hit.u : 0.0f, v = hit ? rh.hit.v : 0.0f;
+            job->t[i] = hit ? rh.ray.tfar : INFINITY;
+            job->ids[i] = hit ? (int32_t)rh.hit.primID : -1;
             job->barys[3 * i] = hit ? 1.0f - u - v : 0.0f;
             job->barys[3 * i + 1] = u;
             job->barys[3 * i + 2] = v;

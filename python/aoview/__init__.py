@@ -65,9 +65,8 @@ def _real_array(a, name, columns):
         raise ValueError(f'{name}: empty')
     with np.errstate(over='ignore', invalid='ignore'):
         f = np.ascontiguousarray(a, dtype=np.float32)
-    bad = ~np.isfinite(f).all(axis=1)
-    if bad.any():
-        row = int(np.argmax(bad))
+    if not np.isfinite(f).all():
+        row = int(np.argmax(~np.isfinite(f).all(axis=1)))
         raise ValueError(f'{name}: row {row} is not finite in single precision: {a[row].tolist()}')
     return f
 
