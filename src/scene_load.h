@@ -1,7 +1,8 @@
 /* Scene files and bare meshes made into scenes (scene.h): the line-based scene format (camera,
  * image, background, ao-distance, sphere, quad and mesh lines; docs/contract.md), or a mesh file
- * placed on a ground quad with a camera framed on it. Two entry points, each with one options
- * struct (NULL or zeroed: the defaults): ao_scene_load for a path, ao_scene_parse for text. Every
+ * placed on a ground quad with a camera framed on it. Three entry points, each with one options
+ * struct (NULL or zeroed: the defaults): ao_scene_load for a path, ao_scene_parse for text,
+ * ao_scene_from_arrays for a mesh (and spheres) given as arrays in code. Every
  * failure is one "file:line: message" line on stderr, and a scene that would not fit the scene
  * budget is refused before its memory is allocated. */
 #ifndef AO_SCENE_LOAD_H

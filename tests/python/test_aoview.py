@@ -9,6 +9,7 @@ import csv
 import os
 import signal
 import subprocess
+import sys
 import threading
 import time
 
@@ -409,3 +410,17 @@ def test_the_gil_is_released_while_tracing():
         time.sleep(0.001)
     worker.join()
     assert count > 20   # the main thread ran throughout the render
+
+
+# ---------------------------------------------------------------- the examples run
+
+@pytest.mark.parametrize('example,args', [('progressive.py', []), ('error_chart.py', ['--seconds', '0.2'])])
+def test_examples_write_their_png(tmp_path, example, args):
+    pytest.importorskip('matplotlib')
+    out = tmp_path / 'out.png'
+    env = dict(os.environ)
+    env.pop('DISPLAY', None)
+    subprocess.run([sys.executable,
+                    os.path.join(ROOT, 'examples', example), '-o', str(out)] + args, check=True, env=env,
+                   cwd=tmp_path, capture_output=True)
+    assert out.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
