@@ -4,7 +4,7 @@ Scenes come from files (Scene.load) or numpy arrays (Scene.from_arrays); render(
 linear running average as a float32 array, bit for bit the PFM that the aoview command writes with
 the same settings; passes() steps through the passes; exact() is aoview-exact's closed form;
 ray_mesh_intersect() traces a batch of rays against a triangle mesh with Embree, with the shapes
-and miss conventions of gpytoolbox.ray_mesh_intersect. Settings are the command line's options as
+and miss conventions of gpytoolbox.ray_mesh_intersect; view() opens aoview's window. Settings are the command line's options as
 keyword arguments (--target-error is target_error=...), with the same defaults, checks and
 messages. See docs/python.md.
 """
@@ -15,7 +15,7 @@ import numpy as np
 
 from . import _core
 
-__all__ = ['Scene', 'Pass', 'render', 'passes', 'exact', 'ray_mesh_intersect']
+__all__ = ['Scene', 'Pass', 'render', 'passes', 'exact', 'ray_mesh_intersect', 'view']
 
 # Keyword arguments that are aoview options taking a value, and the two on/off switches; `size` is
 # (width, height).
@@ -336,3 +336,17 @@ def ray_mesh_intersect(origins, directions, vertices, faces, *, threads=None):
     barys = np.empty((k, 3), np.float32)
     _core.intersect(v, len(v), f, len(f), o, d, k, chosen or _core.cores(), t, ids, barys)
     return t.astype(np.float64), ids.astype(np.int64), barys.astype(np.float64)
+
+
+def view(scene, **settings):
+    """aoview's window on the scene, with the command line's keys (docs/contract.md), render()'s
+    settings and pixel_size; blocks until the window is closed (Esc or Q). RuntimeError where no
+    window can be opened (no display) or where the module was built without the front ends."""
+    _check_scene(scene)
+    argv = _argv(settings, _VALUED + ('size', 'aa', 'adaptive', 'pixel_size'), 'view')
+    _core.parse(argv)
+    try:
+        from . import _window
+    except ImportError as error:
+        raise RuntimeError(f'aoview: view() needs the window, built with the front ends ({error})') from None
+    _window.view(scene._scene, argv)

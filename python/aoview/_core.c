@@ -27,6 +27,7 @@
 #include "render.h"
 #include "scene.h"
 #include "scene_load.h"
+#include "scene_object.h"
 #include "tracer.h"
 
 /* Seconds between two checks for a pending signal while a render is waited for. */
@@ -141,12 +142,6 @@ static bool get_buffer(PyObject *obj, Py_buffer *view, size_t size, size_t count
 
 /* ------------------------------------------------------------------ Scene */
 
-typedef struct {
-    PyObject_HEAD
-    struct ao_scene scene;
-    struct ao_tracer *tracer;   /* built at the first render, shared by the later ones */
-    bool loaded;
-} SceneObject;
 
 static void scene_dealloc(SceneObject *self)
 {

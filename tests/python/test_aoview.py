@@ -24,6 +24,8 @@ EXACT = os.environ['AO_EXACT']
 BUNNY = os.path.join(ROOT, 'assets/scenes/bunny.scene')
 SPHERE_ON_PLANE = os.path.join(ROOT, 'assets/scenes/sphere-on-plane.scene')
 BUNNY_OBJ = os.path.join(ROOT, 'assets/bunny.obj')
+sys.path.insert(0, os.path.join(ROOT, 'tests', 'bench'))
+from bench_python import read_obj  # noqa: E402 (the benchmark's OBJ reader, on the path set above)
 
 
 def read_pfm(path):
@@ -49,17 +51,6 @@ def cli(tmp_path, scene, *args, stats=False):
 
 def as_rgb(image):
     return image if image.ndim == 3 else np.repeat(image[:, :, None], 3, axis=2)
-
-
-def read_obj(path):
-    v, f = [], []
-    for line in open(path):
-        p = line.split()
-        if p and p[0] == 'v':
-            v.append([float(x) for x in p[1:4]])
-        elif p and p[0] == 'f':
-            f.append([int(x.split('/')[0]) - 1 for x in p[1:4]])
-    return np.array(v), np.array(f)
 
 
 # ---------------------------------------------------------------- render and passes against the CLI
