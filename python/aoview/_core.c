@@ -189,7 +189,8 @@ static PyTypeObject SceneType = {
     .tp_new = PyType_GenericNew,
 };
 
-/* The scene's tracer, built on first use (GIL released meanwhile); NULL with ValueError. */
+/* The scene's tracer, built on first use (GIL released meanwhile); NULL with MemoryError (the core's
+ * message) when it cannot be built. */
 static struct ao_tracer *scene_tracer(SceneObject *self)
 {
     if (self->tracer)
@@ -206,7 +207,11 @@ static struct ao_tracer *scene_tracer(SceneObject *self)
         return NULL;
     }
     capture_end(&c);
-    return self->tracer = t;
+    if (self->tracer) /* another thread built one meanwhile (the GIL was released) */
+        ao_tracer_destroy(t);
+    else
+        self->tracer = t;
+    return self->tracer;
 }
 
 /* load(scene: Scene, path: str, argv: list): ao_scene_load with argv's scene options. */
