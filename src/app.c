@@ -18,6 +18,7 @@
 #include "heatmap.h"
 #include "image.h"
 #include "notes.h"
+#include "options.h"
 #include "text.h"
 
 /* The headless progress bar redraws at most this often (and once more at the end). */
@@ -387,13 +388,12 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     app->interrupt.output = opts->output ? opts->output : "aoview.png";
     ao_file_remember_inputs();
     char name[AO_TEXT_SIZE];
-    struct ao_scene_options load = {.budget = opts->scene_budget, .no_ground = !opts->ground, .bvh = opts->bvh,
-                                    .crease = opts->crease, .crease_set = true, .sized = opts->width != 0};
+    struct ao_scene_options load = ao_options_scene(opts);
     if (!ao_scene_load(&app->scene, opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, &load) ||
         !check_written_not_read(app, opts))
         return AO_EXIT_RUNTIME;
-    int width = opts->width ? opts->width : app->scene.width ? app->scene.width : 640;
-    int height = opts->height ? opts->height : app->scene.height ? app->scene.height : 480;
+    int width, height;
+    ao_options_size(opts, &app->scene, &width, &height);
     if (opts->reference_path && !ao_image_read_linear_sized(opts->reference_path, width, height, &app->reference))
         return AO_EXIT_RUNTIME;
     app->reference_width = width;
@@ -416,26 +416,14 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
                 instances, app->scene.sphere_count, ao_tracer_backend(app->tracer));
 
     /* Renderer. */
-    long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    *config = (struct ao_render_config){
-        .scene = &app->scene, .tracer = app->tracer,
-        .threads = opts->threads ? opts->threads : (cores > 0 ? (int)cores : 1),
-        .seed = opts->seed, .target_spp = opts->spp, .target_error = opts->target_error,
-        .time_limit = opts->time_limit,
-        .ao_distance = isnan(opts->ao_distance) ? app->scene.ao_distance : opts->ao_distance,
-        .sequence = opts->sequence, .below = opts->below,
-        .reference = app->reference, .reference_width = app->reference_width,
-        .reference_height = app->reference_height,
-        .on_pass = ao_app_on_pass, .on_preview = ao_app_on_preview, .user = &app->reporter};
-    *settings = (struct ao_settings){.width = width, .height = height, .sampling = opts->sampling, .aa = opts->aa,
-                                     .spppp = (int)opts->spppp, .adaptive = opts->adaptive, .camera = app->scene.camera,
-                                     .output = opts->view == AO_VIEW_MODE_NORMALS ? AO_OUTPUT_NORMALS : AO_OUTPUT_AO,
-                                     .shading = opts->shading};
-    struct ao_view view;
-    if (!ao_camera_view(&settings->camera, width, height, &view)) {
-        fprintf(stderr, "%s: the camera cannot form an image\n", name);
+    if (!ao_options_render(opts, &app->scene, app->tracer, config, settings))
         return AO_EXIT_RUNTIME;
-    }
+    config->reference = app->reference;
+    config->reference_width = app->reference_width;
+    config->reference_height = app->reference_height;
+    config->on_pass = ao_app_on_pass;
+    config->on_preview = ao_app_on_preview;
+    config->user = &app->reporter;
     return 0;
 }
 

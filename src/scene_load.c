@@ -93,10 +93,33 @@ static bool add_ground(struct ao_world *w, struct ao_dvec3 lo, struct ao_dvec3 h
     return ao_world_add_quad(w, p, ao_vec3_make(0, 1, 0), ao_vec3_make(0.5f, 0.5f, 0.5f));
 }
 
-/* A bare mesh: the mesh file's model, a large ground quad under it unless options->no_ground, a
- * camera framed on it. */
-static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budget *budget,
-                           const struct ao_scene_options *options)
+/* Adds the arrays' spheres (in world space) to the scene being read; false after reporting one that
+ * is not a sphere. */
+static bool add_spheres(struct ao_cursor *c, struct ao_scene *s, struct ao_world *w, const struct ao_scene_arrays *a)
+{
+    for (size_t i = 0; i < a->sphere_count; i++) {
+        struct ao_sphere sp = a->spheres[i];
+        struct ao_vec3 rho = sp.albedo;
+        if (!(isfinite(sp.center.x) && isfinite(sp.center.y) && isfinite(sp.center.z) && sp.radius > 0.0f &&
+              isfinite(sp.radius)))
+            return ao_cursor_fail(c, "sphere %zu: the centre must be finite and the radius positive", i);
+        if (!(rho.x >= 0.0f && rho.x <= 1.0f && rho.y >= 0.0f && rho.y <= 1.0f && rho.z >= 0.0f && rho.z <= 1.0f))
+            return ao_cursor_fail(c, "sphere %zu: albedo must lie in [0,1]", i);
+        if (!ao_world_charge(c, w, 1, 0, "sphere"))
+            return false;
+        if (!ao_scene_grow(&s->spheres, s->sphere_count, s->sphere_count + 1, sizeof *s->spheres) ||
+            !ao_scene_grow(&w->sphere_centers, s->sphere_count, s->sphere_count + 1, sizeof *w->sphere_centers))
+            return ao_cursor_fail(c, "out of memory");
+        w->sphere_centers[s->sphere_count] = ao_dvec3_of(sp.center);
+        s->spheres[s->sphere_count++] = sp;
+    }
+    return true;
+}
+
+/* A bare mesh: the mesh file's model (or, with arrays, theirs: its albedo and spheres beside it),
+ * a large ground quad under it unless options->no_ground, a camera framed on it (or the arrays'). */
+static bool load_bare_mesh(struct ao_scene *s, const char *path, const struct ao_scene_arrays *arrays,
+                           struct ao_budget *budget, const struct ao_scene_options *options)
 {
     begin(s, path);
     bool ground = !options->no_ground;
@@ -104,19 +127,38 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budge
                          .budget = budget, .instancing = options->instancing, .crease = crease_of(options)};
     struct ao_cursor c = {.path = path};
     struct ao_affine identity = ao_affine_identity();
-    const struct ao_world_file *f = ao_world_load_file(&c, s, &w, path, w.crease);
-    bool ok = f && (!ground || ao_world_charge(&c, &w, 2, 4, "the ground")) &&
-              ao_world_place_model(&c, s, &w, f, &identity,
-                                   ao_vec3_make(AO_WORLD_ALBEDO, AO_WORLD_ALBEDO, AO_WORLD_ALBEDO), path);
+    struct ao_vec3 rho = ao_vec3_make(AO_WORLD_ALBEDO, AO_WORLD_ALBEDO, AO_WORLD_ALBEDO);
+    const struct ao_world_file *f = NULL;
+    if (arrays) {
+        struct ao_model model;
+        rho = arrays->albedo;
+        if (ao_load_model_arrays(&model, path, arrays->positions, arrays->vertex_count, arrays->indices,
+                                 arrays->triangle_count, arrays->normals, budget, w.crease))
+            f = ao_world_add_model(&c, s, &w, &model, path, w.crease);
+    } else {
+        f = ao_world_load_file(&c, s, &w, path, w.crease);
+    }
+    bool ok = f && (!arrays || add_spheres(&c, s, &w, arrays)) &&
+              (!ground || ao_world_charge(&c, &w, 2, 4, "the ground")) &&
+              ao_world_place_model(&c, s, &w, f, &identity, rho, path);
     struct ao_dvec3 lo, hi;
     if (ok && !ao_world_survey(s, &w))
         ok = ao_cursor_fail(&c, "out of memory");
     if (ok && ao_world_bounds(s, &w, &lo, &hi)) {
-        /* The camera framed on the mesh about its centre, then kept in world space. */
         struct ao_dvec3 mid = ao_dvec3_scale(ao_dvec3_add(lo, hi), 0.5);
-        ao_camera_frame_box(&s->camera, ao_dvec3_narrow(ao_dvec3_sub(lo, mid)), ao_dvec3_narrow(ao_dvec3_sub(hi, mid)));
-        w.eye = ao_dvec3_add(mid, ao_dvec3_of(s->camera.eye));
-        w.target = ao_dvec3_add(mid, ao_dvec3_of(s->camera.target));
+        if (arrays && arrays->camera) {
+            /* The arrays' camera, in world space as a scene file's. */
+            w.eye = ao_dvec3_of(arrays->camera->eye);
+            w.target = ao_dvec3_of(arrays->camera->target);
+            s->camera.up = arrays->camera->up;
+            s->camera.fov = arrays->camera->fov;
+        } else {
+            /* The camera framed on the mesh about its centre, then kept in world space. */
+            ao_camera_frame_box(&s->camera, ao_dvec3_narrow(ao_dvec3_sub(lo, mid)),
+                                ao_dvec3_narrow(ao_dvec3_sub(hi, mid)));
+            w.eye = ao_dvec3_add(mid, ao_dvec3_of(s->camera.eye));
+            w.target = ao_dvec3_add(mid, ao_dvec3_of(s->camera.target));
+        }
         w.has_camera = true;
         if (ground && !add_ground(&w, lo, hi))
             ok = ao_cursor_fail(&c, "out of memory");
@@ -130,6 +172,20 @@ static bool load_bare_mesh(struct ao_scene *s, const char *path, struct ao_budge
     return ok;
 }
 
+bool ao_scene_from_arrays(struct ao_scene *scene, const struct ao_scene_arrays *arrays,
+                          const struct ao_scene_options *options)
+{
+    static const struct ao_scene_options defaults;
+    options = options ? options : &defaults;
+    struct ao_budget budget = budget_of(options);
+    if (arrays->camera && !(arrays->camera->fov > 0.0f && arrays->camera->fov < 180.0f)) {
+        ao_text_report("%s: camera: 'fov' must lie strictly between 0 and 180 degrees", arrays->name);
+        memset(scene, 0, sizeof *scene);
+        return false;
+    }
+    return load_bare_mesh(scene, arrays->name, arrays, &budget, options);
+}
+
 bool ao_scene_load(struct ao_scene *scene, const char *path, const struct ao_scene_options *options)
 {
     static const struct ao_scene_options defaults;
@@ -137,7 +193,7 @@ bool ao_scene_load(struct ao_scene *scene, const char *path, const struct ao_sce
     struct ao_budget budget = budget_of(options);
     memset(scene, 0, sizeof *scene);
     if (ao_load_is_mesh(path))
-        return load_bare_mesh(scene, path, &budget, options);
+        return load_bare_mesh(scene, path, NULL, &budget, options);
     char *text;
     size_t got;
     if (!ao_file_read_budget(path, &budget, &text, &got))

@@ -1,13 +1,15 @@
 /* Scene files and bare meshes made into scenes (scene.h): the line-based scene format (camera,
  * image, background, ao-distance, sphere, quad and mesh lines; docs/contract.md), or a mesh file
- * placed on a ground quad with a camera framed on it. Two entry points, each with one options
- * struct (NULL or zeroed: the defaults): ao_scene_load for a path, ao_scene_parse for text. Every
+ * placed on a ground quad with a camera framed on it. Three entry points, each with one options
+ * struct (NULL or zeroed: the defaults): ao_scene_load for a path, ao_scene_parse for text,
+ * ao_scene_from_arrays for a mesh (and spheres) given as arrays in code. Every
  * failure is one "file:line: message" line on stderr, and a scene that would not fit the scene
  * budget is refused before its memory is allocated. */
 #ifndef AO_SCENE_LOAD_H
 #define AO_SCENE_LOAD_H
 
 #include <stdbool.h>
+#include <stddef.h>
 #include <stdint.h>
 
 #include "modes.h"
@@ -48,5 +50,27 @@ bool ao_scene_load(struct ao_scene *scene, const char *path, const struct ao_sce
 /* Parses scene text as if read from path (relative mesh paths resolve against its directory),
  * with options (NULL: the defaults); reports and fails as ao_scene_load. */
 bool ao_scene_parse(struct ao_scene *scene, const char *text, const char *path, const struct ao_scene_options *options);
+
+/* A scene made in code from arrays (the Python module's): a mesh as ao_load_model_arrays makes it
+ * (load/load.h: what an OBJ file holding the arrays gives), of the given albedo, spheres (world
+ * space), and a camera, or none: then the scene is made as of a bare mesh file of those triangles
+ * (a camera framed on the mesh and spheres, the ground quad under them unless options->no_ground). */
+struct ao_scene_arrays {
+    const char *name;                /* the scene's name, in titles and messages */
+    const float *positions;          /* vertex_count x 3 */
+    size_t vertex_count;
+    const uint32_t *indices;         /* triangle_count x 3, each below vertex_count */
+    size_t triangle_count;
+    const float *normals;            /* vertex_count x 3, or NULL: made as a mesh file's missing ones */
+    struct ao_vec3 albedo;           /* the mesh's, in [0, 1] */
+    const struct ao_sphere *spheres; /* sphere_count, centres in world space */
+    size_t sphere_count;
+    const struct ao_camera *camera;  /* world space, or NULL: framed */
+};
+
+/* Makes the scene arrays describe, with options (NULL: the defaults); reports and fails as
+ * ao_scene_load ("name: message"). Any one thread per scene. */
+bool ao_scene_from_arrays(struct ao_scene *scene, const struct ao_scene_arrays *arrays,
+                          const struct ao_scene_options *options);
 
 #endif

@@ -122,6 +122,14 @@ const struct ao_world_file *ao_world_load_file(struct ao_cursor *c, struct ao_sc
     struct ao_model model;
     if (!ao_load_model(&model, path, w->budget, crease))
         return NULL;
+    return ao_world_add_model(c, s, w, &model, path, crease);
+}
+
+const struct ao_world_file *ao_world_add_model(struct ao_cursor *c, struct ao_scene *s, struct ao_world *w,
+                                              struct ao_model *taken, const char *path, double crease)
+{
+    struct ao_model model = *taken;
+    *taken = (struct ao_model){0};
     uint64_t triangles = 0, vertices = 0;
     for (size_t i = 0; i < model.mesh_count; i++)
         triangles += model.meshes[i].triangle_count, vertices += model.meshes[i].vertex_count;

@@ -115,6 +115,12 @@ const struct ao_world_file *ao_world_find_file(const struct ao_world *w, const c
 const struct ao_world_file *ao_world_load_file(struct ao_cursor *c, struct ao_scene *s, struct ao_world *w,
                                               const char *path, double crease);
 
+/* ao_world_load_file's second half, for a model loaded otherwise (taken: emptied, freed on failure):
+ * its meshes join the scene's as the file `path`'s, charged to the budget; its entry, or NULL after
+ * reporting. */
+const struct ao_world_file *ao_world_add_model(struct ao_cursor *c, struct ao_scene *s, struct ao_world *w,
+                                              struct ao_model *taken, const char *path, double crease);
+
 /* Places every placement of the loaded file f under the map `line`, with albedo rho: one pending
  * placement each, charged to the budget; false after reporting. */
 bool ao_world_place_model(struct ao_cursor *c, struct ao_scene *s, struct ao_world *w,

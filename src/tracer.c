@@ -1,15 +1,18 @@
 /* Embree 3 back end; see tracer.h. The only file that includes Embree. */
 #include "tracer.h"
 
+#include <math.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #include <embree3/rtcore.h>
 
 #include "clock.h"
 #include "direct.h"
+#include "pool.h"
 #if defined(__SSE__)
 #include <pmmintrin.h>
 #include <xmmintrin.h>
@@ -463,4 +466,98 @@ double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packe
     free(converted);
     free(valid);
     return seconds;
+}
+
+/* ao_tracer_intersect_arrays's job: the rays, the scene, the outputs, the next ray to take. */
+struct arrays_job {
+    RTCScene scene;
+    const float *origins, *directions;
+    size_t count;
+    float *t;
+    int32_t *ids;
+    float *barys;
+    atomic_size_t next;
+};
+
+/* Each thread takes runs of rays until none are left, traced one by one with rtcIntersect1: on 1M
+ * random rays at the bunny it measured as fast as rtcIntersect1M streams of 256 and rtcIntersect16
+ * packets of the same rays, or faster (interleaved runs; the rays of a run share nothing). */
+static void intersect_arrays_job(void *user, int self)
+{
+    (void)self;
+    enum { RUN = 256 };
+    struct arrays_job *job = user;
+    struct RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    for (;;) {
+        size_t first = atomic_fetch_add(&job->next, RUN);
+        if (first >= job->count)
+            return;
+        size_t end = job->count - first < RUN ? job->count : first + RUN;
+        for (size_t i = first; i < end; i++) {
+            const float *o = job->origins + 3 * i, *d = job->directions + 3 * i;
+            _Alignas(16) struct RTCRayHit rh;
+            to_single(o[0], o[1], o[2], d[0], d[1], d[2], INFINITY, &rh.ray);
+            rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+            rtcIntersect1(job->scene, &context, &rh);
+            bool hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+            float u = hit ? rh.hit.u : 0.0f, v = hit ? rh.hit.v : 0.0f;
+            job->t[i] = hit ? rh.ray.tfar : INFINITY;
+            job->ids[i] = hit ? (int32_t)rh.hit.primID : -1;
+            job->barys[3 * i] = hit ? 1.0f - u - v : 0.0f;
+            job->barys[3 * i + 1] = u;
+            job->barys[3 * i + 2] = v;
+        }
+    }
+}
+
+bool ao_tracer_intersect_arrays(const float *positions, size_t vertex_count, const uint32_t *indices,
+                                size_t triangle_count, const float *origins, const float *directions, size_t count,
+                                int threads, float *t, int32_t *ids, float *barys)
+{
+    RTCDevice device = rtcNewDevice(NULL);
+    if (!device) {
+        fprintf(stderr, "aoview: Embree could not create a device (error %d)\n", (int)rtcGetDeviceError(NULL));
+        return false;
+    }
+    rtcSetDeviceErrorFunction(device, report, NULL);
+    RTCScene scene = rtcNewScene(device);
+    RTCGeometry g = scene ? rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE) : NULL;
+    /* Embree's own copies: it reads 16 bytes at a time past the last position. */
+    float *p = g ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                           vertex_count) : NULL;
+    uint32_t *i3 = p ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
+                                               triangle_count) : NULL;
+    struct ao_pool *pool = NULL;
+    bool ok = i3 != NULL;
+    if (ok) {
+        memcpy(p, positions, 3 * sizeof(float) * vertex_count);
+        memcpy(i3, indices, 3 * sizeof(uint32_t) * triangle_count);
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(scene, g);
+        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+        rtcCommitScene(scene);
+        ok = rtcGetDeviceError(device) == RTC_ERROR_NONE;
+    }
+    if (!ok)
+        fprintf(stderr, "aoview: Embree could not build the mesh (out of memory?)\n");
+    else if ((ok = (pool = ao_pool_create(threads, ao_tracer_thread_init)) != NULL)) {
+        struct arrays_job job = {.scene = scene, .origins = origins, .directions = directions, .count = count,
+                                 .t = t, .ids = ids, .barys = barys};
+#if defined(__SSE__)
+        unsigned modes = _mm_getcsr();   /* the caller's floating-point modes, given back */
+#endif
+        ao_tracer_thread_init();
+        ao_pool_run(pool, intersect_arrays_job, &job);
+#if defined(__SSE__)
+        _mm_setcsr(modes);
+#endif
+    }
+    ao_pool_destroy(pool);
+    if (g)
+        rtcReleaseGeometry(g);
+    if (scene)
+        rtcReleaseScene(scene);
+    rtcReleaseDevice(device);
+    return ok;
 }

@@ -77,4 +77,14 @@ enum ao_bare { AO_BARE_OCCLUDED16, AO_BARE_OCCLUDED1M, AO_BARE_INTERSECT16 };
 double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packet *packets, size_t count,
                            enum ao_bare how);
 
+/* Closest hits of `count` rays (origins and directions: 3 floats each; directions need not be unit,
+ * t is in their units, t > 0) against one triangle mesh given as arrays (vertex_count positions, 3
+ * floats each; triangle_count triangles, 3 indices below vertex_count each), traced by Embree on
+ * `threads` threads (the calling one among them): t[i] (INFINITY on a miss), ids[i] (the triangle,
+ * -1 on a miss) and barys[3i..3i+2] (the hit's weights of the triangle's three corners, zero on a
+ * miss). False with one message on stderr when memory or threads are short. Any thread. */
+bool ao_tracer_intersect_arrays(const float *positions, size_t vertex_count, const uint32_t *indices,
+                                size_t triangle_count, const float *origins, const float *directions, size_t count,
+                                int threads, float *t, int32_t *ids, float *barys);
+
 #endif

@@ -4,6 +4,7 @@
  * model's placements applied for those who want one mesh. */
 #include "load/load.h"
 
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -186,5 +187,87 @@ bool ao_load_mesh(struct ao_mesh *mesh, const char *path, struct ao_budget *budg
     ao_model_finish(&model);
     if (!ok)
         ao_mesh_finish(mesh);
+    return ok;
+}
+
+/* As an OBJ file with normals makes its vertices (one per position and normal pair, in the order
+ * the faces first name them), keeps the vertices the triangles use, in that order; false when
+ * memory is short. */
+static bool keep_used_vertices(struct ao_mesh *m)
+{
+    uint32_t *made = malloc((m->vertex_count + 1) * sizeof *made);
+    struct ao_vec3 *positions = malloc((m->vertex_count + 1) * sizeof *positions);
+    struct ao_vec3 *normals = malloc((m->vertex_count + 1) * sizeof *normals);
+    if (!made || !positions || !normals) {
+        free(made), free(positions), free(normals);
+        return false;
+    }
+    memset(made, 0xff, (m->vertex_count + 1) * sizeof *made);
+    uint32_t count = 0;
+    for (size_t i = 0; i < 3 * m->triangle_count; i++) {
+        uint32_t v = m->indices[i];
+        if (made[v] == UINT32_MAX) {
+            made[v] = count;
+            positions[count] = m->positions[v];
+            normals[count++] = m->normals[v];
+        }
+        m->indices[i] = made[v];
+    }
+    free(made), free(m->positions), free(m->normals);
+    m->positions = positions, m->normals = normals, m->vertex_count = count;
+    return true;
+}
+
+bool ao_load_model_arrays(struct ao_model *model, const char *name, const float *positions, size_t vertex_count,
+                          const uint32_t *indices, size_t triangle_count, const float *normals,
+                          struct ao_budget *budget, double crease)
+{
+    memset(model, 0, sizeof *model);
+    struct ao_budget defaults = {.limit = AO_BUDGET_DEFAULT};
+    budget = budget ? budget : &defaults;
+    if (vertex_count >= AO_MESH_INDEX_LIMIT || triangle_count > SIZE_MAX / 12) {
+        ao_load_report(name, 0, "too many vertices for 32-bit indices");
+        return false;
+    }
+    for (size_t i = 0; i < 3 * triangle_count; i++)
+        if (indices[i] >= vertex_count) {
+            ao_load_report(name, 0, "triangle %zu: vertex index %u out of range (%zu vertices)", i / 3, indices[i],
+                           vertex_count);
+            return false;
+        }
+    for (size_t i = 0; i < 3 * vertex_count; i++)
+        if (!isfinite(positions[i])) {
+            ao_load_report(name, 0, "vertex %zu: position not finite", i / 3);
+            return false;
+        }
+    if (!ao_mesh_fits(budget, triangle_count, normals ? 2 * vertex_count : vertex_count, name, 0))
+        return false;
+    model->meshes = calloc(1, sizeof *model->meshes);
+    model->placements = calloc(1, sizeof *model->placements);
+    struct ao_mesh *m = model->meshes;
+    bool ok = m && model->placements && (m->positions = malloc((vertex_count + 1) * sizeof *m->positions)) &&
+              (m->indices = malloc((3 * triangle_count + 1) * sizeof *m->indices)) &&
+              (!normals || (m->normals = malloc((vertex_count + 1) * sizeof *m->normals)));
+    if (!ok) {
+        ao_model_finish(model);
+        return ao_load_out_of_memory(name);
+    }
+    model->mesh_count = model->placement_count = 1;
+    model->placements[0].to_model = ao_affine_identity();
+    m->vertex_count = vertex_count;
+    m->triangle_count = triangle_count;
+    for (size_t i = 0; i < vertex_count; i++) {
+        m->positions[i] = ao_vec3_make(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]);
+        if (normals)
+            m->normals[i] = ao_mesh_given_normal(normals[3 * i], normals[3 * i + 1], normals[3 * i + 2],
+                                                 &m->invalid_normals);
+    }
+    memcpy(m->indices, indices, 3 * triangle_count * sizeof *indices);
+    if (normals && !keep_used_vertices(m))
+        ok = ao_load_out_of_memory(name);
+    ok = ok && ao_load_finish(m, name) && complete_normals(model, name, false, crease, budget);
+    model->degenerate_count = m->degenerate_count;
+    if (!ok)
+        ao_model_finish(model);
     return ok;
 }

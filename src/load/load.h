@@ -6,6 +6,8 @@
 #define AO_LOAD_H
 
 #include <stdbool.h>
+#include <stddef.h>
+#include <stdint.h>
 
 #include "budget.h"
 #include "mesh.h"
@@ -31,5 +33,16 @@ bool ao_load_model(struct ao_model *model, const char *path, struct ao_budget *b
  * arrays are allocated; nothing stays charged: the caller charges the mesh it keeps. Reports and
  * fails as ao_load_model. Any thread. */
 bool ao_load_mesh(struct ao_mesh *mesh, const char *path, struct ao_budget *budget);
+
+/* Makes a model of one mesh placed once from arrays, as ao_load_model makes one of an OBJ file
+ * holding them (v lines, then f lines; vn lines and v//vn corners when normals are given): vertex_count
+ * positions and (unless NULL) normals, 3 floats each, and triangle_count triangles of 3 indices
+ * below vertex_count; degenerate triangles dropped, the normals not given (or given as zero or
+ * not finite) made smooth up to crease degrees. The arrays are copied and charged to budget as a
+ * file's would be (NULL: AO_BUDGET_DEFAULT). Reports and fails as ao_load_model, naming `name`. Any
+ * thread. */
+bool ao_load_model_arrays(struct ao_model *model, const char *name, const float *positions, size_t vertex_count,
+                          const uint32_t *indices, size_t triangle_count, const float *normals,
+                          struct ao_budget *budget, double crease);
 
 #endif
