@@ -398,7 +398,9 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
         return AO_EXIT_RUNTIME;
     app->reference_width = width;
     app->reference_height = height;
-    if (!(app->tracer = ao_tracer_create(&app->scene)))
+    /* A big scene traces a LOW BVH while its MEDIUM one is built, unless two renderers share it. */
+    bool progressive = app->scene.progressive && !opts->compare;
+    if (!(app->tracer = progressive ? ao_tracer_create_progressive(&app->scene) : ao_tracer_create(&app->scene)))
         return AO_EXIT_RUNTIME;
     if (!opts->quiet)
         report_skipped(&app->scene);
@@ -418,7 +420,7 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     /* Renderer. */
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
     *config = (struct ao_render_config){
-        .scene = &app->scene, .tracer = app->tracer,
+        .scene = &app->scene, .tracer = app->tracer, .upgrade = progressive ? app->tracer : NULL,
         .threads = opts->threads ? opts->threads : (cores > 0 ? (int)cores : 1),
         .seed = opts->seed, .target_spp = opts->spp, .target_error = opts->target_error,
         .time_limit = opts->time_limit,
