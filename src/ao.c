@@ -347,26 +347,18 @@ static void make_eye_rays(const struct ao_context *ctx, uint64_t stream, uint64_
 }
 
 /* One eye ray per pixel of the tile (number `ray`) and `count` AO samples from `first_sample`; adds
- * each pixel's sum of sample values (background on a miss) to sums. Under cosine sampling with
- * count >= 2 it also adds to spread[0], over the hit pixels, one sample's variance (of the value's
- * channel mean) as the difference of the means of the eye ray's first and second half of samples
- * gives it, (m1 - m2)^2 / (1/n1 + 1/n2), and to spread[1] how many pixels: with Sobol numbers each
- * half is a net of its own, so this is the variance the samples leave as they are stratified,
- * which the choice of samples per eye ray needs (tile.c; docs/estimator.md). Cosine weights are 0
- * or 1, so the halves' sums are whole numbers and add up to the same bits as one sum. The normals
- * view gives each of the `count` samples the value (n + 1) / 2 and a miss black: a unit normal's
- * colour is never black, whereas a background's value could pass for one. */
+ * each pixel's sum of sample values (background on a miss) to sums. The normals view gives each of
+ * the `count` samples the value (n + 1) / 2 and a miss black: a unit normal's colour is never
+ * black, whereas a background's value could pass for one. */
 static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile, int half, uint64_t ray,
-                        uint64_t first_sample, int count, struct ao_vec3 *sums, double spread[2],
-                        uint64_t *eye_rays, uint64_t *shadow_rays)
+                        uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
+                        uint64_t *shadow_rays)
 {
     uint64_t eye_stream = stream_for_half(ctx, EYE_STREAM, half), ao_stream = stream_for_half(ctx, AO_STREAM, half);
     int width = tile->x1 - tile->x0, pixels = width * (tile->y1 - tile->y0);
     struct queue q;
     queue_start(&q, ctx);
-    bool split = ctx->sampling == AO_SAMPLING_COSINE && count > 1 && ctx->output != AO_OUTPUT_NORMALS;
-    int n1 = split ? count / 2 : count, n2 = count - n1;
-    double sum[AO_TILE_PIXELS] = {0}, second[AO_TILE_PIXELS] = {0};
+    double sum[AO_TILE_PIXELS] = {0};
     struct ao_vec3 albedo[AO_TILE_PIXELS];
     bool miss[AO_TILE_PIXELS];
     int x = tile->x0, y = tile->y0; /* the next pixel's column and row */
@@ -398,21 +390,10 @@ static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile
                 continue;
             }
             albedo[first + k] = s.albedo;
-            uint64_t key = ao_rng_key(ctx->seed, index[k], ao_stream);
-            queue_samples(&q, &s, key, first_sample, n1, &sum[first + k]);
-            if (n2)
-                queue_samples(&q, &s, key, first_sample + (uint64_t)n1, n2, &second[first + k]);
+            queue_samples(&q, &s, ao_rng_key(ctx->seed, index[k], ao_stream), first_sample, count, &sum[first + k]);
         }
     }
     flush(&q);
-    for (int k = 0; k < pixels; k++) {
-        if (split && !miss[k]) {
-            double a = ((double)albedo[k].x + albedo[k].y + albedo[k].z) / 3.0, d = sum[k] / n1 - second[k] / n2;
-            spread[0] += a * a * d * d / (1.0 / n1 + 1.0 / n2);
-            spread[1] += 1.0;
-        }
-        sum[k] += second[k];
-    }
     for (int k = 0; k < pixels; k++)
         sums[k] = ao_vec3_add(sums[k], !miss[k] ? ao_vec3_scale(albedo[k], (float)sum[k])
                                        : ctx->output == AO_OUTPUT_NORMALS ? ao_vec3_make(0.0f, 0.0f, 0.0f)
@@ -426,10 +407,8 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
     int pixels = (tile->x1 - tile->x0) * (tile->y1 - tile->y0);
     for (int k = 0; k < pixels; k++)
         sums[k] = ao_vec3_make(0.0f, 0.0f, 0.0f);
-    double spread[2] = {0.0, 0.0};
     for (int r = 0; r < work->rounds; r++)
         trace_round(ctx, tile, work->half, work->first_ray + (uint64_t)r,
-                    work->first_sample + (uint64_t)r * (uint64_t)work->count, work->count, sums, spread, eye_rays,
+                    work->first_sample + (uint64_t)r * (uint64_t)work->count, work->count, sums, eye_rays,
                     shadow_rays);
-    sums[AO_TILE_PIXELS] = ao_vec3_make((float)spread[0], (float)spread[1], 0.0f);
 }

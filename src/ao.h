@@ -117,7 +117,6 @@ struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao
 /* One pass over a tile: per pixel `rounds` eye rays (jittered with AA), each with `count` AO
  * samples (with AO_OUTPUT_NORMALS, `count` samples of the normal's colour and no AO rays); writes
  * each pixel's sum of sample values (background on a miss, black for normals) to sums, row by row,
- * and the within-round spread to sums[AO_TILE_PIXELS] (AO_TILE_ENTRY values, tile.h),
  * and adds the rays traced to *eye_rays / *shadow_rays. Eye rays go to the tracer in packets of
  * 16, AO rays in batches of up to AO_BATCH_RAYS gathered across the tile. Any thread. */
 void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, const struct ao_tile_work *work,

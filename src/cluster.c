@@ -269,8 +269,8 @@ struct ao_cluster *ao_cluster_create(void)
     size_t ranks = (size_t)c->size;
     c->deferred = calloc(ranks, sizeof *c->deferred);
     c->answer = malloc(LEND_BYTES);
-    c->loan_sums = malloc((size_t)LEND_MOST * AO_TILE_ENTRY * sizeof *c->loan_sums);
-    c->repay_packed = malloc(ao_pack_bound((size_t)LEND_MOST * AO_TILE_ENTRY));
+    c->loan_sums = malloc((size_t)LEND_MOST * AO_TILE_PIXELS * sizeof *c->loan_sums);
+    c->repay_packed = malloc(ao_pack_bound((size_t)LEND_MOST * AO_TILE_PIXELS));
     c->answers = calloc(ranks, sizeof *c->answers);
     c->signals = calloc(ranks, sizeof *c->signals);
     c->tiles_by_rank = calloc(ranks, sizeof *c->tiles_by_rank);

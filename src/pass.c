@@ -35,7 +35,7 @@ bool ao_pass_allocate(struct ao_run *r)
         for (size_t t = 0; t < tiles; t++)
             owned += r->mine[t] = !share || share->owns(share->user, (int)t, (int)tiles);
     if (share) {
-        r->pass_sums = malloc(tiles * AO_TILE_ENTRY * sizeof *r->pass_sums);
+        r->pass_sums = malloc(tiles * AO_TILE * AO_TILE * sizeof *r->pass_sums);
         r->records = malloc((owned ? owned : 1) * sizeof *r->records);
         r->all_records = share->follows ? NULL : malloc(tiles * sizeof *r->all_records);
     }
@@ -113,7 +113,7 @@ void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shado
     struct ao_tile rect = ao_pass_tile_rect(r, t);
     uint32_t next;
     struct ao_tile_work work = ao_pass_tile_work(r, t, &next);
-    struct ao_vec3 sums[AO_TILE_ENTRY];
+    struct ao_vec3 sums[AO_TILE_PIXELS];
     ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow);
     ao_pass_add_tile(r, t, &work, next, sums);
 }

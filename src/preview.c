@@ -45,7 +45,7 @@ void ao_preview_trace(struct ao_preview *p, bool (*stop)(void *user), void *user
         struct ao_tile rect = {.x0 = t % p->tiles_x * TILE, .y0 = t / p->tiles_x * TILE};
         rect.x1 = rect.x0 + TILE < p->width ? rect.x0 + TILE : p->width;
         rect.y1 = rect.y0 + TILE < p->height ? rect.y0 + TILE : p->height;
-        struct ao_vec3 sums[AO_TILE_ENTRY];
+        struct ao_vec3 sums[TILE * TILE];
         ao_estimate_tile(&p->ctx, &rect, &work, sums, &rays, &rays);
         const struct ao_vec3 *s = sums;
         for (int j = rect.y0; j < rect.y1; j++)

@@ -15,7 +15,7 @@ static void add_entries(struct ao_run *r, int begin, int end)
         int t = r->work[n];
         uint32_t next;
         struct ao_tile_work work = ao_pass_tile_work(r, t, &next);
-        ao_pass_add_tile(r, t, &work, next, r->pass_sums + (size_t)n * AO_TILE_ENTRY);
+        ao_pass_add_tile(r, t, &work, next, r->pass_sums + (size_t)n * AO_TILE * AO_TILE);
     }
 }
 
@@ -102,7 +102,7 @@ static void render_shared(void *user, int self)
 bool ao_render_share_pass(struct ao_run *r)
 {
     int count = ao_pass_begin(r);
-    r->share_pass = (struct ao_share_pass){.serial = r->pass_serial, .count = count, .pixels = AO_TILE_ENTRY,
+    r->share_pass = (struct ao_share_pass){.serial = r->pass_serial, .count = count, .pixels = AO_TILE * AO_TILE,
                                            .sums = r->pass_sums, .left = entries_left, .lend = lend_entries,
                                            .renderer = r};
     ao_pool_run(r->pool, render_shared, r);

@@ -30,7 +30,7 @@ struct ao_share_tally {
 struct ao_share_pass {
     uint64_t serial;         /* numbers the passes alike on every process */
     int count;               /* entries in this process's list */
-    int pixels;              /* values an entry (AO_TILE_ENTRY: the pixel sums and the spread) */
+    int pixels;              /* pixel sums an entry */
     struct ao_vec3 *sums;
     /* How many entries of this process's list are not begun yet. Any thread. */
     int (*left)(void *renderer);
@@ -42,7 +42,7 @@ struct ao_share_pass {
 };
 
 /* A tile of another process's that this one traces for it (struct ao_render_share's borrow): its
- * number, its work in this pass, where its sums go (AO_TILE_ENTRY values, tile.h). */
+ * number, its work in this pass, where its pixel sums go (tile-sized, row by row). */
 struct ao_share_loan {
     int tile;
     struct ao_tile_work work;

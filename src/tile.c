@@ -1,8 +1,6 @@
 /* A tile's bookkeeping (see tile.h). */
 #include "tile.h"
 
-#include <math.h>
-
 /* Adaptive sampling works on whole tiles. A tile takes MIN_PASSES passes (two in each half) and
  * MIN_SPP samples per pixel before its error estimate decides anything. Then it joins a pass when
  * the error a sample removes there, variance / spp (the derivative of variance/n), is at least
@@ -12,11 +10,6 @@
  * a lucky estimate. */
 enum { MIN_PASSES = 4, MIN_SPP = 16, RECHECK = 8 };
 static const double SKIP_BELOW = 0.25, ROUNDING = 1e-6;
-
-/* What an eye ray costs in AO rays, with its hit's shading, for the split of samples between them
- * (ao_tile_split). A constant, not a clock's reading, so that the image stays a function of the seed
- * and settings: measured with bench_render (docs/performance.md). */
-static const double EYE_COST = 2.0;
 
 struct ao_tile ao_tile_rect(int width, int height, int t)
 {
@@ -62,7 +55,6 @@ struct ao_tile_work ao_tile_work_of(const struct ao_tile_state *ts, const struct
     int samples = (uint32_t)p->samples < left ? p->samples : (int)left;
     uint32_t start = ts->next[half]; /* the half's next sample number */
     bool first = p->per_ray && ts->passes == 0;
-    int per_ray = ts->per_ray ? (int)ts->per_ray : p->per_ray;
     struct ao_tile_work w = {.half = half, .rounds = 1, .count = samples};
     if (p->per_ray) {
         /* Auto passes: the first pass takes one sample, so that the first frame comes at once;
@@ -73,13 +65,15 @@ struct ao_tile_work ao_tile_work_of(const struct ao_tile_state *ts, const struct
          * its start: a stratified net of directions. (Passes of 1, 1, 1, 1, 2, 2, 4, 4 at first
          * gave many eye rays few AO samples: docs/adaptive.md.) A tile rejoining late grows by
          * doubling, its halves balanced. Whole rounds of per_ray samples (the rest in a later
-         * pass), or its eye rays would be too few for AA. */
-        int most = p->samples > per_ray ? p->samples : per_ray; /* at least a round: eye rays cost */
-        uint32_t grow = first ? 1 : start ? start : (uint32_t)p->per_ray;
+         * pass), or its eye rays would be too few for AA; at least one round however large the
+         * image (a 1920x1080 pass of about 2^22 samples would give 2 per eye ray, where the eye
+         * rays cost more than the AO rays: docs/estimator.md). */
+        int most = p->samples > p->per_ray ? p->samples : p->per_ray; /* at least a round: eye rays cost */
         samples = most < (int)left ? most : (int)left;
+        uint32_t grow = first ? 1 : start ? start : (uint32_t)p->per_ray;
         samples = (uint32_t)samples <= grow ? samples : (int)grow;
-        if (samples > per_ray)
-            w.rounds = samples / per_ray, w.count = per_ray;
+        if (samples > p->per_ray)
+            w.rounds = samples / p->per_ray, w.count = p->per_ray;
         else
             w.count = samples;
         if (first && p->sobol)
@@ -93,21 +87,6 @@ struct ao_tile_work ao_tile_work_of(const struct ao_tile_state *ts, const struct
     return w;
 }
 
-uint32_t ao_tile_split(double variance, double within, double spp, double count_squares, double cost,
-                       uint32_t fallback)
-{
-    if (!(variance > 0.0) && !(within > 0.0))
-        return fallback;
-    double eye = (variance * spp * spp - within * spp) / count_squares;
-    if (!(eye > 0.0))
-        return AO_TILE_RAY_MOST;
-    double best = sqrt(within * cost / eye);
-    uint32_t c = AO_TILE_RAY_LEAST;
-    while (c < AO_TILE_RAY_MOST && best > c * 1.4142135623730951) /* the nearest power of two, in log terms */
-        c *= 2;
-    return c;
-}
-
 void ao_tile_add(struct ao_tile_state *ts, struct ao_accum *accum, int width, struct ao_tile rect,
                  const struct ao_tile_work *work, uint32_t next, const struct ao_vec3 *sums)
 {
@@ -118,9 +97,6 @@ void ao_tile_add(struct ao_tile_state *ts, struct ao_accum *accum, int width, st
     ts->rays[half] += work->half == 2 ? 0u : (uint32_t)work->rounds;
     ts->spp[half] += samples;
     ts->next[half] = next;
-    ts->count_squares += (double)work->rounds * work->count * work->count;
-    ts->within += sums[AO_TILE_PIXELS].x;
-    ts->within_rays += sums[AO_TILE_PIXELS].y;
     /* Every pixel of a tile has the even and odd sample counts n_a and n_b of the tile. */
     double n_a = ts->spp[0], n_b = ts->spp[1], total = 0.0, squares = 0.0;
     for (int j = rect.y0; j < rect.y1; j++)
@@ -144,9 +120,4 @@ void ao_tile_add(struct ao_tile_state *ts, struct ao_accum *accum, int width, st
     double variance = n_a > 0.0 && n_b > 0.0 ? squares / (9.0 * n_a * n_b * n * n) : 0.0;
     double rounding = ROUNDING * ts->mean / pixels;
     ts->variance = variance > rounding * rounding * pixels ? variance : 0.0;
-    /* A pair of passes (even, odd) done: the next pair's samples per eye ray, alike in both halves
-     * so that their estimates stay alike (docs/estimator.md, "Samples per eye ray"). */
-    if ((ts->passes & 1) == 0 && ts->within_rays > 0.0)
-        ts->per_ray = ao_tile_split(ts->variance / pixels, ts->within / ts->within_rays, n, ts->count_squares,
-                                    EYE_COST, ts->per_ray);
 }

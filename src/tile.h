@@ -11,11 +11,8 @@
 #include "accum.h"
 #include "vec3.h"
 
-/* Tiles are AO_TILE x AO_TILE pixels, numbered row by row; AO_TILE_PIXELS of them. A pass hands a
- * tile's sums on as AO_TILE_ENTRY values: its pixels' sums row by row, then at AO_TILE_PIXELS the
- * pass's within-round spread (x: the sum over pixels and eye rays of the estimated variance of one
- * AO sample's value, y: how many such estimates; ao_estimate_tile). */
-enum { AO_TILE = 16, AO_TILE_PIXELS = AO_TILE * AO_TILE, AO_TILE_ENTRY = AO_TILE_PIXELS + 1 };
+/* Tiles are AO_TILE x AO_TILE pixels, numbered row by row; AO_TILE_PIXELS of them. */
+enum { AO_TILE = 16, AO_TILE_PIXELS = AO_TILE * AO_TILE };
 
 /* A rectangle of pixels [x0, x1) x [y0, y1) holding at most AO_TILE_PIXELS. */
 struct ao_tile {
@@ -37,17 +34,14 @@ struct ao_tile_state {
     uint32_t passes;
     uint32_t rays[2], spp[2];            /* eye rays and AO samples per pixel, even and odd passes */
     uint32_t next[2];                    /* the next sample number of each half (auto passes skip some) */
-    uint32_t per_ray;                    /* auto passes: AO samples per eye ray; 0 until chosen */
     double variance;                     /* over its pixels, the sum of their estimated variances */
     double mean;                         /* over its pixels, the sum of their averages */
-    double count_squares;                /* the sum over its eye rays (per pixel) of their AO samples squared */
-    double within, within_rays;          /* the within-round spread summed over its passes (AO_TILE_ENTRY) */
 };
 
 /* What a pass gives its tiles: at most `samples` AO samples a pixel, none past target_spp; with
- * per_ray > 0 (auto passes) rounds of the tile's own samples per eye ray (per_ray until its split
- * is measured: ao_tile_split), at least one round a pass, growing by doubling; whether the numbers
- * are Sobol's (streams numbered within each half). */
+ * per_ray > 0 (auto passes) rounds of per_ray samples on one eye ray, at least one round a pass
+ * however few `samples` are, growing by doubling; whether the numbers are Sobol's (streams
+ * numbered within each half). */
 struct ao_tile_pass {
     uint32_t target_spp;
     int samples, per_ray;
@@ -75,20 +69,8 @@ bool ao_tile_wanted(const struct ao_tile_state *ts, int pixels, uint32_t target_
  * next sample number after it. */
 struct ao_tile_work ao_tile_work_of(const struct ao_tile_state *ts, const struct ao_tile_pass *p, uint32_t *next);
 
-/* The AO samples per eye ray, a power of two in [AO_TILE_RAY_LEAST, AO_TILE_RAY_MOST], that make
- * the least error per unit of time for a pixel whose average over N = spp samples on eye rays of
- * c_r samples each (count_squares = sum of c_r^2) has the estimated variance `variance`, one AO
- * sample's value has the variance `within`, and an eye ray costs `cost` AO rays: sqrt(Va C / Ve)
- * with Ve = (variance N^2 - within N) / count_squares (docs/estimator.md); `fallback` when the
- * parts say nothing (no spread at all). Pure. */
-uint32_t ao_tile_split(double variance, double within, double spp, double count_squares, double cost,
-                       uint32_t fallback);
-
-enum { AO_TILE_RAY_LEAST = 2, AO_TILE_RAY_MOST = 32 };
-
 /* Adds the sums of one pass over tile ts at rect (the work it was given, after which its half's
- * next sample is `next`; AO_TILE_ENTRY values) to accum, an image `width` pixels wide, updates its
- * error estimate and, after an odd pass under auto passes, its samples per eye ray. */
+ * next sample is `next`) to accum, an image `width` pixels wide, and updates its error estimate. */
 void ao_tile_add(struct ao_tile_state *ts, struct ao_accum *accum, int width, struct ao_tile rect,
                  const struct ao_tile_work *work, uint32_t next, const struct ao_vec3 *sums);
 

@@ -33,7 +33,7 @@ static uint32_t constant_pass(struct ao_tile_state *ts, struct ao_accum *a, cons
     uint32_t next;
     struct ao_tile_work w = ao_tile_work_of(ts, p, &next);
     uint32_t samples = (uint32_t)(w.rounds * w.count);
-    struct ao_vec3 sums[AO_TILE_ENTRY] = {{0}};
+    struct ao_vec3 sums[AO_TILE * AO_TILE];
     for (int k = 0; k < AO_TILE * AO_TILE; k++)
         sums[k] = (struct ao_vec3){value * samples, value * samples, value * samples};
     ao_tile_add(ts, a, AO_TILE, ao_tile_rect(AO_TILE, AO_TILE, 0), &w, next, sums);
@@ -58,26 +58,14 @@ static void auto_passes_double(void **state)
         assert_int_equal(constant_pass(&ts, &a, &p, 0.5f), expected[k]);
     }
     /* A pass of a large image (2 samples a pixel, as at 1920x1080) still gives each tile a whole
-     * eye ray's samples: 1, then 8 a pass. */
+     * eye ray's samples: 1, then 8 a pass, never more. */
     memset(&ts, 0, sizeof ts);
     p.samples = 2;
-    for (int k = 0; k < 6; k++)
+    for (int k = 0; k < 8; k++) {
+        struct ao_tile_work w = ao_tile_work_of(&ts, &p, NULL);
+        assert_int_equal(w.rounds, 1);
         assert_int_equal(constant_pass(&ts, &a, &p, 0.5f), k == 0 ? 1 : 8);
-    /* A tile that chose 2 samples per eye ray takes the same samples in rounds of 2 ... */
-    ts.per_ray = 2;
-    struct ao_tile_work w = ao_tile_work_of(&ts, &p, NULL);
-    assert_int_equal(w.count, 2);
-    assert_int_equal(w.rounds, 1);
-    p.samples = 64;
-    w = ao_tile_work_of(&ts, &p, NULL);
-    assert_int_equal(w.count, 2);
-    assert_int_equal(w.rounds, 8); /* the even half has given 16: 16 more, in 8 rounds of 2 */
-    /* ... and one that chose 32 takes no more than the half has given, on one eye ray. */
-    ts.per_ray = 32;
-    w = ao_tile_work_of(&ts, &p, NULL);
-    assert_int_equal(w.rounds, 1);
-    p.samples = 2;
-    assert_int_equal(ao_tile_work_of(&ts, &p, NULL).count, 16);
+    }
     p.samples = 64;
     /* A target of 20: 1, 8, 8, then the 3 left. */
     memset(&ts, 0, sizeof ts);
@@ -91,33 +79,6 @@ static void auto_passes_double(void **state)
     assert_true(ts.variance == 0.0);
     assert_true(fabs(ts.mean - 0.5 * AO_TILE * AO_TILE) < 1e-9);
     ao_accum_finish(&a);
-}
-
-/* The samples per eye ray against their derivation (docs/estimator.md): a pixel averaged over N
- * samples on eye rays of c_r samples each has variance (Ve sum c_r^2 + Va N) / N^2; from that
- * variance and Va the split recovers Ve and picks the power of two nearest sqrt(Va Ce / Ve) in
- * [2, 32] (nearest in log terms: below c sqrt 2 it is c), or the fallback when nothing varies. */
-static uint32_t split_for(double ve, double va, double cost)
-{
-    const double n = 64.0, count_squares = 8.0 * 8.0 * 8.0; /* 8 eye rays of 8 samples */
-    return ao_tile_split((ve * count_squares + va * n) / (n * n), va, n, count_squares, cost, 7);
-}
-
-static void split_is_the_classical_optimum(void **state)
-{
-    (void)state;
-    assert_int_equal(split_for(0.01, 0.32, 2.0), 8);    /* sqrt(0.32 * 2 / 0.01) = 8 */
-    assert_int_equal(split_for(0.04, 0.32, 2.0), 4);    /* 4 */
-    assert_int_equal(split_for(0.0025, 0.32, 2.0), 16); /* 16 */
-    assert_int_equal(split_for(0.01, 0.32, 8.0), 16);   /* dearer eye rays: 16 */
-    assert_int_equal(split_for(0.01, 0.32 * 0.49, 2.0), 4);  /* 5.6 < 4 sqrt 2 = 5.66: 4 */
-    assert_int_equal(split_for(0.01, 0.32 * 0.51, 2.0), 8);  /* 5.71: 8 */
-    assert_int_equal(split_for(1.0, 0.32, 2.0), AO_TILE_RAY_LEAST);    /* 0.8: at least 2 */
-    assert_int_equal(split_for(1e-6, 0.32, 2.0), AO_TILE_RAY_MOST);    /* 800: at most 32 */
-    assert_int_equal(split_for(0.0, 0.32, 2.0), AO_TILE_RAY_MOST);     /* no eye noise: the most */
-    assert_int_equal(split_for(0.01, 0.0, 2.0), AO_TILE_RAY_LEAST);    /* no AO noise: the least */
-    assert_int_equal(split_for(0.0, 0.0, 2.0), 7);                     /* nothing varies: as it was */
-    assert_int_equal(ao_tile_split(0.0, 0.32, 64.0, 512.0, 2.0, 7), AO_TILE_RAY_MOST); /* Ve below 0 */
 }
 
 /* The error estimate is unbiased: pixels whose samples are 0 or 1 with probability 1/2 (in every
@@ -142,7 +103,7 @@ static void error_estimate_is_unbiased(void **state)
         for (int pass = 0; pass < PASSES; pass++) {
             uint32_t next;
             struct ao_tile_work w = ao_tile_work_of(&ts, &p, &next);
-            struct ao_vec3 sums[AO_TILE_ENTRY] = {{0}};
+            struct ao_vec3 sums[AO_TILE * AO_TILE];
             for (int k = 0; k < AO_TILE * AO_TILE; k++) {
                 uint64_t key = ao_rng_key(7, (uint64_t)(trial * AO_TILE * AO_TILE + k), (uint64_t)pass);
                 float ones = 0.0f;
@@ -188,7 +149,6 @@ int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(rect_clips_to_the_image),
-        cmocka_unit_test(split_is_the_classical_optimum),
         cmocka_unit_test(auto_passes_double),
         cmocka_unit_test(error_estimate_is_unbiased),
         cmocka_unit_test(adaptive_rule),
