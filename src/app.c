@@ -398,7 +398,9 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
         return AO_EXIT_RUNTIME;
     app->reference_width = width;
     app->reference_height = height;
-    if (!(app->tracer = ao_tracer_create(&app->scene)))
+    /* A big scene traces a LOW BVH while its MEDIUM one is built, unless two renderers share it. */
+    bool progressive = app->scene.progressive && !opts->compare;
+    if (!(app->tracer = progressive ? ao_tracer_create_progressive(&app->scene) : ao_tracer_create(&app->scene)))
         return AO_EXIT_RUNTIME;
     if (!opts->quiet)
         report_skipped(&app->scene);
@@ -424,6 +426,7 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     config->on_pass = ao_app_on_pass;
     config->on_preview = ao_app_on_preview;
     config->user = &app->reporter;
+    config->upgrade = progressive ? app->tracer : NULL;
     return 0;
 }
 

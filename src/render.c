@@ -219,6 +219,11 @@ static bool step(struct ao_render *r, struct loop *l, bool *finishes, uint64_t *
     if (l->info.restarts != restarts && !start_run(r, &s, restarts, &l->info))
         return false;
 
+    /* Between passes nothing traces: the moment to move to a better BVH once it is built, with no
+     * restart, since the BVH never changes an image. */
+    if (run->config.upgrade)
+        ao_tracer_switch(run->config.upgrade);
+
     /* Plan the pass: its tiles, its samples (from every process's pixels). */
     struct ao_next_pass plan;
     if (!ao_pass_plan(run, s.adaptive, &plan))

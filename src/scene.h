@@ -82,6 +82,8 @@ struct ao_scene {
     size_t line_primitives;       /* glTF primitives of lines skipped */
     char notes[512];              /* the meshes' notes (mesh.h), "name: note; name: note", or "" */
     enum ao_bvh bvh;              /* how the tracer builds its BVHs (budget.h); AUTO counts as MEDIUM */
+    bool progressive;             /* big enough, and room in the budget, to trace a LOW BVH first while
+                                   * the MEDIUM one is built (ao_tracer_create_progressive) */
 };
 
 /* Adds mesh (taken: the scene frees it; zeroed here), whose positions are in the scene's local frame

@@ -16,14 +16,28 @@
  * have it (a bare mesh against black read as a silhouette cut out of the night). */
 static const float DEFAULT_BACKGROUND = 1.0f;
 
+/* Scenes of at least PROGRESSIVE_TRIANGLES trace a LOW BVH while the MEDIUM one is built, when
+ * the budget also holds the LOW one beside MEDIUM's build: LOW_TRIANGLE bytes a triangle more
+ * (peak RSS of the 10M-triangle PLY, 2110 against 1215 MB: 92; docs/formats.md, "Which BVH").
+ * Smaller scenes build MEDIUM in a fraction of a second. */
+enum { PROGRESSIVE_TRIANGLES = 1 << 20, LOW_TRIANGLE = 96 };
+
 /* Records in a placed scene the BVH its budget gives it (ao_budget_bvh: every charge is made by
- * now), with a note when AUTO gave COMPACT. */
+ * now), with a note when AUTO gave COMPACT, and whether a LOW BVH traces first (with a note when
+ * the budget has no room for it). */
 static void settle_bvh(struct ao_scene *s, const struct ao_budget *budget)
 {
     s->bvh = ao_budget_bvh(budget);
     if (budget->bvh == AO_BVH_AUTO && s->bvh == AO_BVH_COMPACT)
         ao_scene_add_note(s, s->name, "BVH built compact to fit the scene budget (slower rays; a larger "
                                       "--scene-budget gets the faster BVH)");
+    if (budget->bvh != AO_BVH_AUTO || s->bvh != AO_BVH_MEDIUM || s->triangle_count < PROGRESSIVE_TRIANGLES)
+        return;
+    uint64_t both = (uint64_t)s->triangle_count * LOW_TRIANGLE;
+    s->progressive = budget->surplus <= UINT64_MAX - both && ao_budget_fits(budget, budget->surplus + both);
+    if (!s->progressive)
+        ao_scene_add_note(s, s->name, "first image after the full BVH build: no room in the scene budget for "
+                                      "a quick BVH beside it (a larger --scene-budget renders sooner)");
 }
 
 /* An empty scene named after path's last part, with the defaults a file may change. */

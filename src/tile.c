@@ -65,7 +65,11 @@ struct ao_tile_work ao_tile_work_of(const struct ao_tile_state *ts, const struct
          * its start: a stratified net of directions. (Passes of 1, 1, 1, 1, 2, 2, 4, 4 at first
          * gave many eye rays few AO samples: docs/adaptive.md.) A tile rejoining late grows by
          * doubling, its halves balanced. Whole rounds of per_ray samples (the rest in a later
-         * pass), or its eye rays would be too few for AA. */
+         * pass), or its eye rays would be too few for AA; at least one round however large the
+         * image (a 1920x1080 pass of about 2^22 samples would give 2 per eye ray, where the eye
+         * rays cost more than the AO rays: docs/estimator.md). */
+        int most = p->samples > p->per_ray ? p->samples : p->per_ray; /* at least a round: eye rays cost */
+        samples = most < (int)left ? most : (int)left;
         uint32_t grow = first ? 1 : start ? start : (uint32_t)p->per_ray;
         samples = (uint32_t)samples <= grow ? samples : (int)grow;
         if (samples > p->per_ray)

@@ -39,8 +39,9 @@ struct ao_tile_state {
 };
 
 /* What a pass gives its tiles: at most `samples` AO samples a pixel, none past target_spp; with
- * per_ray > 0 (auto passes) rounds of per_ray samples on one eye ray, growing by doubling; whether
- * the numbers are Sobol's (streams numbered within each half). */
+ * per_ray > 0 (auto passes) rounds of per_ray samples on one eye ray, at least one round a pass
+ * however few `samples` are, growing by doubling; whether the numbers are Sobol's (streams
+ * numbered within each half). */
 struct ao_tile_pass {
     uint32_t target_spp;
     int samples, per_ray;

@@ -2,6 +2,7 @@
 #include "tracer.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -18,14 +19,34 @@
 #include <xmmintrin.h>
 #endif
 
+/* One build of a scene's BVHs: the top level (flat meshes, instances, spheres) and, per scene mesh,
+ * its own BVH when instances place it, else NULL. */
+struct bvhs {
+    RTCScene scene;
+    RTCScene *meshes;
+};
+
+/* The better build made beside the one that traces (ao_tracer_create_progressive): its thread,
+ * what it builds from, and whether it is done (set by its thread, read by the switch). */
+struct upgrade {
+    pthread_t thread;
+    bool started;
+    atomic_bool done, cancel;
+    bool ok;
+    const struct ao_scene *source;
+    struct bvhs built;
+    struct ao_tracer_stats stats;
+};
+
 struct ao_tracer {
     struct ao_direct *direct;            /* set when the direct back end traces: no Embree at all */
     RTCDevice device;
-    RTCScene scene;                      /* the top level: flat meshes, instances, spheres */
-    RTCScene *meshes;                    /* per scene mesh: its own BVH when instances place it, else NULL */
+    RTCScene scene;                      /* the top level that traces: bvhs.scene */
+    struct bvhs bvhs;
     size_t mesh_count;
     unsigned spheres_id;                 /* RTC_INVALID_GEOMETRY_ID when absent */
     struct ao_tracer_stats stats;
+    struct upgrade upgrade;
     _Atomic int64_t embree_bytes, embree_peak;   /* Embree's memory monitor */
     struct ao_ray_recorder *occlusion_recorder, *eye_recorder;  /* benchmarks only */
 };
@@ -33,6 +54,8 @@ struct ao_tracer {
 static void report(void *user, enum RTCError code, const char *message)
 {
     (void)user;
+    if (code == RTC_ERROR_CANCELLED) /* an upgrade's build, cancelled as its tracer goes */
+        return;
     fprintf(stderr, "aoview: Embree error %d: %s\n", (int)code, message ? message : "(no message)");
 }
 
@@ -49,14 +72,24 @@ static bool embree_memory_monitor(void *user, ssize_t bytes, bool post)
     return true;
 }
 
+/* Embree's progress monitor of an upgrade's build: false (which cancels the build) once the tracer
+ * is being destroyed. */
+static bool going_on(void *cancel, double done)
+{
+    (void)done;
+    return !atomic_load((atomic_bool *)cancel);
+}
+
 /* Sets how Embree builds a scene's BVH (budget.h's enum ao_bvh): always robust traversal, which
  * keeps shared edges watertight so that closed meshes stay closed; compact leaves or Morton's build
- * where asked. */
-static void set_build(RTCScene scene, enum ao_bvh bvh)
+ * where asked; a build that `cancel` (unless NULL) stops. */
+static void set_build(RTCScene scene, enum ao_bvh bvh, atomic_bool *cancel)
 {
     rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST | (bvh == AO_BVH_COMPACT ? RTC_SCENE_FLAG_COMPACT : 0));
     if (bvh == AO_BVH_LOW)
         rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
+    if (cancel)
+        rtcSetSceneProgressMonitorFunction(scene, going_on, cancel);
 }
 
 /* A triangle geometry over the mesh's own vertex and index arrays, shared, not copied (scene.h:
@@ -76,52 +109,54 @@ static RTCGeometry triangles_of(struct ao_tracer *t, const struct ao_mesh *m, en
     return g;
 }
 
-/* Instanced mesh m's own scene, built once: one triangle geometry, one BVH. */
-static RTCScene mesh_scene(struct ao_tracer *t, const struct ao_scene *s, uint32_t m)
+/* Instanced mesh m's own scene in b, built once: one triangle geometry, one BVH. */
+static RTCScene mesh_scene(struct ao_tracer *t, struct bvhs *b, const struct ao_scene *s, uint32_t m, enum ao_bvh bvh,
+                           struct ao_tracer_stats *stats, atomic_bool *cancel)
 {
-    if (t->meshes[m])
-        return t->meshes[m];
+    if (b->meshes[m])
+        return b->meshes[m];
     RTCScene scene = rtcNewScene(t->device);
-    RTCGeometry g = scene ? triangles_of(t, &s->meshes[m], s->bvh) : NULL;
+    RTCGeometry g = scene ? triangles_of(t, &s->meshes[m], bvh) : NULL;
     if (!g) {
         if (scene)
             rtcReleaseScene(scene);
         return NULL;
     }
-    set_build(scene, s->bvh);
+    set_build(scene, bvh, cancel);
     rtcAttachGeometry(scene, g);
     rtcReleaseGeometry(g);
     rtcCommitScene(scene);
-    t->stats.bvhs++;
-    return t->meshes[m] = scene;
+    stats->bvhs++;
+    return b->meshes[m] = scene;
 }
 
-/* Instance i of the scene, under geometry id i of the top level: a flat mesh's triangles, or an
+/* Instance i of the scene, under geometry id i of b's top level: a flat mesh's triangles, or an
  * Embree instance of its mesh's own scene under its map into the local frame. */
-static bool add_instance(struct ao_tracer *t, const struct ao_scene *s, size_t i)
+static bool add_instance(struct ao_tracer *t, struct bvhs *b, const struct ao_scene *s, size_t i, enum ao_bvh bvh,
+                         struct ao_tracer_stats *stats, atomic_bool *cancel)
 {
     const struct ao_instance *in = &s->instances[i];
     RTCGeometry g;
     if (in->flat) {
-        if (!(g = triangles_of(t, &s->meshes[in->mesh], s->bvh)))
+        if (!(g = triangles_of(t, &s->meshes[in->mesh], bvh)))
             return false;
-        t->stats.triangle_geometries++;
+        stats->triangle_geometries++;
     } else {
-        RTCScene scene = mesh_scene(t, s, in->mesh);
+        RTCScene scene = mesh_scene(t, b, s, in->mesh, bvh, stats, cancel);
         if (!scene || !(g = rtcNewGeometry(t->device, RTC_GEOMETRY_TYPE_INSTANCE)))
             return false;
         rtcSetGeometryInstancedScene(g, scene);
         rtcSetGeometryTransform(g, 0, RTC_FORMAT_FLOAT3X4_COLUMN_MAJOR, in->to_local);
         rtcCommitGeometry(g);
-        t->stats.instances++;
+        stats->instances++;
     }
-    rtcAttachGeometryByID(t->scene, g, (unsigned)i);
+    rtcAttachGeometryByID(b->scene, g, (unsigned)i);
     rtcReleaseGeometry(g);
     return true;
 }
 
 /* Spheres stay analytic: Embree's sphere primitive, radius in the fourth vertex component. */
-static bool add_spheres(struct ao_tracer *t, const struct ao_scene *s)
+static bool add_spheres(struct ao_tracer *t, struct bvhs *b, const struct ao_scene *s)
 {
     RTCGeometry g = rtcNewGeometry(t->device, RTC_GEOMETRY_TYPE_SPHERE_POINT);
     float *v = rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float),
@@ -137,10 +172,42 @@ static bool add_spheres(struct ao_tracer *t, const struct ao_scene *s)
         v[4 * i + 3] = s->spheres[i].radius;
     }
     rtcCommitGeometry(g);
-    t->spheres_id = (unsigned)s->instance_count;
-    rtcAttachGeometryByID(t->scene, g, t->spheres_id);
+    rtcAttachGeometryByID(b->scene, g, t->spheres_id);
     rtcReleaseGeometry(g);
     return true;
+}
+
+/* Releases what a build made (accepts one half done). */
+static void release_bvhs(struct bvhs *b, size_t mesh_count)
+{
+    if (b->scene)
+        rtcReleaseScene(b->scene);
+    for (size_t i = 0; b->meshes && i < mesh_count; i++)
+        if (b->meshes[i])
+            rtcReleaseScene(b->meshes[i]);
+    free(b->meshes);
+    b->scene = NULL;
+    b->meshes = NULL;
+}
+
+/* Builds the scene's BVHs into b as `bvh` says, counting them in *stats; false when Embree or
+ * memory fails or `cancel` (unless NULL) stopped it (b then holds what to release). */
+static bool build(struct ao_tracer *t, const struct ao_scene *scene, enum ao_bvh bvh, struct bvhs *b,
+                  struct ao_tracer_stats *stats, atomic_bool *cancel)
+{
+    b->meshes = calloc(scene->mesh_count ? scene->mesh_count : 1, sizeof *b->meshes);
+    b->scene = b->meshes ? rtcNewScene(t->device) : NULL;
+    if (!b->scene)
+        return false;
+    set_build(b->scene, bvh, cancel);
+    stats->bvhs = 1;
+    bool ok = true;
+    for (size_t i = 0; ok && i < scene->instance_count; i++)
+        ok = add_instance(t, b, scene, i, bvh, stats, cancel);
+    ok = ok && (scene->sphere_count == 0 || add_spheres(t, b, scene));
+    if (ok)
+        rtcCommitScene(b->scene);
+    return ok && rtcGetDeviceError(t->device) == RTC_ERROR_NONE;
 }
 
 struct ao_tracer *ao_tracer_create(const struct ao_scene *scene)
@@ -148,7 +215,65 @@ struct ao_tracer *ao_tracer_create(const struct ao_scene *scene)
     return ao_tracer_create_with(scene, AO_BACKEND_AUTO);
 }
 
+static struct ao_tracer *create(const struct ao_scene *scene, enum ao_backend backend, enum ao_bvh bvh);
+
 struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_backend backend)
+{
+    return create(scene, backend, scene->bvh);
+}
+
+/* The upgrade's thread: builds the source scene's BVHs as the scene asks. */
+static void *build_upgrade(void *user)
+{
+    struct ao_tracer *t = user;
+    struct upgrade *u = &t->upgrade;
+    ao_tracer_thread_init();
+    u->ok = build(t, u->source, u->source->bvh, &u->built, &u->stats, &u->cancel);
+    atomic_store(&u->done, true);
+    return NULL;
+}
+
+struct ao_tracer *ao_tracer_create_progressive(const struct ao_scene *scene)
+{
+    struct ao_tracer *t = create(scene, AO_BACKEND_AUTO, AO_BVH_LOW);
+    if (!t || t->direct)
+        return t;
+    t->upgrade.source = scene;
+    atomic_store(&t->upgrade.done, false);
+    atomic_store(&t->upgrade.cancel, false);
+    t->upgrade.started = pthread_create(&t->upgrade.thread, NULL, build_upgrade, t) == 0;
+    if (!t->upgrade.started) /* the LOW BVH traces on: slower rays, the same image */
+        fprintf(stderr, "aoview: no thread for the faster BVH's build; tracing on with the quick one\n");
+    return t;
+}
+
+bool ao_tracer_upgrading(const struct ao_tracer *tracer)
+{
+    return tracer->upgrade.started;
+}
+
+bool ao_tracer_switch(struct ao_tracer *tracer)
+{
+    struct upgrade *u = &tracer->upgrade;
+    if (!u->started || !atomic_load(&u->done))
+        return false;
+    pthread_join(u->thread, NULL);
+    u->started = false;
+    if (!u->ok) { /* out of memory beside the quick BVH: keep it */
+        release_bvhs(&u->built, tracer->mesh_count);
+        fprintf(stderr, "aoview: the faster BVH did not fit beside the quick one; tracing on with the quick one\n");
+        return false;
+    }
+    release_bvhs(&tracer->bvhs, tracer->mesh_count);
+    tracer->bvhs = u->built;
+    tracer->scene = tracer->bvhs.scene;
+    tracer->stats = u->stats;
+    tracer->stats.embree_bytes = atomic_load(&tracer->embree_bytes);
+    tracer->stats.embree_peak_bytes = atomic_load(&tracer->embree_peak);
+    return true;
+}
+
+static struct ao_tracer *create(const struct ao_scene *scene, enum ao_backend backend, enum ao_bvh bvh)
 {
     struct ao_tracer *t = calloc(1, sizeof *t);
     if (!t) {
@@ -173,20 +298,9 @@ struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_ba
     rtcSetDeviceErrorFunction(t->device, report, NULL);
     rtcSetDeviceMemoryMonitorFunction(t->device, embree_memory_monitor, t);
     t->mesh_count = scene->mesh_count;
-    t->meshes = calloc(scene->mesh_count ? scene->mesh_count : 1, sizeof *t->meshes);
-    t->scene = t->meshes ? rtcNewScene(t->device) : NULL;
-    if (t->scene) {
-        set_build(t->scene, scene->bvh);
-        t->stats.bvhs = 1;
-    }
-    bool ok = t->scene != NULL;
-    for (size_t i = 0; ok && i < scene->instance_count; i++)
-        ok = add_instance(t, scene, i);
-    ok = ok && (scene->sphere_count == 0 || add_spheres(t, scene));
-    if (ok) {
-        rtcCommitScene(t->scene);
-        ok = rtcGetDeviceError(t->device) == RTC_ERROR_NONE;
-    }
+    t->spheres_id = scene->sphere_count ? (unsigned)scene->instance_count : RTC_INVALID_GEOMETRY_ID;
+    bool ok = build(t, scene, bvh, &t->bvhs, &t->stats, NULL);
+    t->scene = t->bvhs.scene;
     if (!ok) {
         fprintf(stderr, "aoview: Embree could not build the scene (out of memory?)\n");
         ao_tracer_destroy(t);
@@ -207,12 +321,12 @@ void ao_tracer_destroy(struct ao_tracer *tracer)
     if (!tracer)
         return;
     ao_direct_destroy(tracer->direct);
-    if (tracer->scene)
-        rtcReleaseScene(tracer->scene);
-    for (size_t i = 0; tracer->meshes && i < tracer->mesh_count; i++)
-        if (tracer->meshes[i])
-            rtcReleaseScene(tracer->meshes[i]);
-    free(tracer->meshes);
+    if (tracer->upgrade.started) { /* an upgrade still building: cancel it, then free what it made */
+        atomic_store(&tracer->upgrade.cancel, true);
+        pthread_join(tracer->upgrade.thread, NULL);
+        release_bvhs(&tracer->upgrade.built, tracer->mesh_count);
+    }
+    release_bvhs(&tracer->bvhs, tracer->mesh_count);
     if (tracer->device)
         rtcReleaseDevice(tracer->device);
     free(tracer);

@@ -24,6 +24,21 @@ enum ao_backend { AO_BACKEND_AUTO, AO_BACKEND_EMBREE, AO_BACKEND_DIRECT };
  * one for scenes of a few primitives (ao_direct_suits), where it is measured faster. */
 struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_backend backend);
 
+/* ao_tracer_create for a big scene: builds LOW BVHs (Embree's Morton build, 3-4 times sooner,
+ * slower rays), then starts building the scene's own (scene->bvh) beside them on a thread of its
+ * own; ao_tracer_switch moves to them once built. The BVH never changes an image. Main thread. */
+struct ao_tracer *ao_tracer_create_progressive(const struct ao_scene *scene);
+
+/* Once ao_tracer_create_progressive's second build is done: traces with it from now on, frees the
+ * LOW BVHs and returns true (false before, and after: nothing to switch; a build that ran out of
+ * memory is dropped with one line and LOW traces on). Only while nothing traces with this tracer:
+ * the render thread between passes, when its renderer is the tracer's only user. */
+bool ao_tracer_switch(struct ao_tracer *tracer);
+
+/* Whether ao_tracer_create_progressive's second build is still to be switched to. Any thread that
+ * may call ao_tracer_switch. */
+bool ao_tracer_upgrading(const struct ao_tracer *tracer);
+
 /* The back end that traces, "embree" or "direct", for --stats and benchmarks. Any thread. */
 const char *ao_tracer_backend(const struct ao_tracer *tracer);
 

@@ -8,9 +8,16 @@
  * pixel (2 threads, cosine, AA), their sum (time to first image), AO Mrays/s over 4 more passes of
  * 4 samples, peak RSS (getrusage) and peak RSS per triangle. Asserts nothing; docs/formats.md has
  * the figures.
- * Run: build/tests/bench_scale [--rounds N] [--reuse] [--bvh B] DIR   (writes about 1 GB into DIR;
- *      --reuse keeps files written by an earlier run; --bvh as aoview's, default medium)
- *      build/tests/bench_scale [--bvh B] --one FILE   (one measurement, one line: what each round runs) */
+ * With --builds, the binary PLY alone under each build, interleaved per round: `progressive` (what
+ * aoview does with a big scene: LOW first, MEDIUM built beside it and switched to between passes),
+ * then medium, compact and low alone; it prints the medians of first image, Mrays/s and peak RSS as
+ * above, and of the time to 1 % estimated error at GOAL_WIDTH x GOAL_HEIGHT with aoview's defaults
+ * (auto passes, adaptive sampling), from the start of loading, in a process of its own.
+ * Run: build/tests/bench_scale [--rounds N] [--reuse] [--bvh B] [--builds] DIR   (writes about 1 GB
+ *      into DIR; --reuse keeps files written by an earlier run; --bvh as aoview's or progressive,
+ *      default medium)
+ *      build/tests/bench_scale [--bvh B] [--goal] --one FILE   (one measurement, one line: what each
+ *      round runs; --goal: the seconds to 1 % alone) */
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
@@ -31,11 +38,15 @@
 /* The sphere: bench_bumpy_sphere of RINGS rings, 4 RINGS (RINGS - 1) = 9,991,920 triangles. */
 enum { RINGS = 1581 };
 enum { WIDTH = 640, HEIGHT = 480, RATE_SPPPP = 4, RATE_PASSES = 4, MAX_ROUNDS = 21, FILES = 4, PHASES = 8 };
+enum { GOAL_WIDTH = 1280, GOAL_HEIGHT = 960, GOAL_SPP = 100000 };
+static const double GOAL_ERROR = 0.01;
 
 static const char *const names[FILES] = {"sphere.ply", "sphere_ascii.ply", "sphere.obj", "sphere.glb"};
-/* --bvh's names, in budget.h's order, and the one asked for. */
-static const char *const bvh_names[] = {"auto", "medium", "compact", "low"};
+/* --bvh's names, in budget.h's order and then PROGRESSIVE, and the one asked for. */
+enum { PROGRESSIVE = AO_BVH_LOW + 1, BUILDS = 4 };
+static const char *const bvh_names[] = {"auto", "medium", "compact", "low", "progressive"};
 static int bvh = AO_BVH_MEDIUM;
+static const int builds[BUILDS] = {PROGRESSIVE, AO_BVH_MEDIUM, AO_BVH_COMPACT, AO_BVH_LOW};
 
 static const char *const phase_names[PHASES] = {"load s", "normals s", "build s", "first s", "total s",
                                                 "Mrays/s", "peak MB", "B/tri"};
@@ -97,23 +108,34 @@ static void write_files(const char *dir, const struct bench_mesh *m)
     }
 }
 
-/* One measurement of path in this process; prints the PHASES figures on one line. */
-static int measure(const char *path)
+/* One measurement of path in this process; prints the PHASES figures on one line, or with `goal`
+ * the seconds from the start of loading to GOAL_ERROR. */
+static int measure(const char *path, bool goal)
 {
     struct ao_scene scene;
-    struct ao_scene_options options = {.budget = (uint64_t)1 << 40, .bvh = (enum ao_bvh)bvh};
+    struct ao_scene_options options = {.budget = (uint64_t)1 << 40,
+                                       .bvh = bvh == PROGRESSIVE ? AO_BVH_AUTO : (enum ao_bvh)bvh};
     double start = bench_now();
     if (!ao_scene_load(&scene, path, &options))
         return 1;
     double loaded = bench_now();
-    struct ao_tracer *tracer = ao_tracer_create(&scene);
+    bool progressive = bvh == PROGRESSIVE && scene.progressive;
+    struct ao_tracer *tracer = progressive ? ao_tracer_create_progressive(&scene) : ao_tracer_create(&scene);
     if (!tracer)
         return 1;
+    struct ao_tracer *upgrade = progressive ? tracer : NULL;
     double built = bench_now();
-    bench_render(&scene, tracer, WIDTH, HEIGHT, 1, 1);
+    if (goal) {
+        bench_render_until(&scene, tracer, upgrade, GOAL_WIDTH, GOAL_HEIGHT, 0, true, GOAL_SPP, GOAL_ERROR);
+        printf("%.6f\n", bench_now() - start);
+        ao_tracer_destroy(tracer);
+        ao_scene_finish(&scene);
+        return 0;
+    }
+    bench_render_until(&scene, tracer, upgrade, WIDTH, HEIGHT, 1, false, 1, 0.0);
     double first = bench_now();
-    struct ao_frame_info info =
-        bench_render(&scene, tracer, WIDTH, HEIGHT, RATE_SPPPP, RATE_SPPPP * RATE_PASSES);
+    struct ao_frame_info info = bench_render_until(&scene, tracer, upgrade, WIDTH, HEIGHT, RATE_SPPPP, false,
+                                                   RATE_SPPPP * RATE_PASSES, 0.0);
     struct ao_mesh *big = &scene.meshes[0];
     for (size_t m = 1; m < scene.mesh_count; m++)
         big = scene.meshes[m].triangle_count > big->triangle_count ? &scene.meshes[m] : big;
@@ -132,8 +154,9 @@ static int measure(const char *path)
     return 0;
 }
 
-/* Runs `--one path` in a child process (this program, exec'd afresh) and reads its figures. */
-static void run_child(const char *path, double out[PHASES])
+/* Runs `--one path` (with --goal: `count` is 1) in a child process (this program, exec'd afresh)
+ * and reads its `count` figures. */
+static void run_child(const char *path, double *out, int count)
 {
     int fds[2];
     if (pipe(fds) != 0)
@@ -143,18 +166,21 @@ static void run_child(const char *path, double out[PHASES])
         dup2(fds[1], 1);
         close(fds[0]);
         close(fds[1]);
-        execl("/proc/self/exe", "bench_scale", "--bvh", bvh_names[bvh], "--one", path, (char *)NULL);
+        if (count == 1)
+            execl("/proc/self/exe", "bench_scale", "--bvh", bvh_names[bvh], "--goal", "--one", path, (char *)NULL);
+        else
+            execl("/proc/self/exe", "bench_scale", "--bvh", bvh_names[bvh], "--one", path, (char *)NULL);
         _exit(127);
     }
     close(fds[1]);
     FILE *in = fdopen(fds[0], "r");
     int status, got = 0;
-    for (int k = 0; in && k < PHASES; k++)
+    for (int k = 0; in && k < count; k++)
         got += fscanf(in, "%lf", &out[k]) == 1;
     if (in)
         fclose(in);
     if (pid < 0 || waitpid(pid, &status, 0) != pid || !WIFEXITED(status) || WEXITSTATUS(status) != 0 ||
-        got != PHASES) {
+        got != count) {
         fprintf(stderr, "bench_scale: measuring %s failed\n", path);
         exit(1);
     }
@@ -169,10 +195,38 @@ static int bvh_of(const char *name)
     return -1;
 }
 
+/* --builds: the binary PLY under each build, interleaved per round; prints the medians. */
+static int compare_builds(const char *dir, int rounds)
+{
+    static double figures[BUILDS][PHASES + 1][MAX_ROUNDS];
+    char path[4096];
+    snprintf(path, sizeof path, "%s/%s", dir, names[0]);
+    for (int r = 0; r < rounds; r++)
+        for (int b = 0; b < BUILDS; b++) {
+            double one[PHASES + 1];
+            bvh = builds[b];
+            run_child(path, one, PHASES);
+            run_child(path, one + PHASES, 1);
+            for (int k = 0; k <= PHASES; k++)
+                figures[b][k][r] = one[k];
+        }
+    printf("%s, medians of %d rounds, one process per build and figure per round; to 1 %%: %dx%d from the "
+           "start of loading\n%-12s %10s %10s %10s %10s %10s\n", names[0], rounds, GOAL_WIDTH, GOAL_HEIGHT, "build",
+           "build s", "first s", "Mrays/s", "peak MB", "to 1 % s");
+    static const int shown[] = {2, 4, 5, 6, PHASES};
+    for (int b = 0; b < BUILDS; b++) {
+        printf("%-12s", bvh_names[builds[b]]);
+        for (int k = 0; k < 5; k++)
+            printf(" %10.3f", bench_median(figures[b][shown[k]], rounds));
+        printf("\n");
+    }
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     int first = 1, rounds = 5;
-    bool reuse = false, one = false;
+    bool reuse = false, one = false, goal = false, by_build = false;
     for (; first < argc - 1; first++) {
         if (strcmp(argv[first], "--rounds") == 0 && first + 2 < argc)
             rounds = atoi(argv[++first]);
@@ -182,16 +236,20 @@ int main(int argc, char **argv)
             bvh = bvh_of(argv[++first]);
         else if (strcmp(argv[first], "--one") == 0)
             one = true;
+        else if (strcmp(argv[first], "--goal") == 0)
+            goal = true;
+        else if (strcmp(argv[first], "--builds") == 0)
+            by_build = true;
         else
             break;
     }
     if (first != argc - 1 || rounds < 1 || rounds > MAX_ROUNDS || bvh < 0) {
-        fprintf(stderr, "usage: bench_scale [--rounds 1..%d] [--reuse] [--bvh auto|medium|compact|low] DIR | "
-                        "bench_scale [--bvh B] --one FILE\n", MAX_ROUNDS);
+        fprintf(stderr, "usage: bench_scale [--rounds 1..%d] [--reuse] [--bvh auto|medium|compact|low|progressive] "
+                        "[--builds] DIR | bench_scale [--bvh B] [--goal] --one FILE\n", MAX_ROUNDS);
         return 2;
     }
     if (one)
-        return measure(argv[first]);
+        return measure(argv[first], goal);
     const char *dir = argv[first];
     if (!reuse) {
         double start = bench_now();
@@ -202,13 +260,15 @@ int main(int argc, char **argv)
                bench_now() - start);
         bench_mesh_free(&sphere);
     }
+    if (by_build)
+        return compare_builds(dir, rounds);
     static double figures[FILES][PHASES][MAX_ROUNDS];
     for (int r = 0; r < rounds; r++)
         for (int f = 0; f < FILES; f++) {
             char path[4096];
             double one[PHASES];
             snprintf(path, sizeof path, "%s/%s", dir, names[f]);
-            run_child(path, one);
+            run_child(path, one, PHASES);
             for (int k = 0; k < PHASES; k++)
                 figures[f][k][r] = one[k];
         }

@@ -5,12 +5,18 @@ mean, per scene and image size, the median over seeds; writes time-to-error.md (
 time-to-error.csv (every run) into --out. See docs/time-to-error.md for what the figures mean.
 
   time_to_error.py [--aoview BIN] [--exact BIN] [--sizes WxH,...] [--seeds N] [--cap S]
-                   [--ref-spp N] [--work DIR] [--out DIR] [--quick] [--config NAME=ARGS]... SCENE...
+                   [--ref-spp N] [--work DIR] [--out DIR] [--quick] [--config NAME=ARGS]...
+                   [--large WxH] [--large-config NAME=ARGS]... [--large-ref-spp N] SCENE...
 
 --config adds a configuration: NAME and the aoview arguments it adds (any, quoted as in a shell;
-empty for the binary's defaults); without any, the set in DEFAULT_CONFIGS. The ratios are the
-median time of the first configuration (the baseline) over each configuration's. --quick: only
-the first size, one seed, written into the work directory unless --out is given.
+empty for the binary's defaults; `--binary BIN` first runs another aoview binary, e.g. an older
+build); without any, the set in DEFAULT_CONFIGS. The ratios are the median time of the first
+configuration (the baseline) over each configuration's. --quick: only the first size, one seed,
+written into the work directory unless --out is given, and no large size.
+
+At the large size (--large, default 1920x1080; empty for none) only the first SCENE runs, with
+the configurations of --large-config (default LARGE_CONFIGS), to 1 % alone: the render seconds to
+1 % RMSE and to 1 % estimated error (the `error` column of --stats), medians over the seeds.
 """
 import argparse
 import csv
@@ -34,6 +40,9 @@ DEFAULT_CONFIGS = ['old-defaults=--sampler random --spppp 1 --adaptive off',
                    'sobol-spppp8=--sampler sobol --spppp 8 --adaptive off',
                    'sobol-auto=--sampler sobol --spppp auto --adaptive off',
                    'defaults=']
+LARGE_CONFIGS = ['spppp8=--spppp 8', 'defaults=']
+LARGE_LEVEL = 0.01
+LARGE_REF_SPP = 2048
 # References: Owen-scrambled Sobol points at one sample per pass (one eye ray per AO sample, so the
 # anti-aliasing converges with the AO), seeds no timed run uses (benchlib.REFERENCE_SEEDS).
 REFERENCE_ARGS = ['--sampler', 'sobol', '--spppp', '1', '--adaptive', 'off']
@@ -57,21 +66,25 @@ def level_text(level):
 
 
 def parse_rows(text):
-    """Stats rows (pass, spp, seconds, ..., rmse) of complete lines, as (spp, seconds, rmse)."""
+    """Stats rows (pass, spp, seconds, ..., rmse, mean_spp, error, ...) of complete lines, as (spp,
+    seconds, rmse, estimated relative error)."""
     rows = []
     for line in text.splitlines():
         if line and not line.startswith('pass'):
             fields = line.split(',')
-            rows.append((int(fields[1]), float(fields[2]), float(fields[6])))
+            rows.append((int(fields[1]), float(fields[2]), float(fields[6]), float(fields[8])))
     return rows
 
 
-def render(aoview, scene, size, seed, args, ref, lowest, cap, work):
-    """Runs one render until its RMSE is at most lowest or its render seconds reach cap, then
-    interrupts it (aoview writes its image and exits 130); returns its stats rows."""
+def render(aoview, scene, size, seed, args, ref, lowest, cap, work, estimated=False):
+    """Runs one render until its RMSE (and with `estimated` its estimated error) is at most lowest
+    or its render seconds reach cap, then interrupts it (aoview writes its image and exits 130);
+    returns its stats rows. Args starting with `--binary BIN` run BIN instead of aoview."""
     stats, log = os.path.join(work, 'run.csv'), os.path.join(work, 'run.log')
     if os.path.exists(stats):
         os.remove(stats)
+    if args[:1] == ['--binary']:
+        aoview, args = args[1], args[2:]
     command = [aoview, '--headless', '-q', '--threads', str(THREADS), '--size', size, '--seed', str(seed),
                '--spp', str(SPP)] + args + ['--reference', ref, '--stats', stats, '-o', os.path.join(work, 'run.pfm'),
                                            scene]
@@ -88,7 +101,8 @@ def render(aoview, scene, size, seed, args, ref, lowest, cap, work):
             rows += parse_rows(pending[:complete])
             pending = pending[complete:]
         # The wall clock backs up the render seconds, should a pass never end.
-        if not interrupted and ((rows and (rows[-1][2] <= lowest or rows[-1][1] >= cap))
+        if not interrupted and ((rows and ((rows[-1][2] <= lowest and (not estimated or rows[-1][3] <= lowest))
+                                           or rows[-1][1] >= cap))
                                 or time.monotonic() - started > 2 * cap + 30):
             proc.send_signal(signal.SIGINT)
             interrupted = True
@@ -114,6 +128,61 @@ def reaches(rows, targets, cap):
         s = crossing(seconds, rmse, t)
         result.append(None if s is None or s > cap else (s, crossing(spp, rmse, t)))
     return result
+
+
+def large_block(a, scene, started):
+    """The large size's runs: the first SCENE to LARGE_LEVEL RMSE and estimated error, per
+    --large-config, interleaved per seed; returns the block of the results and the CSV rows."""
+    configs = parse_configs(a.large_config or LARGE_CONFIGS)
+    name, size = os.path.splitext(os.path.basename(scene))[0], a.large
+    ref = os.path.join(a.work, 'reference-%s-%s.pfm' % (name, size))
+    made = time.monotonic()
+    kind, pair = reference(a.aoview, a.exact, scene, size, a.large_ref_spp // 2, EXACT_SPP, a.work, REFERENCE_ARGS, ref)
+    made = time.monotonic() - made
+    values = read_pfm(ref)[2]
+    mean = sum(values) / len(values)
+    noise = pair_noise(pair) if pair else 0.0
+    results, runs = {c[0]: [] for c in configs}, []
+    for seed in range(1, a.seeds + 1):
+        for label, args in configs:
+            rows = render(a.aoview, scene, size, seed, args, ref, LARGE_LEVEL * mean, a.cap, a.work, estimated=True)
+            true = crossing([r[1] for r in rows], [r[2] for r in rows], LARGE_LEVEL * mean)
+            known = [r for r in rows if not math.isnan(r[3])]
+            estimated = crossing([r[1] for r in known], [r[3] for r in known], LARGE_LEVEL) if known else None
+            reached = [None if v is None or v > a.cap else v for v in (true, estimated)]
+            results[label].append(reached)
+            runs.append([name, size, label, shlex.join(args), seed, LARGE_LEVEL, '%.6g' % (LARGE_LEVEL * mean),
+                         '' if reached[0] is None else '%.6f' % reached[0], '', '%.6f' % rows[-1][1], rows[-1][0],
+                         '%.6g' % rows[-1][2]])
+            print('time_to_error.py: [%.0f s] %s %s %s seed %d: 1 %% RMSE %s, 1 %% estimated %s' % (
+                time.monotonic() - started, name, size, label, seed,
+                *('> cap' if v is None else '%.3g s' % v for v in reached)), file=sys.stderr, flush=True)
+    medians = {label: [median([r[k] for r in per_seed]) for k in range(2)] for label, per_seed in results.items()}
+    base = medians[configs[0][0]]
+    lines = ['### %s, %s: time to 1 %%\n\n' % (name, size),
+             'Reference: %s (%d spp in all); made in this run in %.0f s (0 when cached). Mean %.4f; its own RMS '
+             'error %s. Each cell: the median render seconds over %d seeds to 1 %% RMSE against it, or to 1 %% '
+             'estimated error (`--stats`\'s `error`), and %s\'s median over this one\'s.\n\n' % (
+                 kind, a.large_ref_spp, made, mean,
+                 '%.2g (%.3g %% of the mean)' % (noise, 100 * noise / mean) if pair else 'none (exact)', a.seeds,
+                 configs[0][0]),
+             '| config | aoview args | 1 % RMSE | 1 % estimated |\n|---|---|---|---|\n']
+    for label, args in configs:
+        cells = ['> %g s' % a.cap if math.isinf(m) else '%.3g s · ×%.3g' % (m, b / m if math.isfinite(b) else math.inf)
+                 for m, b in zip(medians[label], base)]
+        lines.append('| %s | %s | %s |\n' % (label, '`%s`' % shlex.join(args) if args else '(none)', ' | '.join(cells)))
+    return ''.join(lines) + '\n', runs
+
+
+def parse_configs(specs):
+    """NAME=ARGS specs as (name, argument list), or exits on a malformed or repeated one."""
+    configs = []
+    for spec in specs:
+        name, equals, args = spec.partition('=')
+        if not name or not equals or name in (c[0] for c in configs):
+            sys.exit("time_to_error.py: configuration '%s': expected a new NAME=ARGS" % spec)
+        configs.append((name, shlex.split(args)))
+    return configs
 
 
 def median(values):
@@ -176,6 +245,9 @@ def main():
     parser.add_argument('--out')
     parser.add_argument('--quick', action='store_true')
     parser.add_argument('--config', action='append')
+    parser.add_argument('--large', default='1920x1080')
+    parser.add_argument('--large-config', action='append')
+    parser.add_argument('--large-ref-spp', type=int, default=LARGE_REF_SPP)
     parser.add_argument('scenes', nargs='+')
     a = parser.parse_args()
     a.exact = a.exact or os.path.join(os.path.dirname(a.aoview), 'aoview-exact')
@@ -183,13 +255,10 @@ def main():
     sizes = a.sizes.split(',')[:1 if a.quick else None]
     seeds = 1 if a.quick else a.seeds
     a.out = a.out or (a.work if a.quick else os.path.join(ROOT, 'docs'))
-    configs = []
-    for spec in a.config or DEFAULT_CONFIGS:
-        name, equals, args = spec.partition('=')
-        if not name or not equals or name in (c[0] for c in configs):
-            parser.error("--config '%s': expected a new NAME=ARGS" % spec)
-        configs.append((name, shlex.split(args)))
-    for size in sizes:
+    configs = parse_configs(a.config or DEFAULT_CONFIGS)
+    if a.quick:
+        a.large = ''
+    for size in sizes + ([a.large] if a.large else []):
         if len(size.split('x')) != 2 or not all(p.isdigit() and int(p) > 0 for p in size.split('x')):
             parser.error("--sizes: '%s' is not WxH" % size)
     if seeds < 1 or not a.cap > 0:
@@ -263,6 +332,11 @@ def main():
                     cell(s, n, medians[base][k][0], a.cap) for k, (s, n) in enumerate(medians[label]))))
             blocks.append(''.join(lines) + '\n')
             write_outputs(a.out, blocks, runs, header, started)
+    if a.large:
+        block, large_runs = large_block(a, a.scenes[0], started)
+        blocks.append(block)
+        runs += large_runs
+        write_outputs(a.out, blocks, runs, header, started)
     print('time_to_error.py: done in %.0f s, load average %s at the end' % (time.monotonic() - started, load()),
           file=sys.stderr, flush=True)
 

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "ao.h"
@@ -203,6 +204,7 @@ static void bunny_mesh(struct ao_mesh *m)
 struct fixture {
     struct ao_scene scene;
     struct ao_tracer *tracer;
+    struct ao_tracer *upgrade;   /* the tracer when it is progressive (render.h's config.upgrade) */
 };
 
 /* Loads name with that BVH and builds its Embree tracer. */
@@ -213,6 +215,7 @@ static void setup_bvh(struct fixture *f, const char *name, enum ao_instancing in
                                        .bvh = bvh};
     assert_true(ao_scene_load(&f->scene, in_dir(name, path, sizeof path), &options));
     f->tracer = ao_tracer_create_with(&f->scene, AO_BACKEND_EMBREE);
+    f->upgrade = NULL;
     assert_non_null(f->tracer);
 }
 
@@ -231,8 +234,8 @@ static void teardown(struct fixture *f)
  * the final linear image. */
 static float *render(const struct fixture *f, int width, int height, uint32_t spp, enum ao_output output, bool aa)
 {
-    struct ao_render_config config = {.scene = &f->scene, .tracer = f->tracer, .threads = 2, .seed = 9,
-                                      .target_spp = spp, .ao_distance = f->scene.ao_distance,
+    struct ao_render_config config = {.scene = &f->scene, .tracer = f->tracer, .upgrade = f->upgrade, .threads = 2,
+                                      .seed = 9, .target_spp = spp, .ao_distance = f->scene.ao_distance,
                                       .sequence = AO_SEQUENCE_RANDOM};
     struct ao_settings settings = {.width = width, .height = height, .sampling = AO_SAMPLING_COSINE, .aa = aa,
                                    .spppp = spp < 16 ? spp : 16, .camera = f->scene.camera, .output = output};
@@ -502,6 +505,50 @@ static void test_every_bvh_renders_the_same_image(void **state)
         free(want);
         teardown(&medium);
     }
+}
+
+/* The progressive tracer (LOW first, MEDIUM built beside it, switched to between passes) renders
+ * the same image as MEDIUM alone, bit for bit, whether the switch comes during a run or before it;
+ * one destroyed while its second build runs cancels it. */
+static void test_progressive_bvh_renders_the_same_image(void **state)
+{
+    (void)state;
+    write_bunnies();
+    enum { W = 96, H = 72, N = 64 };
+    for (int instanced = 0; instanced < 2; instanced++) {
+        enum ao_instancing how = instanced ? AO_INSTANCING_ALWAYS : AO_INSTANCING_NEVER;
+        struct fixture medium, progressive;
+        setup_bvh(&medium, "bunnies.scene", how, false, AO_BVH_MEDIUM);
+        float *want = render(&medium, W, H, N, AO_OUTPUT_AO, true);
+        setup_bvh(&progressive, "bunnies.scene", how, false, AO_BVH_MEDIUM);
+        ao_tracer_destroy(progressive.tracer);
+        progressive.tracer = progressive.upgrade = ao_tracer_create_progressive(&progressive.scene);
+        assert_non_null(progressive.tracer);
+        for (int run = 0; run < 2; run++) {
+            float *got = render(&progressive, W, H, N, AO_OUTPUT_AO, true);
+            int differ = 0;
+            for (int p = 0; p < 3 * W * H; p++)
+                differ += got[p] != want[p];
+            print_message("%s, progressive run %d against MEDIUM: %d of %d values differ\n",
+                          instanced ? "instanced" : "flattened", run, differ, 3 * W * H);
+            assert_int_equal(differ, 0);
+            free(got);
+            /* Before the second run, wait (at most 20 s) for the second build, if it is not in yet. */
+            for (int wait = 0; run == 0 && wait < 2000 && ao_tracer_upgrading(progressive.tracer) &&
+                               !ao_tracer_switch(progressive.tracer); wait++)
+                nanosleep(&(struct timespec){.tv_nsec = 10000000}, NULL);
+        }
+        assert_false(ao_tracer_upgrading(progressive.tracer)); /* switched */
+        free(want);
+        teardown(&progressive);
+        teardown(&medium);
+    }
+    struct fixture gone;
+    setup_bvh(&gone, "bunnies.scene", AO_INSTANCING_NEVER, false, AO_BVH_MEDIUM);
+    ao_tracer_destroy(gone.tracer);
+    gone.tracer = ao_tracer_create_progressive(&gone.scene);
+    assert_non_null(gone.tracer);
+    teardown(&gone);
 }
 
 /* A unit sphere mesh with radial file normals, mirrored three ways: a glTF node scaling x by -1,
@@ -849,6 +896,7 @@ int main(void)
         cmocka_unit_test(test_instances_shade_as_flattened),
         cmocka_unit_test(test_instanced_image_matches_flattened),
         cmocka_unit_test(test_every_bvh_renders_the_same_image),
+        cmocka_unit_test(test_progressive_bvh_renders_the_same_image),
         cmocka_unit_test(test_mirrored_placements_shade_outward),
         cmocka_unit_test(test_three_mesh_lines_load_one_mesh),
         cmocka_unit_test(test_a_mesh_lines_crease_angle),

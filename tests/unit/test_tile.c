@@ -57,6 +57,16 @@ static void auto_passes_double(void **state)
         assert_int_equal(w.count, k == 0 ? 1 : 8); /* whole rounds of per_ray on one eye ray */
         assert_int_equal(constant_pass(&ts, &a, &p, 0.5f), expected[k]);
     }
+    /* A pass of a large image (2 samples a pixel, as at 1920x1080) still gives each tile a whole
+     * eye ray's samples: 1, then 8 a pass, never more. */
+    memset(&ts, 0, sizeof ts);
+    p.samples = 2;
+    for (int k = 0; k < 8; k++) {
+        struct ao_tile_work w = ao_tile_work_of(&ts, &p, NULL);
+        assert_int_equal(w.rounds, 1);
+        assert_int_equal(constant_pass(&ts, &a, &p, 0.5f), k == 0 ? 1 : 8);
+    }
+    p.samples = 64;
     /* A target of 20: 1, 8, 8, then the 3 left. */
     memset(&ts, 0, sizeof ts);
     p.target_spp = 20;
