@@ -12,10 +12,10 @@
 /* --spppp auto: the first pass after a restart takes one sample per pixel, so that the first
  * frame comes at once; then each pass of a half (even, odd) takes AUTO_PER_RAY samples, then
  * doubles what that half's sequence has given (ao_tile_work_of), up to about AUTO_SAMPLES samples
- * over the pixels it traces (8 spp a pass at 640x480, 128 at 160x120), in rounds of one eye ray
- * with AUTO_PER_RAY AO samples; both chosen by time to 1 % and 0.5 % RMSE
- * (docs/adaptive.md). The schedule depends on samples, not on seconds, so that the image stays a
- * function of the seed and settings alone. */
+ * over the pixels it traces (8 spp a pass at 640x480, 128 at 160x120) but never less than one
+ * round, in rounds of one eye ray with AUTO_PER_RAY AO samples; both chosen by time to 1 % and
+ * 0.5 % RMSE (docs/adaptive.md, docs/estimator.md). The schedule depends on samples, not on
+ * seconds, so that the image stays a function of the seed and settings alone. */
 enum { AUTO_SAMPLES = 1 << 22, AUTO_PER_RAY = 8 };
 
 /* ---- a run's memory ---- */
