@@ -9,6 +9,8 @@
  * the uniform sphere) add nothing and are not traced. */
 #include "ao.h"
 
+#include <float.h>
+
 #include "rng.h"
 #include "sampling.h"
 #include "simd.h"
@@ -111,6 +113,47 @@ static void shade_instanced(const struct ao_scene *scene, const struct ao_instan
     }
 }
 
+/* The components of a where c holds, of b elsewhere: a choice between values already computed,
+ * which a loop over lanes vectorizes. */
+static inline struct ao_vec3 pick(bool c, struct ao_vec3 a, struct ao_vec3 b)
+{
+    return ao_vec3_make(c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z);
+}
+
+/* A flat mesh's triangle (corners p, vertex normals n) hit at Embree's u, v with geometric normal
+ * hit_ng: the point recomputed with its error bound, the unit geometric normal and the shading one
+ * per `phong` (the geometric one where the vertex normals cancel). Branch-free. */
+static inline void shade_triangle(const struct ao_vec3 p[3], const struct ao_vec3 n[3], float u, float v,
+                                  struct ao_vec3 hit_ng, bool phong, struct ao_vec3 *position, struct ao_vec3 *error,
+                                  struct ao_vec3 *ng, struct ao_vec3 *ns)
+{
+    *position = ao_triangle_point(p[0], p[1], p[2], u, v, error);
+    *ng = ao_vec3_normalize(hit_ng);
+    float w0 = 1.0f - u - v;
+    struct ao_vec3 sum = ao_vec3_scale(n[0], w0);
+    sum = ao_vec3_add(sum, ao_vec3_scale(n[1], u));
+    sum = ao_vec3_add(sum, ao_vec3_scale(n[2], v));
+    float len = ao_vec3_length(sum);
+    bool smooth = phong && len > 1e-6f && len <= FLT_MAX; /* false for NaN and infinity too */
+    *ns = pick(smooth, ao_vec3_scale(sum, 1.0f / len), *ng);
+}
+
+/* The shading point's normals turned to the side the eye ray (direction dir) came from (the eye's
+ * direction for both where ng is not a unit normal: a degenerate triangle, NaN), and where its
+ * occlusion rays leave. Branch-free. */
+static inline void face_eye(struct ao_vec3 position, struct ao_vec3 error, struct ao_vec3 dir, struct ao_vec3 *ng,
+                            struct ao_vec3 *ns, struct ao_vec3 *origin)
+{
+    struct ao_vec3 back = ao_vec3_scale(dir, -1.0f);
+    bool degenerate = !(ao_vec3_dot(*ng, *ng) > 0.25f);
+    *ng = pick(degenerate, back, *ng);
+    *ns = pick(degenerate, back, *ns);
+    float side = ao_vec3_dot(*ng, dir) > 0.0f ? -1.0f : 1.0f;
+    *ng = ao_vec3_scale(*ng, side);
+    *ns = ao_vec3_scale(*ns, side);
+    *origin = ao_surface_lift(position, *ng, error);
+}
+
 void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, struct ao_vec3 org,
                          struct ao_vec3 dir, const struct ao_hit *hit, struct ao_surface *s)
 {
@@ -140,43 +183,117 @@ void ao_surface_from_hit(const struct ao_scene *scene, enum ao_shading shading, 
         }
         const struct ao_mesh *m = &scene->meshes[in->mesh];
         const uint32_t *i = &m->indices[3 * hit->prim];
-        r.position = ao_triangle_point(m->positions[i[0]], m->positions[i[1]], m->positions[i[2]], hit->u, hit->v,
-                                       &error);
-        r.ng = ao_vec3_normalize(hit->ng);
-        float w0 = 1.0f - hit->u - hit->v;
-        struct ao_vec3 n = ao_vec3_scale(m->normals[i[0]], w0);
-        n = ao_vec3_add(n, ao_vec3_scale(m->normals[i[1]], hit->u));
-        n = ao_vec3_add(n, ao_vec3_scale(m->normals[i[2]], hit->v));
-        float len = ao_vec3_length(n);
-        r.ns = shading == AO_SHADING_PHONG && len > 1e-6f && isfinite(len) ? ao_vec3_scale(n, 1.0f / len) : r.ng;
+        struct ao_vec3 p[3] = {m->positions[i[0]], m->positions[i[1]], m->positions[i[2]]};
+        struct ao_vec3 n[3] = {m->normals[i[0]], m->normals[i[1]], m->normals[i[2]]};
+        shade_triangle(p, n, hit->u, hit->v, hit->ng, shading == AO_SHADING_PHONG, &r.position, &error, &r.ng, &r.ns);
         r.albedo = scene->albedos[in->albedo];
     }
-    if (!(ao_vec3_dot(r.ng, r.ng) > 0.25f)) /* not a unit normal: degenerate triangle, NaN */
-        r.ng = r.ns = ao_vec3_scale(dir, -1.0f);
-    /* Turn the surface to the side the eye ray came from. */
-    if (ao_vec3_dot(r.ng, dir) > 0.0f) {
-        r.ng = ao_vec3_scale(r.ng, -1.0f);
-        r.ns = ao_vec3_scale(r.ns, -1.0f);
-    }
+    face_eye(r.position, error, dir, &r.ng, &r.ns, &r.origin);
     s->position = r.position;
     s->ng = r.ng;
     s->ns = r.ns;
     s->albedo = r.albedo;
-    s->origin = ao_surface_lift(r.position, r.ng, error);
+    s->origin = r.origin;
+}
+
+/* A packet's shading points in structure-of-arrays layout, lane by lane as its eye rays. */
+struct surfaces {
+    float ng[3][AO_PACKET_SIZE], ns[3][AO_PACKET_SIZE], albedo[3][AO_PACKET_SIZE], origin[3][AO_PACKET_SIZE];
+};
+
+/* What shade_triangles reads, gathered lane by lane: the corners and vertex normals of each lane's
+ * triangle, component by component (corner c's x, y, z at 3c, 3c + 1, 3c + 2), Embree's u, v and
+ * geometric normal, and the eye ray's direction. */
+struct triangle_lanes {
+    float p[9][AO_PACKET_SIZE], n[9][AO_PACKET_SIZE];
+    float u[AO_PACKET_SIZE], v[AO_PACKET_SIZE], hit_ng[3][AO_PACKET_SIZE];
+};
+
+/* The vector of three of a lane's components, from row `first` on. */
+static inline struct ao_vec3 lane_vec3(float (*rows)[AO_PACKET_SIZE], int first, int k)
+{
+    return ao_vec3_make(rows[first][k], rows[first + 1][k], rows[first + 2][k]);
+}
+
+/* Writes v as lane k of the rows. */
+static inline void set_lane(float (*rows)[AO_PACKET_SIZE], int k, struct ao_vec3 v)
+{
+    rows[0][k] = v.x, rows[1][k] = v.y, rows[2][k] = v.z;
+}
+
+/* shade_triangle and face_eye for all AO_PACKET_SIZE lanes at once (lanes without a triangle hold
+ * zeros and are overwritten after), as ao_surface_from_hit computes them one by one. */
+AO_VECTOR_CLONES
+static void shade_triangles(struct triangle_lanes *restrict t, const struct ao_packet *restrict eye, bool phong,
+                            struct surfaces *restrict out)
+{
+    for (int k = 0; k < AO_PACKET_SIZE; k++) {
+        struct ao_vec3 p[3] = {lane_vec3(t->p, 0, k), lane_vec3(t->p, 3, k), lane_vec3(t->p, 6, k)};
+        struct ao_vec3 n[3] = {lane_vec3(t->n, 0, k), lane_vec3(t->n, 3, k), lane_vec3(t->n, 6, k)};
+        struct ao_vec3 position, error, ng, ns, origin;
+        shade_triangle(p, n, t->u[k], t->v[k], lane_vec3(t->hit_ng, 0, k), phong, &position, &error, &ng, &ns);
+        face_eye(position, error, ao_vec3_make(eye->dir_x[k], eye->dir_y[k], eye->dir_z[k]), &ng, &ns, &origin);
+        set_lane(out->ng, k, ng);
+        set_lane(out->ns, k, ns);
+        set_lane(out->origin, k, origin);
+    }
+}
+
+/* The packet's hits (hit[k].t finite) shaded into *out as ao_surface_from_hit does: flat meshes'
+ * triangles in one loop across the lanes, spheres and instanced meshes' triangles one by one. */
+static void shade_packet(const struct ao_context *ctx, const struct ao_packet *eye, const struct ao_hit *hits,
+                         struct surfaces *out)
+{
+    const struct ao_scene *scene = ctx->scene;
+    struct triangle_lanes t;
+    bool alone[AO_PACKET_SIZE];
+    for (int k = 0; k < AO_PACKET_SIZE; k++) {
+        const struct ao_hit *h = &hits[k];
+        const struct ao_instance *in = k >= eye->count || h->sphere ? NULL : &scene->instances[h->instance];
+        alone[k] = k >= eye->count || h->t == INFINITY || !in || !in->flat;
+        if (alone[k]) { /* zeros, so that the loop reads no garbage */
+            for (int row = 0; row < 9; row++)
+                t.p[row][k] = t.n[row][k] = 0.0f;
+            t.u[k] = t.v[k] = t.hit_ng[0][k] = t.hit_ng[1][k] = t.hit_ng[2][k] = 0.0f;
+            continue;
+        }
+        const struct ao_mesh *m = &scene->meshes[in->mesh];
+        const uint32_t *i = &m->indices[3 * h->prim];
+        for (int c = 0; c < 3; c++) {
+            set_lane(t.p + 3 * c, k, m->positions[i[c]]);
+            set_lane(t.n + 3 * c, k, m->normals[i[c]]);
+        }
+        t.u[k] = h->u, t.v[k] = h->v;
+        set_lane(t.hit_ng, k, h->ng);
+        set_lane(out->albedo, k, scene->albedos[in->albedo]);
+    }
+    shade_triangles(&t, eye, ctx->shading == AO_SHADING_PHONG, out);
+    for (int k = 0; k < eye->count; k++) {
+        if (!alone[k] || hits[k].t == INFINITY) /* shaded above, or a miss */
+            continue;
+        struct ao_surface s;
+        ao_surface_from_hit(scene, ctx->shading, ctx->view.eye,
+                            ao_vec3_make(eye->dir_x[k], eye->dir_y[k], eye->dir_z[k]), &hits[k], &s);
+        set_lane(out->ng, k, s.ng);
+        set_lane(out->ns, k, s.ns);
+        set_lane(out->albedo, k, s.albedo);
+        set_lane(out->origin, k, s.origin);
+    }
 }
 
 /* Occlusion rays waiting for a full batch, each remembering its weight and whose sum the weight
  * joins when the ray is open. Rays from `drawn` on hold their origins only, with their streams,
- * sample numbers and normals in the pending arrays: their numbers and directions are drawn 16 at a
- * time, so that the generator and the sampler run across lanes even at one sample a pixel. */
+ * sample numbers and normals in the pending arrays: their numbers and directions are drawn
+ * AO_RNG_LANES at a time, so that the generator and the sampler run across lanes even at one
+ * sample a pixel, four vectors at once whose chains of multiplies and square roots overlap. */
 struct queue {
     const struct ao_context *ctx;
     struct ao_batch rays;
-    int drawn;                     /* rays whose directions are drawn; fewer than 16 pending */
-    uint64_t key[AO_PACKET_SIZE], index[AO_PACKET_SIZE];               /* streams, sample numbers */
-    float u1[AO_PACKET_SIZE], u2[AO_PACKET_SIZE];
-    float nx[AO_PACKET_SIZE], ny[AO_PACKET_SIZE], nz[AO_PACKET_SIZE];  /* shading normals */
-    float gx[AO_PACKET_SIZE], gy[AO_PACKET_SIZE], gz[AO_PACKET_SIZE];  /* geometric normals */
+    int drawn;                     /* rays whose directions are drawn; fewer than AO_RNG_LANES pending */
+    struct ao_rng_lanes rng;                                      /* streams, sample numbers */
+    float u1[AO_RNG_LANES], u2[AO_RNG_LANES];
+    float nx[AO_RNG_LANES], ny[AO_RNG_LANES], nz[AO_RNG_LANES];  /* shading normals */
+    float gx[AO_RNG_LANES], gy[AO_RNG_LANES], gz[AO_RNG_LANES];  /* geometric normals */
     float weight[AO_BATCH_RAYS];
     double *sum[AO_BATCH_RAYS];
     uint64_t traced;
@@ -232,7 +349,7 @@ static void draw_directions(struct queue *q)
 {
     struct ao_batch *r = &q->rays;
     int first = q->drawn, n = r->count - first;
-    ao_rng_pairs(q->ctx->sequence, q->key, q->index, n, q->u1, q->u2);
+    ao_rng_pairs(q->ctx->sequence, &q->rng, n, q->u1, q->u2);
     ao_sample_directions(q->ctx->sampling, n, q->nx, q->ny, q->nz, q->u1, q->u2, r->dir_x + first,
                          r->dir_y + first, r->dir_z + first, q->weight + first);
     if (q->ctx->below == AO_BELOW_REFLECT)
@@ -275,21 +392,23 @@ static void flush(struct queue *q)
     r->count = q->drawn = 0;
 }
 
-/* Queues the `count` AO samples of surface s (stream `key`, from first_sample) into *sum. */
-static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t key, uint64_t first_sample,
-                          int count, double *sum)
+/* Queues the `count` AO samples of the surface with these normals and origin (stream `key`, from
+ * first_sample) into *sum. */
+static void queue_samples(struct queue *q, struct ao_vec3 ns, struct ao_vec3 ng, struct ao_vec3 origin, uint64_t key,
+                          uint64_t first_sample, int count, double *sum)
 {
-    struct ao_vec3 origin = s->origin;
+    struct ao_rng_stream stream = ao_rng_stream(key);
+    enum ao_sequence sequence = q->ctx->sequence;
     struct ao_batch *r = &q->rays;
     for (int done = 0; done < count;) {
         /* As many as fit among the pending rays and in the batch. */
         int lane = r->count - q->drawn, n = count - done;
-        n = n < AO_PACKET_SIZE - lane ? n : AO_PACKET_SIZE - lane;
+        n = n < AO_RNG_LANES - lane ? n : AO_RNG_LANES - lane;
         n = n < AO_BATCH_RAYS - r->count ? n : AO_BATCH_RAYS - r->count;
         for (int k = lane; k < lane + n; k++) {
-            q->key[k] = key, q->index[k] = first_sample + (uint64_t)(done + k - lane);
-            q->nx[k] = s->ns.x, q->ny[k] = s->ns.y, q->nz[k] = s->ns.z;
-            q->gx[k] = s->ng.x, q->gy[k] = s->ng.y, q->gz[k] = s->ng.z;
+            ao_rng_lanes_set(&q->rng, sequence, k, &stream, first_sample + (uint64_t)(done + k - lane));
+            q->nx[k] = ns.x, q->ny[k] = ns.y, q->nz[k] = ns.z;
+            q->gx[k] = ng.x, q->gy[k] = ng.y, q->gz[k] = ng.z;
         }
         for (int k = r->count; k < r->count + n; k++) {
             r->org_x[k] = origin.x, r->org_y[k] = origin.y, r->org_z[k] = origin.z;
@@ -298,7 +417,7 @@ static void queue_samples(struct queue *q, const struct ao_surface *s, uint64_t 
         }
         r->count += n;
         done += n;
-        if (lane + n == AO_PACKET_SIZE || r->count == AO_BATCH_RAYS)
+        if (lane + n == AO_RNG_LANES || r->count == AO_BATCH_RAYS)
             draw_directions(q);
     }
 }
@@ -310,7 +429,7 @@ struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao
     struct queue q;
     queue_start(&q, ctx);
     double sum = 0.0;
-    queue_samples(&q, s, ao_rng_key(ctx->seed, pixel, AO_STREAM), first_sample, count, &sum);
+    queue_samples(&q, s->ns, s->ng, s->origin, ao_rng_key(ctx->seed, pixel, AO_STREAM), first_sample, count, &sum);
     flush(&q);
     *shadow_rays += q.traced;
     return ao_vec3_scale(s->albedo, (float)sum);
@@ -328,10 +447,15 @@ static void make_eye_rays(const struct ao_context *ctx, uint64_t stream, uint64_
         for (int k = 0; k < eye->count; k++)
             du[k] = dv[k] = 0.5f;
     else { /* pair `ray` of each pixel's eye stream */
-        uint64_t key[AO_PACKET_SIZE], sample[AO_PACKET_SIZE];
+        uint64_t key[AO_PACKET_SIZE];
         for (int k = 0; k < eye->count; k++)
-            key[k] = ao_rng_key(ctx->seed, index[k], stream), sample[k] = ray;
-        ao_rng_pairs(ctx->sequence, key, sample, eye->count, du, dv);
+            key[k] = ao_rng_key(ctx->seed, index[k], stream);
+        if (ctx->sequence == AO_SEQUENCE_SOBOL)
+            for (int k = 0; k < eye->count; k++)
+                ao_rng_sobol_pair(key[k], ray, &du[k], &dv[k]);
+        else
+            for (int k = 0; k < eye->count; k++)
+                ao_rng_pair(key[k], ray, &du[k], &dv[k]);
     }
     const struct ao_view *view = &ctx->view;
     for (int k = 0; k < eye->count; k++) {
@@ -376,21 +500,22 @@ static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile
         make_eye_rays(ctx, eye_stream, ray, index, column, row, &eye);
         ao_tracer_intersect(ctx->tracer, &eye, hits);
         *eye_rays += (uint64_t)eye.count;
+        struct surfaces s;
+        shade_packet(ctx, &eye, hits, &s);
         /* Their AO samples, queued across the tile so that batches fill at one sample per pass. */
         for (int k = 0; k < eye.count; k++) {
             miss[first + k] = hits[k].t == INFINITY;
             if (miss[first + k])
                 continue;
-            struct ao_surface s;
-            struct ao_vec3 d = ao_vec3_make(eye.dir_x[k], eye.dir_y[k], eye.dir_z[k]);
-            ao_surface_from_hit(ctx->scene, ctx->shading, ctx->view.eye, d, &hits[k], &s);
+            struct ao_vec3 ns = lane_vec3(s.ns, 0, k);
             if (ctx->output == AO_OUTPUT_NORMALS) {
-                albedo[first + k] = ao_vec3_scale(ao_vec3_add(s.ns, ao_vec3_make(1.0f, 1.0f, 1.0f)), 0.5f);
+                albedo[first + k] = ao_vec3_scale(ao_vec3_add(ns, ao_vec3_make(1.0f, 1.0f, 1.0f)), 0.5f);
                 sum[first + k] = (double)count;
                 continue;
             }
-            albedo[first + k] = s.albedo;
-            queue_samples(&q, &s, ao_rng_key(ctx->seed, index[k], ao_stream), first_sample, count, &sum[first + k]);
+            albedo[first + k] = lane_vec3(s.albedo, 0, k);
+            queue_samples(&q, ns, lane_vec3(s.ng, 0, k), lane_vec3(s.origin, 0, k),
+                          ao_rng_key(ctx->seed, index[k], ao_stream), first_sample, count, &sum[first + k]);
         }
     }
     flush(&q);

@@ -44,17 +44,6 @@ static inline uint32_t ao_rng_reverse(uint32_t x)
     return ((x & 0x55555555u) << 1) | ((x >> 1) & 0x55555555u);
 }
 
-/* The bits of x in reverse order, 64 of them: the low half's reversed bits land in the high half. */
-static inline uint64_t ao_rng_reverse64(uint64_t x)
-{
-    x = (x << 32) | (x >> 32);
-    x = ((x & 0x0000ffff0000ffffULL) << 16) | ((x >> 16) & 0x0000ffff0000ffffULL);
-    x = ((x & 0x00ff00ff00ff00ffULL) << 8) | ((x >> 8) & 0x00ff00ff00ff00ffULL);
-    x = ((x & 0x0f0f0f0f0f0f0f0fULL) << 4) | ((x >> 4) & 0x0f0f0f0f0f0f0f0fULL);
-    x = ((x & 0x3333333333333333ULL) << 2) | ((x >> 2) & 0x3333333333333333ULL);
-    return ((x & 0x5555555555555555ULL) << 1) | ((x >> 1) & 0x5555555555555555ULL);
-}
-
 /* The hash of Laine and Karras, a nested uniform (Owen) scramble of bits given in reverse order:
  * each bit is flipped by a hash of the bits below it, since additions and multiplications carry only
  * upwards (Burley, "Practical hash-based Owen scrambling", JCGT 2020). */
@@ -82,37 +71,78 @@ static inline uint32_t ao_rng_pascal(uint32_t x)
     return x ^ ((x & 0xffff0000u) >> 16);
 }
 
-/* The stream's sample-th pair (24 bits each, in [0, 1)) from the first two dimensions of a Sobol
- * sequence, the van der Corput radical inverse and the dimension of ao_rng_pascal, at the sample
- * number's low 32 bits Owen scrambled by the key's; each dimension then Owen scrambled with its own
- * seed derived from key. Owen scrambling a dimension reverses its bits first, which undoes the
- * reversal of the radical inverse and leaves ao_rng_pascal's result as it is. Free of branches, so
- * that loops over samples or over keys vectorize. */
-static inline void ao_rng_sobol_pair(uint64_t key, uint64_t sample, float *u1, float *u2)
+/* What drawing from a stream needs of its key, derived once per stream: the key itself (random
+ * numbers) and, for Sobol numbers, the seeds of the Owen scrambles of the sample number and of the
+ * two dimensions. */
+struct ao_rng_stream {
+    uint64_t key;
+    uint32_t seed_index, seed_x, seed_y;
+};
+
+/* The stream of `key`. */
+static inline struct ao_rng_stream ao_rng_stream(uint64_t key)
 {
     uint64_t seeds = ao_rng_mix(key ^ 0x5851f42d4c957f2dULL);
-    /* The Owen scramble of the sample number's low half, whose reversal is taken from the whole
-     * number's: a loop over lanes then loads whole numbers, where for the low halves alone GCC
-     * loads every other word and leaves the last vector's lanes, all 16 of a packet, scalar. */
-    uint32_t index = ao_rng_reverse(ao_rng_laine_karras((uint32_t)(ao_rng_reverse64(sample) >> 32), (uint32_t)key));
-    uint32_t d0 = ao_rng_reverse(ao_rng_laine_karras(index, (uint32_t)seeds));
-    uint32_t d1 = ao_rng_reverse(ao_rng_laine_karras(ao_rng_pascal(index), (uint32_t)(seeds >> 32)));
+    struct ao_rng_stream s = {key, (uint32_t)key, (uint32_t)seeds, (uint32_t)(seeds >> 32)};
+    return s;
+}
+
+/* The sample-th pair (24 bits each, in [0, 1)) of a stream with these seeds (ao_rng_stream) from
+ * the first two dimensions of a Sobol sequence, the van der Corput radical inverse and the dimension
+ * of ao_rng_pascal, at the sample number's low 32 bits Owen scrambled; each dimension then Owen
+ * scrambled with its own seed. Owen scrambling a dimension reverses its bits first, which undoes the
+ * reversal of the radical inverse and leaves ao_rng_pascal's result as it is. Free of branches and
+ * of 64-bit arithmetic, so that loops over samples or over streams vectorize 16 lanes wide. */
+static inline void ao_rng_sobol_seeded(uint32_t seed_index, uint32_t seed_x, uint32_t seed_y, uint32_t sample,
+                                       float *u1, float *u2)
+{
+    uint32_t index = ao_rng_reverse(ao_rng_laine_karras(ao_rng_reverse(sample), seed_index));
+    uint32_t d0 = ao_rng_reverse(ao_rng_laine_karras(index, seed_x));
+    uint32_t d1 = ao_rng_reverse(ao_rng_laine_karras(ao_rng_pascal(index), seed_y));
     *u1 = (float)(d0 >> 8) * 0x1.0p-24f;
     *u2 = (float)(d1 >> 8) * 0x1.0p-24f;
 }
 
-/* Pair index[k] of the stream key[k] from `sequence` into u1[k]/u2[k], for k below n: loops
- * that vectorize across lanes, whatever their streams and indices. */
+/* The stream key's sample-th Sobol pair (ao_rng_sobol_seeded). */
+static inline void ao_rng_sobol_pair(uint64_t key, uint64_t sample, float *u1, float *u2)
+{
+    struct ao_rng_stream s = ao_rng_stream(key);
+    ao_rng_sobol_seeded(s.seed_index, s.seed_x, s.seed_y, (uint32_t)sample, u1, u2);
+}
+
+/* Up to AO_RNG_LANES pairs drawn at once, each lane from its own stream: structure of arrays, the
+ * lanes set by ao_rng_lanes_set. */
+enum { AO_RNG_LANES = 64 };
+struct ao_rng_lanes {
+    uint64_t key[AO_RNG_LANES], sample[AO_RNG_LANES];                          /* random numbers */
+    uint32_t seed_index[AO_RNG_LANES], seed_x[AO_RNG_LANES], seed_y[AO_RNG_LANES], low[AO_RNG_LANES]; /* Sobol */
+};
+
+/* Lane k draws pair `sample` of stream s from `sequence`. */
+static inline void ao_rng_lanes_set(struct ao_rng_lanes *lanes, enum ao_sequence sequence, int k,
+                                    const struct ao_rng_stream *s, uint64_t sample)
+{
+    if (sequence == AO_SEQUENCE_SOBOL) {
+        lanes->seed_index[k] = s->seed_index, lanes->seed_x[k] = s->seed_x, lanes->seed_y[k] = s->seed_y;
+        lanes->low[k] = (uint32_t)sample;
+    } else {
+        lanes->key[k] = s->key, lanes->sample[k] = sample;
+    }
+}
+
+/* The pairs of lanes 0..n-1 from `sequence` into u1[k]/u2[k]: loops that vectorize across lanes,
+ * whatever their streams and sample numbers. */
 AO_VECTOR_CLONES
-static inline void ao_rng_pairs(enum ao_sequence sequence, const uint64_t *restrict key, const uint64_t *restrict index,
-                                int n, float *restrict u1, float *restrict u2)
+static inline void ao_rng_pairs(enum ao_sequence sequence, const struct ao_rng_lanes *restrict lanes, int n,
+                                float *restrict u1, float *restrict u2)
 {
     if (sequence == AO_SEQUENCE_SOBOL)
         for (int k = 0; k < n; k++)
-            ao_rng_sobol_pair(key[k], index[k], &u1[k], &u2[k]);
+            ao_rng_sobol_seeded(lanes->seed_index[k], lanes->seed_x[k], lanes->seed_y[k], lanes->low[k], &u1[k],
+                                &u2[k]);
     else
         for (int k = 0; k < n; k++)
-            ao_rng_pair(key[k], index[k], &u1[k], &u2[k]);
+            ao_rng_pair(lanes->key[k], lanes->sample[k], &u1[k], &u2[k]);
 }
 
 #endif

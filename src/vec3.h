@@ -68,11 +68,13 @@ static inline float ao_vec3_length(struct ao_vec3 a)
     return sqrtf(ao_vec3_dot(a, a));
 }
 
-/* a / |a|; the zero vector stays zero (callers that need a direction check the length). */
+/* a / |a|; the zero vector stays zero (callers that need a direction check the length). Both
+ * sides of the choice computed first, so that a loop over lanes vectorizes it. */
 static inline struct ao_vec3 ao_vec3_normalize(struct ao_vec3 a)
 {
     float len2 = ao_vec3_dot(a, a);
-    return len2 > 0.0f ? ao_vec3_scale(a, 1.0f / sqrtf(len2)) : a;
+    struct ao_vec3 unit = ao_vec3_scale(a, 1.0f / sqrtf(len2));
+    return ao_vec3_make(len2 > 0.0f ? unit.x : a.x, len2 > 0.0f ? unit.y : a.y, len2 > 0.0f ? unit.z : a.z);
 }
 
 /* Component-wise |a|. */

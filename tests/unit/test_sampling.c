@@ -230,15 +230,26 @@ static void assert_reference_pairs(const uint64_t *key, const uint64_t *index, i
     }
 }
 
+/* Pair index[k] of stream key[k] for k below n, drawn through lanes as the renderer draws them. */
+static void draw_sobol(const uint64_t *key, const uint64_t *index, int n, struct ao_rng_lanes *lanes, float *u1,
+                       float *u2)
+{
+    for (int k = 0; k < n; k++) {
+        struct ao_rng_stream s = ao_rng_stream(key[k]);
+        ao_rng_lanes_set(lanes, AO_SEQUENCE_SOBOL, k, &s, index[k]);
+    }
+    ao_rng_pairs(AO_SEQUENCE_SOBOL, lanes, n, u1, u2);
+}
+
 static void test_vector_sobol_equals_reference(void **state)
 {
     (void)state;
     /* Keys: 0, all ones, and pseudo-random ones (fixed seed); indices from 0, and around 2^31 (the
      * top bit of the scrambled index), 2^32 (where the sample number is truncated), 2^40 and the
      * top of the range. Drawn as the AO samples are (one stream, consecutive indices) and as the
-     * eye jitter is (one index, a stream per lane), in calls of every length up to 40, so
-     * that the vector loops (16 lanes at most) run at every length and leave every remainder. */
-    enum { KEYS = 66, SPAN = 4096, LANES = 40 };
+     * eye jitter is (one index, a stream per lane), in calls of every length up to AO_RNG_LANES, so
+     * that the vector loops run at every length and leave every remainder. */
+    enum { KEYS = 66, SPAN = 4096, LANES = AO_RNG_LANES };
     static const uint64_t STARTS[] = {0, (1ULL << 31) - SPAN / 2, (1ULL << 32) - SPAN / 2, (1ULL << 40) - SPAN / 2,
                                       UINT64_MAX - SPAN + 1};
     enum { START_COUNT = sizeof STARTS / sizeof STARTS[0] };
@@ -246,6 +257,7 @@ static void test_vector_sobol_equals_reference(void **state)
     for (int j = 2; j < KEYS; j++)
         keys[j] = ao_rng_mix(0x243f6a8885a308d3ULL + (uint64_t)j);
     uint64_t key[LANES], index[LANES];
+    struct ao_rng_lanes lanes;
     float u1[LANES], u2[LANES];
     for (int j = 0; j < KEYS; j++)
         for (int s = 0; s < START_COUNT; s++)
@@ -253,7 +265,7 @@ static void test_vector_sobol_equals_reference(void **state)
                 int n = 1 + c % LANES < SPAN - done ? 1 + c % LANES : SPAN - done;
                 for (int k = 0; k < n; k++)
                     key[k] = keys[j], index[k] = STARTS[s] + (uint64_t)(done + k);
-                ao_rng_pairs(AO_SEQUENCE_SOBOL, key, index, n, u1, u2);
+                draw_sobol(key, index, n, &lanes, u1, u2);
                 assert_reference_pairs(key, index, n, u1, u2);
                 done += n;
             }
@@ -263,7 +275,7 @@ static void test_vector_sobol_equals_reference(void **state)
                 int n = 1 + c % LANES < KEYS - j ? 1 + c % LANES : KEYS - j;
                 for (int k = 0; k < n; k++)
                     key[k] = keys[j + k], index[k] = i;
-                ao_rng_pairs(AO_SEQUENCE_SOBOL, key, index, n, u1, u2);
+                draw_sobol(key, index, n, &lanes, u1, u2);
                 assert_reference_pairs(key, index, n, u1, u2);
                 j += n;
             }
