@@ -474,6 +474,7 @@ static void make_eye_rays(const struct ao_context *ctx, uint64_t stream, uint64_
  * each pixel's sum of sample values (background on a miss) to sums. The normals view gives each of
  * the `count` samples the value (n + 1) / 2 and a miss black: a unit normal's colour is never
  * black, whereas a background's value could pass for one. */
+AO_VECTOR_CLONES
 static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile, int half, uint64_t ray,
                         uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
                         uint64_t *shadow_rays)
