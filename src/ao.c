@@ -201,9 +201,9 @@ struct surfaces {
     float ng[3][AO_PACKET_SIZE], ns[3][AO_PACKET_SIZE], albedo[3][AO_PACKET_SIZE], origin[3][AO_PACKET_SIZE];
 };
 
-/* What shade_triangles reads, gathered lane by lane: the corners and vertex normals of each lane's
- * triangle, component by component (corner c's x, y, z at 3c, 3c + 1, 3c + 2), Embree's u, v and
- * geometric normal, and the eye ray's direction. */
+/* What shade_triangles reads besides the eye rays, gathered lane by lane: the corners and vertex
+ * normals of each lane's triangle, component by component (corner c's x, y, z at 3c, 3c + 1,
+ * 3c + 2), and Embree's u, v and geometric normal. */
 struct triangle_lanes {
     float p[9][AO_PACKET_SIZE], n[9][AO_PACKET_SIZE];
     float u[AO_PACKET_SIZE], v[AO_PACKET_SIZE], hit_ng[3][AO_PACKET_SIZE];
@@ -249,8 +249,9 @@ static void shade_packet(const struct ao_context *ctx, const struct ao_packet *e
     bool alone[AO_PACKET_SIZE];
     for (int k = 0; k < AO_PACKET_SIZE; k++) {
         const struct ao_hit *h = &hits[k];
-        const struct ao_instance *in = k >= eye->count || h->sphere ? NULL : &scene->instances[h->instance];
-        alone[k] = k >= eye->count || h->t == INFINITY || !in || !in->flat;
+        bool hit = k < eye->count && h->t != INFINITY;
+        const struct ao_instance *in = hit && !h->sphere ? &scene->instances[h->instance] : NULL;
+        alone[k] = !in || !in->flat;
         if (alone[k]) { /* zeros, so that the loop reads no garbage */
             for (int row = 0; row < 9; row++)
                 t.p[row][k] = t.n[row][k] = 0.0f;
