@@ -113,13 +113,6 @@ static void shade_instanced(const struct ao_scene *scene, const struct ao_instan
     }
 }
 
-/* The components of a where c holds, of b elsewhere: a choice between values already computed,
- * which a loop over lanes vectorizes. */
-static inline struct ao_vec3 pick(bool c, struct ao_vec3 a, struct ao_vec3 b)
-{
-    return ao_vec3_make(c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z);
-}
-
 /* A flat mesh's triangle (corners p, vertex normals n) hit at Embree's u, v with geometric normal
  * hit_ng: the point recomputed with its error bound, the unit geometric normal and the shading one
  * per `phong` (the geometric one where the vertex normals cancel). Branch-free. */
@@ -135,7 +128,7 @@ static inline void shade_triangle(const struct ao_vec3 p[3], const struct ao_vec
     sum = ao_vec3_add(sum, ao_vec3_scale(n[2], v));
     float len = ao_vec3_length(sum);
     bool smooth = phong && len > 1e-6f && len <= FLT_MAX; /* false for NaN and infinity too */
-    *ns = pick(smooth, ao_vec3_scale(sum, 1.0f / len), *ng);
+    *ns = ao_vec3_pick(smooth, ao_vec3_scale(sum, 1.0f / len), *ng);
 }
 
 /* The shading point's normals turned to the side the eye ray (direction dir) came from (the eye's
@@ -146,8 +139,8 @@ static inline void face_eye(struct ao_vec3 position, struct ao_vec3 error, struc
 {
     struct ao_vec3 back = ao_vec3_scale(dir, -1.0f);
     bool degenerate = !(ao_vec3_dot(*ng, *ng) > 0.25f);
-    *ng = pick(degenerate, back, *ng);
-    *ns = pick(degenerate, back, *ns);
+    *ng = ao_vec3_pick(degenerate, back, *ng);
+    *ns = ao_vec3_pick(degenerate, back, *ns);
     float side = ao_vec3_dot(*ng, dir) > 0.0f ? -1.0f : 1.0f;
     *ng = ao_vec3_scale(*ng, side);
     *ns = ao_vec3_scale(*ns, side);

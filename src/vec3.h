@@ -68,13 +68,18 @@ static inline float ao_vec3_length(struct ao_vec3 a)
     return sqrtf(ao_vec3_dot(a, a));
 }
 
-/* a / |a|; the zero vector stays zero (callers that need a direction check the length). Both
- * sides of the choice computed first, so that a loop over lanes vectorizes it. */
+/* a where c holds, b elsewhere: a choice between values already computed, which a loop over lanes
+ * vectorizes (no branch, nothing computed on one side only). */
+static inline struct ao_vec3 ao_vec3_pick(bool c, struct ao_vec3 a, struct ao_vec3 b)
+{
+    return ao_vec3_make(c ? a.x : b.x, c ? a.y : b.y, c ? a.z : b.z);
+}
+
+/* a / |a|; the zero vector stays zero (callers that need a direction check the length). */
 static inline struct ao_vec3 ao_vec3_normalize(struct ao_vec3 a)
 {
     float len2 = ao_vec3_dot(a, a);
-    struct ao_vec3 unit = ao_vec3_scale(a, 1.0f / sqrtf(len2));
-    return ao_vec3_make(len2 > 0.0f ? unit.x : a.x, len2 > 0.0f ? unit.y : a.y, len2 > 0.0f ? unit.z : a.z);
+    return ao_vec3_pick(len2 > 0.0f, ao_vec3_scale(a, 1.0f / sqrtf(len2)), a);
 }
 
 /* Component-wise |a|. */
