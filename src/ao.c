@@ -388,10 +388,9 @@ static void flush(struct queue *q)
 
 /* Queues the `count` AO samples of the surface with these normals and origin (stream `key`, from
  * first_sample) into *sum. */
-static void queue_samples(struct queue *q, struct ao_vec3 ns, struct ao_vec3 ng, struct ao_vec3 origin, uint64_t key,
-                          uint64_t first_sample, int count, double *sum)
+static void queue_samples(struct queue *q, struct ao_vec3 ns, struct ao_vec3 ng, struct ao_vec3 origin,
+                          const struct ao_rng_stream *stream, uint64_t first_sample, int count, double *sum)
 {
-    struct ao_rng_stream stream = ao_rng_stream(key);
     enum ao_sequence sequence = q->ctx->sequence;
     struct ao_batch *r = &q->rays;
     for (int done = 0; done < count;) {
@@ -400,7 +399,7 @@ static void queue_samples(struct queue *q, struct ao_vec3 ns, struct ao_vec3 ng,
         n = n < AO_RNG_LANES - lane ? n : AO_RNG_LANES - lane;
         n = n < AO_BATCH_RAYS - r->count ? n : AO_BATCH_RAYS - r->count;
         for (int k = lane; k < lane + n; k++) {
-            ao_rng_lanes_set(&q->rng, sequence, k, &stream, first_sample + (uint64_t)(done + k - lane));
+            ao_rng_lanes_set(&q->rng, sequence, k, stream, first_sample + (uint64_t)(done + k - lane));
             q->nx[k] = ns.x, q->ny[k] = ns.y, q->nz[k] = ns.z;
             q->gx[k] = ng.x, q->gy[k] = ng.y, q->gz[k] = ng.z;
         }
@@ -423,34 +422,61 @@ struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao
     struct queue q;
     queue_start(&q, ctx);
     double sum = 0.0;
-    queue_samples(&q, s->ns, s->ng, s->origin, ao_rng_key(ctx->seed, pixel, AO_STREAM), first_sample, count, &sum);
+    struct ao_rng_stream stream = ao_rng_stream(ao_rng_key(ctx->seed, pixel, AO_STREAM));
+    queue_samples(&q, s->ns, s->ng, s->origin, &stream, first_sample, count, &sum);
     flush(&q);
     *shadow_rays += q.traced;
     return ao_vec3_scale(s->albedo, (float)sum);
 }
 
-/* The eye rays of pixels index[k] (at column[k], row[k]), number `ray` of their eye streams
- * (slot `stream`), for the packet's count: through the pixel centres, or jittered inside the pixel
- * with AA; loops that vectorize. */
+/* Streams of a tile's pixels, row by row, in one pass slot: the same for every round of a pass,
+ * so derived once per tile and pass (structure of arrays; ao_rng_stream's fields). */
+struct tile_streams {
+    uint64_t key[AO_TILE_PIXELS];
+    uint32_t seed_index[AO_TILE_PIXELS], seed_x[AO_TILE_PIXELS], seed_y[AO_TILE_PIXELS];
+};
+
+/* The streams of the tile's pixels in pass slot `slot`; a loop that vectorizes across a row. */
 AO_VECTOR_CLONES
-static void make_eye_rays(const struct ao_context *ctx, uint64_t stream, uint64_t ray, const uint64_t *index,
+static void make_tile_streams(const struct ao_context *ctx, const struct ao_tile *tile, uint64_t slot,
+                              struct tile_streams *restrict out)
+{
+    int width = tile->x1 - tile->x0;
+    for (int y = tile->y0, first = 0; y < tile->y1; y++, first += width) {
+        uint64_t row = (uint64_t)y * (uint64_t)ctx->view.width + (uint64_t)tile->x0;
+        for (int i = 0; i < width; i++) {
+            struct ao_rng_stream s = ao_rng_stream(ao_rng_key(ctx->seed, row + (uint64_t)i, slot));
+            out->key[first + i] = s.key, out->seed_index[first + i] = s.seed_index;
+            out->seed_x[first + i] = s.seed_x, out->seed_y[first + i] = s.seed_y;
+        }
+    }
+}
+
+/* Stream k of the tile's streams. */
+static inline struct ao_rng_stream tile_stream(const struct tile_streams *streams, int k)
+{
+    struct ao_rng_stream s = {streams->key[k], streams->seed_index[k], streams->seed_x[k], streams->seed_y[k]};
+    return s;
+}
+
+/* The eye rays of the tile's pixels first, first + 1, ... (at column[k], row[k]), number `ray` of
+ * their eye streams, for the packet's count: through the pixel centres, or jittered inside the
+ * pixel with AA; loops that vectorize. */
+AO_VECTOR_CLONES
+static void make_eye_rays(const struct ao_context *ctx, const struct tile_streams *streams, int first, uint64_t ray,
                           const int *column, const int *row, struct ao_packet *eye)
 {
     float du[AO_PACKET_SIZE], dv[AO_PACKET_SIZE];
     if (!ctx->aa)
         for (int k = 0; k < eye->count; k++)
             du[k] = dv[k] = 0.5f;
-    else { /* pair `ray` of each pixel's eye stream */
-        uint64_t key[AO_PACKET_SIZE];
+    else if (ctx->sequence == AO_SEQUENCE_SOBOL) /* pair `ray` of each pixel's eye stream */
         for (int k = 0; k < eye->count; k++)
-            key[k] = ao_rng_key(ctx->seed, index[k], stream);
-        if (ctx->sequence == AO_SEQUENCE_SOBOL)
-            for (int k = 0; k < eye->count; k++)
-                ao_rng_sobol_pair(key[k], ray, &du[k], &dv[k]);
-        else
-            for (int k = 0; k < eye->count; k++)
-                ao_rng_pair(key[k], ray, &du[k], &dv[k]);
-    }
+            ao_rng_sobol_seeded(streams->seed_index[first + k], streams->seed_x[first + k], streams->seed_y[first + k],
+                                (uint32_t)ray, &du[k], &dv[k]);
+    else
+        for (int k = 0; k < eye->count; k++)
+            ao_rng_pair(streams->key[first + k], ray, &du[k], &dv[k]);
     const struct ao_view *view = &ctx->view;
     for (int k = 0; k < eye->count; k++) {
         struct ao_vec3 d = ao_camera_ray(view, (float)column[k] + du[k], (float)row[k] + dv[k]);
@@ -464,16 +490,15 @@ static void make_eye_rays(const struct ao_context *ctx, uint64_t stream, uint64_
     }
 }
 
-/* One eye ray per pixel of the tile (number `ray`) and `count` AO samples from `first_sample`; adds
- * each pixel's sum of sample values (background on a miss) to sums. The normals view gives each of
- * the `count` samples the value (n + 1) / 2 and a miss black: a unit normal's colour is never
- * black, whereas a background's value could pass for one. */
+/* One eye ray per pixel of the tile (number `ray` of its eye stream) and `count` AO samples from
+ * `first_sample` of its AO stream; adds each pixel's sum of sample values (background on a miss)
+ * to sums. The normals view gives each of the `count` samples the value (n + 1) / 2 and a miss
+ * black: a unit normal's colour is never black, whereas a background's value could pass for one. */
 AO_VECTOR_CLONES
-static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile, int half, uint64_t ray,
-                        uint64_t first_sample, int count, struct ao_vec3 *sums, uint64_t *eye_rays,
-                        uint64_t *shadow_rays)
+static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile, const struct tile_streams *eye_streams,
+                        const struct tile_streams *ao_streams, uint64_t ray, uint64_t first_sample, int count,
+                        struct ao_vec3 *sums, uint64_t *eye_rays, uint64_t *shadow_rays)
 {
-    uint64_t eye_stream = stream_for_half(ctx, EYE_STREAM, half), ao_stream = stream_for_half(ctx, AO_STREAM, half);
     int width = tile->x1 - tile->x0, pixels = width * (tile->y1 - tile->y0);
     struct queue q;
     queue_start(&q, ctx);
@@ -484,15 +509,13 @@ static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile
     for (int first = 0; first < pixels; first += AO_PACKET_SIZE) {
         struct ao_packet eye = {.count = pixels - first < AO_PACKET_SIZE ? pixels - first : AO_PACKET_SIZE};
         struct ao_hit hits[AO_PACKET_SIZE];
-        uint64_t index[AO_PACKET_SIZE];
         int column[AO_PACKET_SIZE], row[AO_PACKET_SIZE];
         for (int k = 0; k < eye.count; k++) {
             column[k] = x, row[k] = y;
-            index[k] = (uint64_t)y * (uint64_t)ctx->view.width + (uint64_t)x;
             if (++x == tile->x1) /* row by row, without a division per pixel */
                 x = tile->x0, y++;
         }
-        make_eye_rays(ctx, eye_stream, ray, index, column, row, &eye);
+        make_eye_rays(ctx, eye_streams, first, ray, column, row, &eye);
         ao_tracer_intersect(ctx->tracer, &eye, hits);
         *eye_rays += (uint64_t)eye.count;
         struct surfaces s;
@@ -509,8 +532,9 @@ static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile
                 continue;
             }
             albedo[first + k] = lane_vec3(s.albedo, 0, k);
-            queue_samples(&q, ns, lane_vec3(s.ng, 0, k), lane_vec3(s.origin, 0, k),
-                          ao_rng_key(ctx->seed, index[k], ao_stream), first_sample, count, &sum[first + k]);
+            struct ao_rng_stream stream = tile_stream(ao_streams, first + k);
+            queue_samples(&q, ns, lane_vec3(s.ng, 0, k), lane_vec3(s.origin, 0, k), &stream, first_sample, count,
+                          &sum[first + k]);
         }
     }
     flush(&q);
@@ -527,8 +551,13 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
     int pixels = (tile->x1 - tile->x0) * (tile->y1 - tile->y0);
     for (int k = 0; k < pixels; k++)
         sums[k] = ao_vec3_make(0.0f, 0.0f, 0.0f);
+    struct tile_streams eye, ao;
+    if (ctx->aa)
+        make_tile_streams(ctx, tile, stream_for_half(ctx, EYE_STREAM, work->half), &eye);
+    if (ctx->output != AO_OUTPUT_NORMALS)
+        make_tile_streams(ctx, tile, stream_for_half(ctx, AO_STREAM, work->half), &ao);
     for (int r = 0; r < work->rounds; r++)
-        trace_round(ctx, tile, work->half, work->first_ray + (uint64_t)r,
+        trace_round(ctx, tile, &eye, &ao, work->first_ray + (uint64_t)r,
                     work->first_sample + (uint64_t)r * (uint64_t)work->count, work->count, sums, eye_rays,
                     shadow_rays);
 }
