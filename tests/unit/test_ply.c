@@ -177,6 +177,8 @@ static void test_ply_binary_errors(void **state)
     expect_failure(temp_file("huge.ply", b.data, b.size), ": face 0: ", "4294967295");
     b = binary_triangle("uint8 ushort", 1, 3, 2, range);
     expect_failure(temp_file("range.ply", b.data, b.size), ": face 0: ", "vertex index 3");
+    b = binary_triangle("uchar uint", 1, 3, 4, range);
+    expect_failure(temp_file("range_uint.ply", b.data, b.size), ": face 0: ", "vertex index 3");
 
     b = binary_triangle("uchar int", 1, 3, 4, good);
     put_int(&b, 0, 3);
