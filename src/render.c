@@ -219,11 +219,6 @@ static bool step(struct ao_render *r, struct loop *l, bool *finishes, uint64_t *
     if (l->info.restarts != restarts && !start_run(r, &s, restarts, &l->info))
         return false;
 
-    /* Between passes nothing traces: the moment to move to a better BVH once it is built, with no
-     * restart, since the BVH never changes an image. */
-    if (run->config.upgrade)
-        ao_tracer_switch(run->config.upgrade);
-
     /* Plan the pass: its tiles, its samples (from every process's pixels). */
     struct ao_next_pass plan;
     if (!ao_pass_plan(run, s.adaptive, &plan))
@@ -254,6 +249,12 @@ static bool step(struct ao_render *r, struct loop *l, bool *finishes, uint64_t *
     }
     if (ending)
         return false;
+
+    /* Between passes nothing traces: the moment to start a better BVH's build (after the first
+     * image is out, while there is more to render) and to move to it once built, with no restart:
+     * the BVH never changes an image. */
+    if (run->config.upgrade && counts && !l->info.done)
+        ao_tracer_switch(run->config.upgrade);
 
     /* Done: the image is finished until the settings change (the leader gathers what it has not
      * before it idles); another process's run goes on until the leader ends it. */

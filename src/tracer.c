@@ -26,11 +26,12 @@ struct bvhs {
     RTCScene *meshes;
 };
 
-/* The better build made beside the one that traces (ao_tracer_create_progressive): its thread,
- * what it builds from, and whether it is done (set by its thread, read by the switch). */
+/* The better build made beside the one that traces (ao_tracer_create_progressive): whether it is
+ * still to start, its thread, what it builds from, and whether it is done (set by its thread, read
+ * by the switch). */
 struct upgrade {
     pthread_t thread;
-    bool started;
+    bool pending, started;
     atomic_bool done, cancel;
     bool ok;
     const struct ao_scene *source;
@@ -239,22 +240,32 @@ struct ao_tracer *ao_tracer_create_progressive(const struct ao_scene *scene)
     if (!t || t->direct)
         return t;
     t->upgrade.source = scene;
-    atomic_store(&t->upgrade.done, false);
-    atomic_store(&t->upgrade.cancel, false);
-    t->upgrade.started = pthread_create(&t->upgrade.thread, NULL, build_upgrade, t) == 0;
-    if (!t->upgrade.started) /* the LOW BVH traces on: slower rays, the same image */
-        fprintf(stderr, "aoview: no thread for the faster BVH's build; tracing on with the quick one\n");
+    t->upgrade.pending = true;
     return t;
 }
 
 bool ao_tracer_upgrading(const struct ao_tracer *tracer)
 {
-    return tracer->upgrade.started;
+    return tracer->upgrade.pending || tracer->upgrade.started;
+}
+
+/* Starts the upgrade's thread; without one the LOW BVH traces on: slower rays, the same image. */
+static void start_upgrade(struct ao_tracer *t)
+{
+    struct upgrade *u = &t->upgrade;
+    u->pending = false;
+    atomic_store(&u->done, false);
+    atomic_store(&u->cancel, false);
+    u->started = pthread_create(&u->thread, NULL, build_upgrade, t) == 0;
+    if (!u->started)
+        fprintf(stderr, "aoview: no thread for the faster BVH's build; tracing on with the quick one\n");
 }
 
 bool ao_tracer_switch(struct ao_tracer *tracer)
 {
     struct upgrade *u = &tracer->upgrade;
+    if (u->pending)
+        start_upgrade(tracer);
     if (!u->started || !atomic_load(&u->done))
         return false;
     pthread_join(u->thread, NULL);

@@ -25,14 +25,15 @@ enum ao_backend { AO_BACKEND_AUTO, AO_BACKEND_EMBREE, AO_BACKEND_DIRECT };
 struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_backend backend);
 
 /* ao_tracer_create for a big scene: builds LOW BVHs (Embree's Morton build, 3-4 times sooner,
- * slower rays), then starts building the scene's own (scene->bvh) beside them on a thread of its
- * own; ao_tracer_switch moves to them once built. The BVH never changes an image. Main thread. */
+ * slower rays); the scene's own (scene->bvh) are built later beside them, on a thread of their
+ * own, from ao_tracer_switch's first call. The BVH never changes an image. Main thread. */
 struct ao_tracer *ao_tracer_create_progressive(const struct ao_scene *scene);
 
-/* Once ao_tracer_create_progressive's second build is done: traces with it from now on, frees the
- * LOW BVHs and returns true (false before, and after: nothing to switch; a build that ran out of
- * memory is dropped with one line and LOW traces on). Only while nothing traces with this tracer:
- * the render thread between passes, when its renderer is the tracer's only user. */
+/* For ao_tracer_create_progressive's second build: the first call starts it (after the first
+ * image, so that the build does not slow that); once it is done, traces with it from now on, frees
+ * the LOW BVHs and returns true (false before, and after: nothing to switch; a build that ran out
+ * of memory is dropped with one line and LOW traces on). Only while nothing traces with this
+ * tracer: the render thread between passes, when its renderer is the tracer's only user. */
 bool ao_tracer_switch(struct ao_tracer *tracer);
 
 /* Whether ao_tracer_create_progressive's second build is still to be switched to. Any thread that
