@@ -40,7 +40,12 @@ PY
 }
 interrupt_once INT 130
 interrupt_once TERM 143
-interrupt_once HUP 129
+# Under nohup SIGHUP reaches aoview ignored, and aoview leaves it so (as nohup asks).
+if (( 0x$(sed -n 's/^SigIgn:\s*//p' /proc/$$/status) & 1 )); then
+  echo "(SIGHUP is ignored here, as under nohup: its interruption not checked)"
+else
+  interrupt_once HUP 129
+fi
 # The EXR's aoview.spp says the same as the line (exrheader: Debian's openexr).
 if command -v exrheader >/dev/null; then
   rm -f out.exr stats.csv
