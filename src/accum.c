@@ -42,8 +42,14 @@ void ao_accum_clear(struct ao_accum *a, int x0, int y0, int x1, int y1)
 void ao_accum_resolve(const struct ao_accum *a, float *rgb)
 {
     size_t pixels = (size_t)a->width * (size_t)a->height;
+    /* Neighbouring pixels mostly have the same count: its reciprocal is kept, not divided again. */
+    uint32_t count = 0;
+    double inv = 0.0;
     for (size_t p = 0; p < pixels; p++) {
-        double inv = a->count[p] ? 1.0 / a->count[p] : 0.0;
+        if (a->count[p] != count) {
+            count = a->count[p];
+            inv = 1.0 / count;
+        }
         for (int c = 0; c < 3; c++)
             rgb[3 * p + c] = (float)(a->sum[3 * p + c] * inv);
     }
