@@ -251,9 +251,9 @@ static bool step(struct ao_render *r, struct loop *l, bool *finishes, uint64_t *
         return false;
 
     /* Between passes nothing traces: the moment to start a better BVH's build (after the first
-     * image is out, while there is more to render) and to move to it once built, with no restart:
-     * the BVH never changes an image. */
-    if (run->config.upgrade && counts && !l->info.done)
+     * pass, published or cut short by a move, while there is more to render) and to move to it
+     * once built, with no restart: the BVH never changes an image. */
+    if (run->config.upgrade && pixels && !l->info.done)
         ao_tracer_switch(run->config.upgrade);
 
     /* Done: the image is finished until the settings change (the leader gathers what it has not
