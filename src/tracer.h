@@ -29,11 +29,11 @@ struct ao_tracer *ao_tracer_create_with(const struct ao_scene *scene, enum ao_ba
  * own, from ao_tracer_switch's first call. The BVH never changes an image. Main thread. */
 struct ao_tracer *ao_tracer_create_progressive(const struct ao_scene *scene);
 
-/* For ao_tracer_create_progressive's second build: the first call starts it (after the first
- * image, so that the build does not slow that); once it is done, traces with it from now on, frees
- * the LOW BVHs and returns true (false before, and after: nothing to switch; a build that ran out
- * of memory is dropped with one line and LOW traces on). Only while nothing traces with this
- * tracer: the render thread between passes, when its renderer is the tracer's only user. */
+/* For ao_tracer_create_progressive's second build: the first call starts it (the render thread
+ * makes it after its first pass, which the build would slow); once it is done, traces with it from
+ * now on, frees the LOW BVHs and returns true (false before, and after: nothing to switch; a build
+ * that ran out of memory is dropped with one line and LOW traces on). Only while nothing traces
+ * with this tracer: the render thread between passes, when its renderer is the tracer's only user. */
 bool ao_tracer_switch(struct ao_tracer *tracer);
 
 /* Whether ao_tracer_create_progressive's second build is still to be switched to. Any thread that

@@ -4,6 +4,7 @@
  * element row (binary). */
 #include <math.h>
 #include <stdarg.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -580,19 +581,21 @@ static bool read_face_rows(struct ply_reader *r)
     const unsigned char *bytes = (const unsigned char *)r->cur, *end = (const unsigned char *)r->end;
     if (!ao_load_reserve(&r->indices, 3 * (size_t)r->element->count))
         return ao_load_out_of_memory(r->path);
-    /* Indices below this are in range as either type (a negative int32 reads as 2^31 or more). */
+    /* Indices below this are in range as either type (a negative int32 reads as 2^31 or more);
+     * a triangle's row is its count and three indices. */
     uint64_t limit = is_signed && vertices > (uint64_t)INT32_MAX ? (uint64_t)INT32_MAX + 1 : vertices;
+    const ptrdiff_t triangle_row = 1 + 3 * (ptrdiff_t)sizeof(uint32_t);
     for (r->row_index = 0; r->row_index < r->element->count; r->row_index++) {
         /* The usual row, a triangle in range within the checked count and the room reserved, goes
          * straight in; any other row takes the checks below. */
-        if (end - bytes >= 13 && bytes[0] == 3 && r->indices.count / 3 < checked &&
+        if (end - bytes >= triangle_row && bytes[0] == 3 && r->indices.count / 3 < checked &&
             r->indices.capacity - r->indices.count >= 3) {
             uint32_t corner[3];
             memcpy(corner, bytes + 1, sizeof corner);
             if (corner[0] < limit && corner[1] < limit && corner[2] < limit) {
                 memcpy((uint32_t *)r->indices.data + r->indices.count, corner, sizeof corner);
                 r->indices.count += 3;
-                bytes += 13;
+                bytes += triangle_row;
                 continue;
             }
         }
