@@ -41,16 +41,21 @@ void ao_accum_clear(struct ao_accum *a, int x0, int y0, int x1, int y1)
 
 void ao_accum_resolve(const struct ao_accum *a, float *rgb)
 {
-    size_t pixels = (size_t)a->width * (size_t)a->height;
+    ao_accum_resolve_rect(a, 0, 0, a->width, a->height, rgb);
+}
+
+void ao_accum_resolve_rect(const struct ao_accum *a, int x0, int y0, int x1, int y1, float *rgb)
+{
     /* Neighbouring pixels mostly have the same count: its reciprocal is kept, not divided again. */
     uint32_t count = 0;
     double inv = 0.0;
-    for (size_t p = 0; p < pixels; p++) {
-        if (a->count[p] != count) {
-            count = a->count[p];
-            inv = 1.0 / count;
+    for (int j = y0; j < y1; j++)
+        for (size_t p = (size_t)j * (size_t)a->width + (size_t)x0, end = p + (size_t)(x1 - x0); p < end; p++) {
+            if (a->count[p] != count) {
+                count = a->count[p];
+                inv = 1.0 / count;
+            }
+            for (int c = 0; c < 3; c++)
+                rgb[3 * p + c] = (float)(a->sum[3 * p + c] * inv);
         }
-        for (int c = 0; c < 3; c++)
-            rgb[3 * p + c] = (float)(a->sum[3 * p + c] * inv);
-    }
 }

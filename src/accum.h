@@ -41,4 +41,7 @@ static inline void ao_accum_add(struct ao_accum *a, size_t p, struct ao_vec3 sum
 /* Writes the running average as 3 floats per pixel, top row first (0 where no sample yet). */
 void ao_accum_resolve(const struct ao_accum *a, float *rgb);
 
+/* ao_accum_resolve of the pixels [x0, x1) x [y0, y1) alone, into the image rgb of the same size. */
+void ao_accum_resolve_rect(const struct ao_accum *a, int x0, int y0, int x1, int y1, float *rgb);
+
 #endif

@@ -27,7 +27,16 @@ void ao_frames_finish(struct ao_frames *fs)
 
 struct ao_frame *ao_frames_back(struct ao_frames *fs, int width, int height, int tiles)
 {
+    uint64_t kept;
+    return ao_frames_back_stamped(fs, width, height, tiles, 0, &kept);
+}
+
+struct ao_frame *ao_frames_back_stamped(struct ao_frames *fs, int width, int height, int tiles, uint64_t stamp,
+                                        uint64_t *kept)
+{
     struct ao_frame *f = &fs->frames[fs->back];
+    *kept = f->width == width && f->height == height ? fs->stamp[fs->back] : 0;
+    fs->stamp[fs->back] = 0;
     size_t *room = fs->room[fs->back];
     if (!ao_buffer_grow(&f->rgb, &room[0], 3 * (size_t)width * (size_t)height) ||
         !ao_buffer_grow(&f->tile_error, &room[1], (size_t)tiles)) {
@@ -36,6 +45,7 @@ struct ao_frame *ao_frames_back(struct ao_frames *fs, int width, int height, int
     }
     f->width = width;
     f->height = height;
+    fs->stamp[fs->back] = stamp;
     return f;
 }
 

@@ -19,6 +19,7 @@ enum { AO_FRAMES_LOG = 256 };
 struct ao_frames {
     struct ao_frame frames[3];
     size_t room[3][2];
+    uint64_t stamp[3];       /* ao_frames_back_stamped's stamp of each frame's pixels, or 0 */
     int back, front;
     atomic_uint middle;
     struct ao_frame_info log[AO_FRAMES_LOG];
@@ -34,6 +35,12 @@ void ao_frames_finish(struct ao_frames *fs);
 /* The back frame, made width x height pixels with room for `tiles` tile errors (its buffers grown
  * where short, never shrunk); NULL with one message when memory is short. Producer thread. */
 struct ao_frame *ao_frames_back(struct ao_frames *fs, int width, int height, int tiles);
+
+/* ao_frames_back for a producer that brings the back frame's pixels up to date in place: *kept is
+ * the stamp this call last gave them (0 when another call filled them since, or their size
+ * changed); they are stamped `stamp` now, which the caller then makes true. Producer thread. */
+struct ao_frame *ao_frames_back_stamped(struct ao_frames *fs, int width, int height, int tiles, uint64_t stamp,
+                                        uint64_t *kept);
 
 /* Publishes the back frame, filled in: it becomes the newest, and its facts go into the log
  * (unless AO_FRAMES_LOG entries wait there unread). Producer thread. */

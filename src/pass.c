@@ -29,6 +29,7 @@ bool ao_pass_allocate(struct ao_run *r)
     size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y, owned = 0;
     const struct ao_render_share *share = r->config.share;
     r->tiles = calloc(tiles, sizeof *r->tiles);
+    r->tile_stamps = calloc(tiles, sizeof *r->tile_stamps);
     r->work = calloc(tiles, sizeof *r->work);
     r->mine = malloc(tiles);
     if (r->mine)
@@ -39,7 +40,7 @@ bool ao_pass_allocate(struct ao_run *r)
         r->records = malloc((owned ? owned : 1) * sizeof *r->records);
         r->all_records = share->follows ? NULL : malloc(tiles * sizeof *r->all_records);
     }
-    if (!r->tiles || !r->work || !r->mine ||
+    if (!r->tiles || !r->tile_stamps || !r->work || !r->mine ||
         (share && (!r->pass_sums || !r->records || (!share->follows && !r->all_records)))) {
         fprintf(stderr, "aoview: out of memory for a %dx%d image\n", r->width, r->height);
         return false;
@@ -51,12 +52,14 @@ void ao_pass_free(struct ao_run *r)
 {
     ao_accum_finish(&r->accum);
     free(r->tiles);
+    free(r->tile_stamps);
     free(r->work);
     free(r->mine);
     free(r->pass_sums);
     free(r->records);
     free(r->all_records);
     r->tiles = NULL;
+    r->tile_stamps = NULL;
     r->work = NULL;
     r->mine = NULL;
     r->pass_sums = NULL;
@@ -73,6 +76,7 @@ bool ao_pass_restart(struct ao_run *r, int width, int height)
             return false;
     }
     memset(r->tiles, 0, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
+    r->run_stamp = ++r->stamp;
     /* Nothing sampled: every tile short of the target (all of them) joins the first pass. */
     r->busiest = 0;
     r->fastest = 0.0;
@@ -105,6 +109,14 @@ void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, 
                       const struct ao_vec3 *sums)
 {
     ao_tile_add(&r->tiles[t], &r->accum, r->width, ao_pass_tile_rect(r, t), work, next, sums);
+    r->tile_stamps[t] = r->stamp;
+}
+
+void ao_pass_clear_tile(struct ao_run *r, int t)
+{
+    struct ao_tile rect = ao_pass_tile_rect(r, t);
+    ao_accum_clear(&r->accum, rect.x0, rect.y0, rect.x1, rect.y1);
+    r->tile_stamps[t] = r->stamp;
 }
 
 void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shadow)
@@ -396,12 +408,21 @@ void ao_pass_frame_facts(const struct ao_run *r, struct ao_frame *f, const struc
 
 struct ao_frame *ao_pass_resolve(struct ao_run *r, const struct ao_frame_info *info)
 {
-    struct ao_frame *f = ao_frames_back(&r->frames, r->width, r->height, r->tiles_x * r->tiles_y);
+    uint64_t kept;
+    struct ao_frame *f = ao_frames_back_stamped(&r->frames, r->width, r->height, r->tiles_x * r->tiles_y, r->stamp,
+                                                &kept);
     if (!f)
         return NULL;
-    ao_accum_resolve(&r->accum, f->rgb);
-    for (int t = 0; t < r->tiles_x * r->tiles_y; t++)
+    /* The back frame's pixels are brought up to date where the sums changed since it was resolved
+     * (all of them when it was resolved in another run, or holds something else). */
+    for (int t = 0; t < r->tiles_x * r->tiles_y; t++) {
+        if (kept < r->run_stamp || r->tile_stamps[t] > kept) {
+            struct ao_tile rect = ao_pass_tile_rect(r, t);
+            ao_accum_resolve_rect(&r->accum, rect.x0, rect.y0, rect.x1, rect.y1, f->rgb);
+        }
         f->tile_error[t] = ao_pass_tile_error(r, t);
+    }
+    r->stamp++;
     ao_pass_frame_facts(r, f, info);
     return f;
 }

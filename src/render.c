@@ -383,10 +383,8 @@ const struct ao_frame *ao_render_resolve_stopped(struct ao_render *render)
         return f;
     }
     for (int t = 0; t < run->tiles_x * run->tiles_y; t++)
-        if (run->tiles[t].passes == 0) { /* not traced in this run: sums of an earlier one */
-            struct ao_tile rect = ao_pass_tile_rect(run, t);
-            ao_accum_clear(&run->accum, rect.x0, rect.y0, rect.x1, rect.y1);
-        }
+        if (run->tiles[t].passes == 0) /* not traced in this run: sums of an earlier one */
+            ao_pass_clear_tile(run, t);
     struct ao_frame *f = ao_pass_resolve(run, &info);
     if (!f)
         return NULL;

@@ -37,6 +37,37 @@ static void assert_whole(const struct ao_frame *f)
     assert_true(f->tile_error[0] == (float)f->info.pass);
 }
 
+/* A producer that updates frames in place learns what each back frame's pixels hold: the stamp it
+ * gave them, until ao_frames_back fills that frame for another use or the size changes (0). With
+ * no consumer the producer's frames alternate between two of the three. */
+static void test_stamps(void **state)
+{
+    (void)state;
+    struct ao_frames fs;
+    ao_frames_init(&fs);
+    uint64_t kept = 99;
+    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, 1, &kept));
+    assert_int_equal(kept, 0);
+    ao_frames_publish(&fs);
+    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, 2, &kept));
+    assert_int_equal(kept, 0);   /* the other of the two, never stamped */
+    ao_frames_publish(&fs);
+    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, 3, &kept));
+    assert_int_equal(kept, 1);   /* the first again */
+    ao_frames_publish(&fs);
+    assert_non_null(ao_frames_back(&fs, 4, 3, 1));   /* the second, filled otherwise */
+    ao_frames_publish(&fs);
+    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, 4, &kept));
+    assert_int_equal(kept, 3);
+    ao_frames_publish(&fs);
+    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, 5, &kept));
+    assert_int_equal(kept, 0);   /* the second: ao_frames_back cleared its stamp */
+    ao_frames_publish(&fs);
+    assert_non_null(ao_frames_back_stamped(&fs, 5, 3, 1, 6, &kept));
+    assert_int_equal(kept, 0);   /* the first at another size */
+    ao_frames_finish(&fs);
+}
+
 /* Nothing before the first publish; then the newest, once; frames in between are skipped. */
 static void test_take_newest(void **state)
 {
@@ -168,6 +199,7 @@ int main(void)
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_take_newest),
         cmocka_unit_test(test_log),
+        cmocka_unit_test(test_stamps),
         cmocka_unit_test(test_handoff_under_contention),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
