@@ -28,11 +28,10 @@ void ao_frames_finish(struct ao_frames *fs)
 struct ao_frame *ao_frames_back(struct ao_frames *fs, int width, int height, int tiles)
 {
     uint64_t kept;
-    return ao_frames_back_stamped(fs, width, height, tiles, 0, &kept);
+    return ao_frames_back_stamped(fs, width, height, tiles, &kept);
 }
 
-struct ao_frame *ao_frames_back_stamped(struct ao_frames *fs, int width, int height, int tiles, uint64_t stamp,
-                                        uint64_t *kept)
+struct ao_frame *ao_frames_back_stamped(struct ao_frames *fs, int width, int height, int tiles, uint64_t *kept)
 {
     struct ao_frame *f = &fs->frames[fs->back];
     *kept = f->width == width && f->height == height ? fs->stamp[fs->back] : 0;
@@ -45,8 +44,12 @@ struct ao_frame *ao_frames_back_stamped(struct ao_frames *fs, int width, int hei
     }
     f->width = width;
     f->height = height;
-    fs->stamp[fs->back] = stamp;
     return f;
+}
+
+void ao_frames_stamp_back(struct ao_frames *fs, uint64_t stamp)
+{
+    fs->stamp[fs->back] = stamp;
 }
 
 void ao_frames_publish(struct ao_frames *fs)

@@ -19,7 +19,7 @@ enum { AO_FRAMES_LOG = 256 };
 struct ao_frames {
     struct ao_frame frames[3];
     size_t room[3][2];
-    uint64_t stamp[3];       /* ao_frames_back_stamped's stamp of each frame's pixels, or 0 */
+    uint64_t stamp[3];       /* ao_frames_stamp_back's stamp of each frame's pixels, or 0 */
     int back, front;
     atomic_uint middle;
     struct ao_frame_info log[AO_FRAMES_LOG];
@@ -37,10 +37,12 @@ void ao_frames_finish(struct ao_frames *fs);
 struct ao_frame *ao_frames_back(struct ao_frames *fs, int width, int height, int tiles);
 
 /* ao_frames_back for a producer that brings the back frame's pixels up to date in place: *kept is
- * the stamp this call last gave them (0 when another call filled them since, or their size
- * changed); they are stamped `stamp` now, which the caller then makes true. Producer thread. */
-struct ao_frame *ao_frames_back_stamped(struct ao_frames *fs, int width, int height, int tiles, uint64_t stamp,
-                                        uint64_t *kept);
+ * the stamp ao_frames_stamp_back last gave them (0 when they were filled otherwise since, or their
+ * size changed); until it stamps them again they count as filled otherwise. Producer thread. */
+struct ao_frame *ao_frames_back_stamped(struct ao_frames *fs, int width, int height, int tiles, uint64_t *kept);
+
+/* Stamps the back frame's pixels, now up to date as of `stamp`. Producer thread. */
+void ao_frames_stamp_back(struct ao_frames *fs, uint64_t stamp);
 
 /* Publishes the back frame, filled in: it becomes the newest, and its facts go into the log
  * (unless AO_FRAMES_LOG entries wait there unread). Producer thread. */

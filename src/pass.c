@@ -77,6 +77,7 @@ bool ao_pass_restart(struct ao_run *r, int width, int height)
     }
     memset(r->tiles, 0, (size_t)r->tiles_x * (size_t)r->tiles_y * sizeof *r->tiles);
     r->run_stamp = ++r->stamp;
+    r->frame = NULL;   /* the frame begun, if any, counts as filled otherwise: its stamp is 0 */
     /* Nothing sampled: every tile short of the target (all of them) joins the first pass. */
     r->busiest = 0;
     r->fastest = 0.0;
@@ -105,18 +106,27 @@ struct ao_tile_work ao_pass_tile_work(const struct ao_run *r, int t, uint32_t *n
     return ao_tile_work_of(&r->tiles[t], &r->tile_pass, next);
 }
 
+/* Stamps tile t's change and resolves the tile into the frame begun, if any. */
+static void changed(struct ao_run *r, int t, struct ao_tile rect)
+{
+    r->tile_stamps[t] = r->stamp;
+    if (r->frame)
+        ao_accum_resolve_rect(&r->accum, rect.x0, rect.y0, rect.x1, rect.y1, r->frame->rgb);
+}
+
 void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, uint32_t next,
                       const struct ao_vec3 *sums)
 {
-    ao_tile_add(&r->tiles[t], &r->accum, r->width, ao_pass_tile_rect(r, t), work, next, sums);
-    r->tile_stamps[t] = r->stamp;
+    struct ao_tile rect = ao_pass_tile_rect(r, t);
+    ao_tile_add(&r->tiles[t], &r->accum, r->width, rect, work, next, sums);
+    changed(r, t, rect);
 }
 
 void ao_pass_clear_tile(struct ao_run *r, int t)
 {
     struct ao_tile rect = ao_pass_tile_rect(r, t);
     ao_accum_clear(&r->accum, rect.x0, rect.y0, rect.x1, rect.y1);
-    r->tile_stamps[t] = r->stamp;
+    changed(r, t, rect);
 }
 
 void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shadow)
@@ -161,8 +171,18 @@ int ao_pass_begin(struct ao_run *r)
     return count;
 }
 
+/* Begins the back frame that changes are resolved into as they are made, with a fresh stamp for
+ * them (left NULL when memory is short, which ao_pass_resolve then reports). */
+static void begin_frame(struct ao_run *r)
+{
+    r->frame = ao_frames_back_stamped(&r->frames, r->width, r->height, r->tiles_x * r->tiles_y, &r->frame_kept);
+    r->stamp++;
+}
+
 bool ao_pass_run(struct ao_run *r)
 {
+    if (!r->frame)
+        begin_frame(r);
     ao_pass_begin(r);
     ao_pool_run(r->pool, render_tiles, r);
     return !ao_pass_aborted(r);
@@ -408,21 +428,24 @@ void ao_pass_frame_facts(const struct ao_run *r, struct ao_frame *f, const struc
 
 struct ao_frame *ao_pass_resolve(struct ao_run *r, const struct ao_frame_info *info)
 {
-    uint64_t kept;
-    struct ao_frame *f = ao_frames_back_stamped(&r->frames, r->width, r->height, r->tiles_x * r->tiles_y, r->stamp,
-                                                &kept);
+    if (!r->frame)
+        begin_frame(r);
+    struct ao_frame *f = r->frame;
     if (!f)
         return NULL;
-    /* The back frame's pixels are brought up to date where the sums changed since it was resolved
-     * (all of them when it was resolved in another run, or holds something else). */
+    /* The frame's pixels are brought up to date where the sums changed since it was resolved (all
+     * of them when it was resolved in another run, or filled otherwise), but for the changes made
+     * since it was begun, resolved into it then. */
+    uint64_t kept = r->frame_kept;
     for (int t = 0; t < r->tiles_x * r->tiles_y; t++) {
-        if (kept < r->run_stamp || r->tile_stamps[t] > kept) {
+        if (r->tile_stamps[t] != r->stamp && (kept < r->run_stamp || r->tile_stamps[t] > kept)) {
             struct ao_tile rect = ao_pass_tile_rect(r, t);
             ao_accum_resolve_rect(&r->accum, rect.x0, rect.y0, rect.x1, rect.y1, f->rgb);
         }
         f->tile_error[t] = ao_pass_tile_error(r, t);
     }
-    r->stamp++;
+    ao_frames_stamp_back(&r->frames, r->stamp++);
+    r->frame = NULL;
     ao_pass_frame_facts(r, f, info);
     return f;
 }

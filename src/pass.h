@@ -62,9 +62,14 @@ struct ao_run {
     struct ao_tile_pass tile_pass;       /* what the pass gives each tile */
     int tiles_x, tiles_y;
     struct ao_tile_state *tiles;         /* tiles_x * tiles_y, row by row */
-    uint64_t *tile_stamps;               /* per tile: the stamp at which its sums last changed */
-    uint64_t stamp;                      /* the next resolve's, and so the pass's sums' */
+    uint64_t *tile_stamps;               /* per tile: the stamp of its sums' last change */
+    uint64_t stamp;                      /* of the changes made now: a fresh one from each frame begun
+                                            and each frame resolved on */
     uint64_t run_stamp;                  /* the run's first: frames stamped before show another run */
+    struct ao_frame *frame;              /* the back frame begun for the passes since the last
+                                            resolve, into which each change is resolved as it is made
+                                            (NULL: none) */
+    uint64_t frame_kept;                 /* the stamp its pixels had when it was begun */
     double image_mean;                   /* of the running average, as of the last survey */
     int *work;                           /* the pass's tiles, grouped by lane */
     struct ao_lane *lanes;               /* one per thread, the render thread's first */
@@ -120,8 +125,9 @@ struct ao_tile ao_pass_tile_rect(const struct ao_run *r, int t);
 struct ao_tile_work ao_pass_tile_work(const struct ao_run *r, int t, uint32_t *next);
 
 /* Adds tile t's sums of one pass (the work it was given, after which its half's next sample is
- * `next`) to the accumulation and brings its state up to date, stamped for ao_pass_resolve. The
- * thread that traced it. */
+ * `next`) to the accumulation and brings its state up to date, stamped for ao_pass_resolve (and
+ * resolved into the frame begun, while its sums are in this core's cache). The thread that traced
+ * it. */
 void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, uint32_t next,
                       const struct ao_vec3 *sums);
 

@@ -37,34 +37,40 @@ static void assert_whole(const struct ao_frame *f)
     assert_true(f->tile_error[0] == (float)f->info.pass);
 }
 
+/* Takes the back frame, width x 3, for an update in place, stamps it `stamp` and publishes it;
+ * returns the stamp it had. */
+static uint64_t restamp(struct ao_frames *fs, int width, uint64_t stamp)
+{
+    uint64_t kept = 99;
+    assert_non_null(ao_frames_back_stamped(fs, width, 3, 1, &kept));
+    ao_frames_stamp_back(fs, stamp);
+    ao_frames_publish(fs);
+    return kept;
+}
+
 /* A producer that updates frames in place learns what each back frame's pixels hold: the stamp it
- * gave them, until ao_frames_back fills that frame for another use or the size changes (0). With
- * no consumer the producer's frames alternate between two of the three. */
+ * gave them, until they are filled otherwise (ao_frames_back, or taken for an update that is not
+ * stamped) or their size changes (0). With no consumer the producer's frames alternate between
+ * two of the three. */
 static void test_stamps(void **state)
 {
     (void)state;
     struct ao_frames fs;
     ao_frames_init(&fs);
-    uint64_t kept = 99;
-    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, 1, &kept));
-    assert_int_equal(kept, 0);
-    ao_frames_publish(&fs);
-    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, 2, &kept));
-    assert_int_equal(kept, 0);   /* the other of the two, never stamped */
-    ao_frames_publish(&fs);
-    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, 3, &kept));
-    assert_int_equal(kept, 1);   /* the first again */
-    ao_frames_publish(&fs);
+    uint64_t kept;
+    assert_int_equal(restamp(&fs, 4, 1), 0);
+    assert_int_equal(restamp(&fs, 4, 2), 0);   /* the other of the two, never stamped */
+    assert_int_equal(restamp(&fs, 4, 3), 1);
     assert_non_null(ao_frames_back(&fs, 4, 3, 1));   /* the second, filled otherwise */
     ao_frames_publish(&fs);
-    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, 4, &kept));
-    assert_int_equal(kept, 3);
+    assert_int_equal(restamp(&fs, 4, 4), 3);
+    assert_int_equal(restamp(&fs, 4, 5), 0);   /* ao_frames_back cleared its stamp */
+    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, &kept));   /* an update left unstamped */
+    assert_int_equal(kept, 4);
     ao_frames_publish(&fs);
-    assert_non_null(ao_frames_back_stamped(&fs, 4, 3, 1, 5, &kept));
-    assert_int_equal(kept, 0);   /* the second: ao_frames_back cleared its stamp */
-    ao_frames_publish(&fs);
-    assert_non_null(ao_frames_back_stamped(&fs, 5, 3, 1, 6, &kept));
-    assert_int_equal(kept, 0);   /* the first at another size */
+    assert_int_equal(restamp(&fs, 4, 6), 5);
+    assert_int_equal(restamp(&fs, 4, 7), 0);
+    assert_int_equal(restamp(&fs, 5, 8), 0);   /* the first at another size */
     ao_frames_finish(&fs);
 }
 
