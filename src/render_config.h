@@ -19,10 +19,10 @@ struct ao_tracer;
 struct ao_render_config {
     const struct ao_scene *scene;
     const struct ao_tracer *tracer;
-    struct ao_tracer *upgrade;   /* the tracer again when its better BVH is being built beside
-                                  * (ao_tracer_create_progressive): the render thread switches to it
-                                  * between passes; NULL: nothing to switch (and with two renderers
-                                  * on one tracer) */
+    struct ao_tracer *upgrade;   /* the tracer again when it has a better BVH to build beside
+                                  * (ao_tracer_create_progressive): the render thread starts that
+                                  * build after its first pass and switches to it between passes;
+                                  * NULL: nothing to switch (and with two renderers on one tracer) */
     int threads;
     uint64_t seed;
     uint32_t target_spp;     /* per pixel; with adaptive sampling the most a pixel gets */
