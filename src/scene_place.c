@@ -1,6 +1,7 @@
 /* The scene while it is read, and placing it into its local frame; see scene_place.h. */
 #include "scene_place.h"
 
+#include <float.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -213,9 +214,10 @@ static double gamma_n(int n)
  * and D the determinant, Cabs and Dabs computed with absolute values) and |W| <= |L*| + E. With
  * |o| <= max|o| on every axis, slack[0] is the largest row sum of the first matrix and slack[1]
  * the largest entry of the second vector; both are raised by 2^-20 of themselves for the rounding
- * of this arithmetic and of ao.c's float evaluation. False, when slack[0] exceeds 2^-8 or L is
- * singular: too ill-conditioned to instance (ao.c's lift assumes slack[0] <= 1/4); the mesh is
- * flattened instead. */
+ * of this arithmetic and of ao.c's float evaluation. False, when slack[0] exceeds 2^-8, slack[1]
+ * exceeds 2^-8 of the largest float (so that ao.c's sums with it stay finite) or L is singular:
+ * too ill-conditioned to instance (ao.c's lift assumes slack[0] <= 1/4); the mesh is flattened
+ * instead. */
 static bool round_trip(const float a[12], float slack[2])
 {
     double l[9], cof[9], cabs[9];
@@ -252,7 +254,7 @@ static bool round_trip(const float a[12], float slack[2])
         beta = fmax(beta, gamma_n(14) * wt);
     }
     alpha *= 1.0 + 0x1p-20, beta *= 1.0 + 0x1p-20;
-    if (!(alpha <= 0x1p-8) || !isfinite(beta))
+    if (!(alpha <= 0x1p-8) || !(beta <= 0x1p-8 * FLT_MAX))
         return false;
     slack[0] = nextafterf((float)alpha, INFINITY);
     slack[1] = nextafterf((float)beta, INFINITY);
@@ -282,7 +284,21 @@ static void box_of(const struct ao_mesh *mesh, struct ao_dvec3 *lo, struct ao_dv
     *hi = ao_dvec3_make(h[0], h[1], h[2]);
 }
 
-/* Never instanced where round_trip finds a placement's map too ill-conditioned. */
+/* The largest translation per axis that the placement of a mesh with box info->lo..hi and linear
+ * part a can have in the local frame, where the local frame is not chosen yet: a vertex p lies
+ * within AO_SCENE_MAX_EXTENT there (check_range: the box is at most that across and either holds
+ * (0, 0, 0) or is centred on it), so t = p_local - L p is within that plus |L| max|p| per axis,
+ * raised by 2^-10 of itself for rounding. Infinite for a mesh without vertices. */
+static void largest_translation(const float a[12], const struct ao_world_mesh *info, float t[3])
+{
+    double most = fmax(fmax(fmax(fabs(info->lo.x), fabs(info->hi.x)), fmax(fabs(info->lo.y), fabs(info->hi.y))),
+                       fmax(fabs(info->lo.z), fabs(info->hi.z)));
+    for (int r = 0; r < 3; r++)
+        t[r] = (float)((AO_SCENE_MAX_EXTENT + (fabs(a[r]) + fabs(a[3 + r]) + fabs(a[6 + r])) * most) * (1.0 + 0x1p-10));
+}
+
+/* Never instanced where round_trip finds a placement's map too ill-conditioned for the largest
+ * translation it can have in the local frame. */
 bool ao_world_survey(struct ao_scene *s, struct ao_world *w)
 {
     free(w->info);
@@ -313,7 +329,7 @@ bool ao_world_survey(struct ao_scene *s, struct ao_world *w)
         struct ao_world_mesh *info = &w->info[w->placements[i].mesh];
         float a[12], slack[2];
         narrow_affine(&w->placements[i].to_world, a);
-        a[9] = a[10] = a[11] = 0.0f;   /* the translation changes slack[1] only */
+        largest_translation(a, info, a + 9);
         if (info->instanced && !round_trip(a, slack))
             info->instanced = false;
     }
@@ -468,7 +484,7 @@ static bool build_instance(struct ao_scene *s, struct ao_world *w, struct ao_cur
         ao_affine_normals(&narrowed, n);
         for (int k = 0; k < 9; k++)
             in->normals[k] = (float)n[k];
-        if (!round_trip(in->to_local, in->slack))   /* ao_world_survey() checked the same L */
+        if (!round_trip(in->to_local, in->slack))   /* ao_world_survey() checked L with a larger t */
             return ao_cursor_fail(c, "an instance's transform is too ill-conditioned to trace");
         s->instance_count++;
         return true;

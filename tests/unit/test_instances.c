@@ -300,6 +300,26 @@ static void test_auto_flattens_a_mesh_placed_a_few_times(void **state)
     teardown(&f);
 }
 
+/* A placement that shrinks a mesh to 1e-42 (a subnormal scale) a million units out: its inverse is
+ * about 1e42, so mapping a ray origin into the local frame and back could move it by more than a
+ * float holds (slack[1] would be infinite). Instancing every mesh file's mesh still loads the
+ * scene, with that mesh flattened (both placements), and every instance's slack finite. */
+static void test_a_map_too_small_to_invert_is_flattened(void **state)
+{
+    (void)state;
+    write_text("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\n");
+    write_text("subnormal.scene", "camera eye 0 1 4 target 0 0 0\nmesh tri.obj scale 1e-42 translate 1e6 0 0\n"
+                                  "mesh tri.obj scale 0.1\n");
+    struct fixture f;
+    setup(&f, "subnormal.scene", AO_INSTANCING_ALWAYS, false);
+    assert_int_equal(f.scene.instance_count, 2);
+    for (size_t i = 0; i < f.scene.instance_count; i++) {
+        assert_true(f.scene.instances[i].flat);
+        assert_true(isfinite(f.scene.instances[i].slack[0]) && isfinite(f.scene.instances[i].slack[1]));
+    }
+    teardown(&f);
+}
+
 /* One mesh under four nodes loads once and builds one BVH: the scene holds 1 mesh and 4 instances,
  * the tracer 2 BVHs (the top level, the bunny's) and 4 Embree instances, and Embree holds less than
  * the same scene flattened (4 copies in one BVH) by more than 2 copies' worth. */
@@ -892,6 +912,7 @@ int main(void)
         return 1;
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_auto_flattens_a_mesh_placed_a_few_times),
+        cmocka_unit_test(test_a_map_too_small_to_invert_is_flattened),
         cmocka_unit_test(test_one_mesh_under_many_nodes_is_built_once),
         cmocka_unit_test(test_instances_shade_as_flattened),
         cmocka_unit_test(test_instanced_image_matches_flattened),
