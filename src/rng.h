@@ -3,6 +3,7 @@
 #ifndef AO_RNG_H
 #define AO_RNG_H
 
+#include <stdbool.h>
 #include <stdint.h>
 
 #include "modes.h"
@@ -44,18 +45,22 @@ static inline uint32_t ao_rng_reverse(uint32_t x)
     return ((x & 0x55555555u) << 1) | ((x >> 1) & 0x55555555u);
 }
 
+/* The multipliers of ao_rng_laine_karras's four rounds. */
+static const uint32_t AO_RNG_LAINE_KARRAS[4] = {0x6c50b47cu, 0xb82f1e52u, 0xc7afe638u, 0x8d22f6e6u};
+
 /* The hash of Laine and Karras, a nested uniform (Owen) scramble of bits given in reverse order:
  * each bit is flipped by a hash of the bits below it, since additions and multiplications carry only
  * upwards (Burley, "Practical hash-based Owen scrambling", JCGT 2020). */
 static inline uint32_t ao_rng_laine_karras(uint32_t x, uint32_t seed)
 {
     x += seed;
-    x ^= x * 0x6c50b47cu;
-    x ^= x * 0xb82f1e52u;
-    x ^= x * 0xc7afe638u;
-    x ^= x * 0x8d22f6e6u;
+    for (int i = 0; i < 4; i++)
+        x ^= x * AO_RNG_LAINE_KARRAS[i];
     return x;
 }
+
+/* The bits that ao_rng_pascal's step b moves down by 2^b: those with bit b of their index set. */
+static const uint32_t AO_RNG_PASCAL_BITS[5] = {0xaaaaaaaau, 0xccccccccu, 0xf0f0f0f0u, 0xff00ff00u, 0xffff0000u};
 
 /* Sobol's second dimension, bit-reversed: bit j of the result is the parity of the bits i >= j of x
  * with binomial(i, j) odd (x times Pascal's matrix mod 2). Reversed, the dimension's direction
@@ -64,11 +69,9 @@ static inline uint32_t ao_rng_laine_karras(uint32_t x, uint32_t seed)
  * all bits i with bit b set at once. Five steps, with no branch and no dependence on x. */
 static inline uint32_t ao_rng_pascal(uint32_t x)
 {
-    x ^= (x & 0xaaaaaaaau) >> 1;
-    x ^= (x & 0xccccccccu) >> 2;
-    x ^= (x & 0xf0f0f0f0u) >> 4;
-    x ^= (x & 0xff00ff00u) >> 8;
-    return x ^ ((x & 0xffff0000u) >> 16);
+    for (int b = 0; b < 5; b++)
+        x ^= (x & AO_RNG_PASCAL_BITS[b]) >> (1 << b);
+    return x;
 }
 
 /* What drawing from a stream needs of its key, derived once per stream: the key itself (random
@@ -130,11 +133,23 @@ static inline void ao_rng_lanes_set(struct ao_rng_lanes *lanes, enum ao_sequence
     }
 }
 
+#if defined(__GNUC__) && defined(__x86_64__)
+#define AO_RNG_GFNI 1
+/* Whether the CPU runs ao_rng_sobol_pairs_gfni (AVX-512 with byte shuffles, and GFNI). */
+bool ao_rng_gfni(void);
+/* ao_rng_pairs's Sobol pairs, bit for bit, 16 lanes a vector, each lane's bits reversed by a byte
+ * shuffle and one GF(2) affine map (rng_gfni.c). */
+void ao_rng_sobol_pairs_gfni(const struct ao_rng_lanes *restrict lanes, int n, float *restrict u1,
+                             float *restrict u2);
+#else
+#define AO_RNG_GFNI 0
+#endif
+
 /* The pairs of lanes 0..n-1 from `sequence` into u1[k]/u2[k]: loops that vectorize across lanes,
  * whatever their streams and sample numbers. */
 AO_VECTOR_CLONES
-static inline void ao_rng_pairs(enum ao_sequence sequence, const struct ao_rng_lanes *restrict lanes, int n,
-                                float *restrict u1, float *restrict u2)
+static inline void ao_rng_pairs_loops(enum ao_sequence sequence, const struct ao_rng_lanes *restrict lanes, int n,
+                                      float *restrict u1, float *restrict u2)
 {
     if (sequence == AO_SEQUENCE_SOBOL)
         for (int k = 0; k < n; k++)
@@ -143,6 +158,20 @@ static inline void ao_rng_pairs(enum ao_sequence sequence, const struct ao_rng_l
     else
         for (int k = 0; k < n; k++)
             ao_rng_pair(lanes->key[k], lanes->sample[k], &u1[k], &u2[k]);
+}
+
+/* The pairs of lanes 0..n-1 from `sequence` into u1[k]/u2[k]: Sobol pairs by
+ * ao_rng_sobol_pairs_gfni where the CPU has it, else ao_rng_pairs_loops; the same bits either way. */
+static inline void ao_rng_pairs(enum ao_sequence sequence, const struct ao_rng_lanes *restrict lanes, int n,
+                                float *restrict u1, float *restrict u2)
+{
+#if AO_RNG_GFNI
+    if (sequence == AO_SEQUENCE_SOBOL && ao_rng_gfni()) {
+        ao_rng_sobol_pairs_gfni(lanes, n, u1, u2);
+        return;
+    }
+#endif
+    ao_rng_pairs_loops(sequence, lanes, n, u1, u2);
 }
 
 #endif

@@ -230,20 +230,23 @@ static void assert_reference_pairs(const uint64_t *key, const uint64_t *index, i
     }
 }
 
-/* Pair index[k] of stream key[k] for k below n, drawn through lanes as the renderer draws them. */
-static void draw_sobol(const uint64_t *key, const uint64_t *index, int n, struct ao_rng_lanes *lanes, float *u1,
-                       float *u2)
+/* A way of drawing the Sobol pairs of lanes 0..n-1. */
+typedef void draw_pairs_fn(const struct ao_rng_lanes *lanes, int n, float *u1, float *u2);
+
+/* Pair index[k] of stream key[k] for k below n, drawn through lanes by draw. */
+static void draw_sobol(draw_pairs_fn *draw, const uint64_t *key, const uint64_t *index, int n,
+                       struct ao_rng_lanes *lanes, float *u1, float *u2)
 {
     for (int k = 0; k < n; k++) {
         struct ao_rng_stream s = ao_rng_stream(key[k]);
         ao_rng_lanes_set(lanes, AO_SEQUENCE_SOBOL, k, &s, index[k]);
     }
-    ao_rng_pairs(AO_SEQUENCE_SOBOL, lanes, n, u1, u2);
+    draw(lanes, n, u1, u2);
 }
 
-static void test_vector_sobol_equals_reference(void **state)
+/* Fails unless draw gives the reference's pairs bit for bit. */
+static void assert_draws_reference_sobol(draw_pairs_fn *draw)
 {
-    (void)state;
     /* Keys: 0, all ones, and pseudo-random ones (fixed seed); indices from 0, and around 2^31 (the
      * top bit of the scrambled index), 2^32 (where the sample number is truncated), 2^40 and the
      * top of the range. Drawn as the AO samples are (one stream, consecutive indices) and as the
@@ -265,7 +268,7 @@ static void test_vector_sobol_equals_reference(void **state)
                 int n = 1 + c % LANES < SPAN - done ? 1 + c % LANES : SPAN - done;
                 for (int k = 0; k < n; k++)
                     key[k] = keys[j], index[k] = STARTS[s] + (uint64_t)(done + k);
-                draw_sobol(key, index, n, &lanes, u1, u2);
+                draw_sobol(draw, key, index, n, &lanes, u1, u2);
                 assert_reference_pairs(key, index, n, u1, u2);
                 done += n;
             }
@@ -275,10 +278,34 @@ static void test_vector_sobol_equals_reference(void **state)
                 int n = 1 + c % LANES < KEYS - j ? 1 + c % LANES : KEYS - j;
                 for (int k = 0; k < n; k++)
                     key[k] = keys[j + k], index[k] = i;
-                draw_sobol(key, index, n, &lanes, u1, u2);
+                draw_sobol(draw, key, index, n, &lanes, u1, u2);
                 assert_reference_pairs(key, index, n, u1, u2);
                 j += n;
             }
+}
+
+/* The plain loops, as the vector clones of this CPU run them. */
+static void draw_loops(const struct ao_rng_lanes *lanes, int n, float *u1, float *u2)
+{
+    ao_rng_pairs_loops(AO_SEQUENCE_SOBOL, lanes, n, u1, u2);
+}
+
+static void test_vector_sobol_equals_reference(void **state)
+{
+    (void)state;
+    assert_draws_reference_sobol(draw_loops);
+}
+
+static void test_gfni_sobol_equals_reference(void **state)
+{
+    (void)state;
+#if AO_RNG_GFNI
+    if (ao_rng_gfni()) {
+        assert_draws_reference_sobol(ao_rng_sobol_pairs_gfni);
+        return;
+    }
+#endif
+    skip();
 }
 
 static void test_names_round_trip(void **state)
@@ -303,6 +330,7 @@ int main(void)
         cmocka_unit_test(test_histograms_match_pdfs),
         cmocka_unit_test(test_sobol_pairs_stratify),
         cmocka_unit_test(test_vector_sobol_equals_reference),
+        cmocka_unit_test(test_gfni_sobol_equals_reference),
         cmocka_unit_test(test_names_round_trip),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
