@@ -3,16 +3,10 @@
 
 static const float PI = 3.14159265358979323846f;
 
-/* How far from the local origin the viewer's pan and zoom may take the eye and the target: far
- * beyond any scene (scene.h's AO_SCENE_MAX_EXTENT, 2^31), and with an orbit about a target there
- * (at most 3 times this) well inside Embree's bound on ray origins (1.844e18, about 2^60.7), beyond
- * which its traversal aborts. */
-static const float MOVE_LIMIT = 0x1p48f;
-
-/* Whether p lies within MOVE_LIMIT of the origin in every coordinate (not NaN). */
+/* Whether p lies within AO_CAMERA_REACH of the origin in every coordinate (not NaN). */
 static bool within_reach(struct ao_vec3 p)
 {
-    return fabsf(p.x) <= MOVE_LIMIT && fabsf(p.y) <= MOVE_LIMIT && fabsf(p.z) <= MOVE_LIMIT;
+    return fabsf(p.x) <= AO_CAMERA_REACH && fabsf(p.y) <= AO_CAMERA_REACH && fabsf(p.z) <= AO_CAMERA_REACH;
 }
 
 bool ao_camera_view(const struct ao_camera *c, int width, int height, struct ao_view *v)

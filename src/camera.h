@@ -7,6 +7,12 @@
 
 #include "vec3.h"
 
+/* How far from the local origin, in every coordinate, the viewer's moves may take the eye and the
+ * target: far beyond any scene (scene.h's AO_SCENE_MAX_EXTENT, 2^31, whose framed camera stands
+ * within 4 times that), and with an orbit about a target there (at most 3 times this) well inside
+ * Embree's bound on ray origins (1.844e18, about 2^60.7), beyond which its traversal aborts. */
+#define AO_CAMERA_REACH 0x1p48f
+
 /* A pinhole camera as the scene file states it; fov is vertical, in degrees. */
 struct ao_camera {
     struct ao_vec3 eye, target, up;
@@ -45,14 +51,15 @@ static inline struct ao_vec3 ao_camera_ray(const struct ao_view *v, float x, flo
 void ao_camera_orbit(struct ao_camera *c, float yaw, float pitch);
 
 /* Moves eye and target sideways and up by fractions of the view's height at the target; not where
- * either would pass 2^48 from the origin in a coordinate (camera.c's MOVE_LIMIT). */
+ * either would pass AO_CAMERA_REACH from the origin in a coordinate. */
 void ao_camera_pan(struct ao_camera *c, float dx, float dy);
 
-/* Moves the eye towards the target by factor (< 1 zooms in), never onto it, nor past 2^48 from the
- * origin in a coordinate. */
+/* Moves the eye towards the target by factor (< 1 zooms in), never onto it, nor past AO_CAMERA_REACH
+ * from the origin in a coordinate. */
 void ao_camera_zoom(struct ao_camera *c, float factor);
 
-/* Points the camera at a bounding box from the front, slightly above, so that it fills the view. */
+/* Points the camera at a bounding box from the front, slightly above, so that it fills the view:
+ * the eye 1.1 / sin 20° = 3.22 half-diagonals from the box's centre, outside the box. */
 void ao_camera_frame_box(struct ao_camera *c, struct ao_vec3 lo, struct ao_vec3 hi);
 
 #endif

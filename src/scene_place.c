@@ -406,9 +406,10 @@ bool ao_world_bounds(const struct ao_scene *s, const struct ao_world *w, struct 
  *   |Ng|; below 2^-126 the product flushes to 0, the ray meets its own facet at t = 0 and the
  *   facet turns black. So |Ng| >= 2^-26, which a facet spanning the scene (|Ng| = E^2 for a
  *   square) reaches at E = 2^-13 = 1.22e-4; AO_SCENE_MIN_EXTENT = 2^-12 = 2.44e-4 keeps a factor 2.
- * The camera's eye and target are ray origins and directions: they belong to the box (Embree's
- * check, and the depth test's o), and ao_camera_view squares their distance, which must therefore
- * stay above 2^-63 (MIN_CAMERA_DISTANCE = 2^-60). Detail finer than the scene is not checked: a
+ * A camera line's eye and target are ray origins and directions: they belong to the box (Embree's
+ * check, and the depth test's o; the camera framing a scene without one stands outside it, within
+ * 3.3 E of the origin, which those bounds allow), and ao_camera_view squares their distance,
+ * which must therefore stay above 2^-63 (MIN_CAMERA_DISTANCE = 2^-60). Detail finer than the scene is not checked: a
  * triangle whose |Ng| is below 2^-63 (edges of about 3e-10) is shaded with the eye-facing normal
  * that stands in for degenerate ones, and a facet in a coordinate plane through the origin with
  * |Ng| below 2^-26 occludes itself, whatever the scene's size. */

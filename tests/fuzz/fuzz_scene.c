@@ -50,12 +50,18 @@ static void write_meshes(void)
     fuzz_write_file(fuzz_temp_path("nodes.gltf"), gltf, sizeof gltf - 1);
 }
 
+/* The largest of p's coordinates in magnitude (NaN when one is). */
+static float largest_coordinate(struct ao_vec3 p)
+{
+    return ao_vec3_is_finite(p) ? fmaxf(fabsf(p.x), fmaxf(fabsf(p.y), fabsf(p.z))) : NAN;
+}
+
 /* A message when a point of the local frame lies beyond what scene_place.c accepts, else NULL. */
 static const char *check_point(struct ao_vec3 p)
 {
     if (!ao_vec3_is_finite(p))
         return "non-finite position";
-    if (fmaxf(fabsf(p.x), fmaxf(fabsf(p.y), fabsf(p.z))) > AO_SCENE_MAX_EXTENT)
+    if (largest_coordinate(p) > AO_SCENE_MAX_EXTENT)
         return "position beyond the range scene_place.c accepts";
     return NULL;
 }
@@ -104,9 +110,14 @@ static void check(const struct ao_scene *s)
     for (size_t i = 0; !broken && i < s->sphere_count; i++)
         if (!(s->spheres[i].radius > 0.0f))
             broken = "sphere without a positive radius";
-    struct ao_vec3 eye = s->camera.eye;
-    if (!broken && !(fmaxf(fabsf(eye.x), fmaxf(fabsf(eye.y), fabsf(eye.z))) <= AO_SCENE_MAX_EXTENT))
-        broken = "eye beyond the range scene_place.c accepts";
+    /* A camera line's eye and target lie in the scene's range (scene_place.c's check_range). The
+     * camera framing a scene without one stands 3.22 half-diagonals (each at most sqrt(3) / 2 of
+     * AO_SCENE_MAX_EXTENT) from the box's centre, itself at most half AO_SCENE_MAX_EXTENT from the
+     * origin: its eye within 3.3 AO_SCENE_MAX_EXTENT, its target (the centre) in range. */
+    if (!broken && !(largest_coordinate(s->camera.eye) <= 4.0f * AO_SCENE_MAX_EXTENT))
+        broken = "eye beyond where scene_place.c puts it";
+    if (!broken && !(largest_coordinate(s->camera.target) <= AO_SCENE_MAX_EXTENT))
+        broken = "target beyond the range scene_place.c accepts";
     if (!broken && !(s->ao_distance > 0.0f))
         broken = "ao-distance not positive";
     if (!broken && (s->width < 0 || s->height < 0))

@@ -127,6 +127,25 @@ static void test_parser_errors(void **state)
         expect_error(errors[k].text, errors[k].line, errors[k].message, false);
 }
 
+/* A scene near the largest size, without a camera line, is framed from outside the range a camera
+ * line must keep to: the eye 3.22 half-diagonals from the centre (scene.h's ao_camera_frame_box),
+ * beyond AO_SCENE_MAX_EXTENT yet within the 3.3 times it that the fuzz harness checks, and a view. */
+static void test_the_largest_scenes_are_framed_from_outside_them(void **state)
+{
+    (void)state;
+    static const char text[] = "quad corner -6.5e8 0 -6.5e8 edge1 0 0 1.3e9 edge2 1.3e9 0 0\n"
+                               "sphere center 0 2e8 0 radius 2e8\n";
+    struct ao_scene scene;
+    char err[1024];
+    assert_true(load_captured_scene(&scene, FROM_TEXT, "largest.scene", text, NULL, err, sizeof err));
+    struct ao_vec3 eye = scene.camera.eye;
+    float far = fmaxf(fabsf(eye.x), fmaxf(fabsf(eye.y), fabsf(eye.z)));
+    assert_true(far > AO_SCENE_MAX_EXTENT && far <= 3.3f * AO_SCENE_MAX_EXTENT);
+    struct ao_view view;
+    assert_true(ao_camera_view(&scene.camera, 64, 48, &view));
+    ao_scene_finish(&scene);
+}
+
 /* A line of more than 4096 characters, and one of more than 64 words, each refused at its line;
  * a mesh line naming a file that cannot load: that file's own one line. */
 static void test_line_limits(void **state)
@@ -426,6 +445,7 @@ int main(void)
         cmocka_unit_test(test_parser_errors),
         cmocka_unit_test(test_line_limits),
         cmocka_unit_test(test_file_errors),
+        cmocka_unit_test(test_the_largest_scenes_are_framed_from_outside_them),
         cmocka_unit_test(test_defaults),
         cmocka_unit_test(test_bvh_through_every_entry),
         cmocka_unit_test(test_budget_through_every_entry),
