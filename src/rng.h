@@ -1,5 +1,5 @@
 /* Counter-based random numbers: every value is a pure function of (seed, pixel, pass, sample), so
- * results never depend on which thread ran which tile. Header only. */
+ * results never depend on which thread ran which tile. Inline, but for the GFNI path in rng.c. */
 #ifndef AO_RNG_H
 #define AO_RNG_H
 
@@ -138,7 +138,7 @@ static inline void ao_rng_lanes_set(struct ao_rng_lanes *lanes, enum ao_sequence
 /* Whether the CPU runs ao_rng_sobol_pairs_gfni (AVX-512 with byte shuffles, and GFNI). */
 bool ao_rng_gfni(void);
 /* ao_rng_pairs's Sobol pairs, bit for bit, 16 lanes a vector, each lane's bits reversed by a byte
- * shuffle and one GF(2) affine map (rng_gfni.c). */
+ * shuffle and one GF(2) affine map (rng.c). */
 void ao_rng_sobol_pairs_gfni(const struct ao_rng_lanes *restrict lanes, int n, float *restrict u1,
                              float *restrict u2);
 #else

@@ -1,7 +1,7 @@
-/* Sobol pairs on AVX-512 with GFNI; see rng.h. The four bit reversals of a pair are most of
- * ao_rng_sobol_seeded's work in plain vector code (five rounds of shifts and masks each); here each
- * is a byte shuffle and one affine map, and the result is the same bit for bit
- * (test_gfni_sobol_equals_reference). */
+/* Counter-based random numbers (see rng.h): the Sobol pairs on AVX-512 with GFNI. The four bit
+ * reversals of a pair are most of ao_rng_sobol_seeded's work in plain vector code (five rounds of
+ * shifts and masks each); here each is a byte shuffle and one affine map, and the result is the
+ * same bit for bit (test_gfni_sobol_equals_reference). */
 #include "rng.h"
 
 #if AO_RNG_GFNI
