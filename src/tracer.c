@@ -593,14 +593,144 @@ double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packe
     return seconds;
 }
 
-/* ao_tracer_intersect_arrays's job: the rays, the scene, the outputs, the next ray to take. */
-struct arrays_job {
+/* ---- Ray batches against a mesh given as arrays (the Python module's ray_mesh_intersect).
+ * Each ray is brought to the mesh before Embree sees it, so that what Embree's robust triangle test
+ * (Pluecker's, in single precision, with flush-to-zero) forms stays between 2^-126 and 2^128 for
+ * any ray the caller may give: coordinates within AO_TRACER_ARRAYS_LIMIT, a mesh from
+ * AO_SCENE_MIN_EXTENT to AO_SCENE_MAX_EXTENT across (the scenes' range, scene_place.c). With E the
+ * mesh's largest side:
+ * - The direction is scaled by a power of two that puts its largest component in [1, 2): exact,
+ *   and the triangle test's t and weights scale with it exactly, so t comes back in the caller's
+ *   units (in double: a short direction's t may pass the float range). A zero direction meets
+ *   nothing and is not traced.
+ * - An origin outside the box around the mesh grown by FAR E on each side starts at the ray's
+ *   entry into that box, or at tnear if later (in double; that part's t is added back; nothing of
+ *   the mesh lies there); a ray that misses the grown box, or leaves it before tnear, meets
+ *   nothing. Every origin Embree sees is then within (2 FAR + 1) E = 33 E of each vertex per axis.
+ * - So the test's edges (at most 2E per axis), offsets from the origin (33E), their cross products
+ *   (2 * 2E * 66E) and Ng = e1 x e2 (2 (2E)^2), dotted with an offset (3 * 33E * 8E^2) or the
+ *   direction (< 2), stay below 2^14 E^3 < 2^108 for E <= 2^31: finite. A facet spanning the mesh
+ *   (E >= 2^-12) has |Ng| near E^2 >= 2^-24, far above 2^-126; finer detail is not checked, as in
+ *   scenes. The far origin's precision is that of the box, not of its own distance.
+ * - Embree aborts the process on a ray whose |org| or |dir| component passes FLT_LARGE = 1.844e18
+ *   (its ray.valid() check): origins, directions and vertices within 2^60 = 1.153e18 keep every
+ *   moved origin (at most 2^60 + 33 * 2^31) and scaled direction below it. */
+enum { FAR = 16 };
+
+struct ao_tracer_arrays {
+    RTCDevice device;
     RTCScene scene;
+    double lo[3], hi[3];   /* the box around the positions grown by FAR times its largest side */
+};
+
+struct ao_tracer_arrays *ao_tracer_arrays_create(const float *positions, size_t vertex_count, const uint32_t *indices,
+                                                 size_t triangle_count)
+{
+    struct ao_tracer_arrays *mesh = calloc(1, sizeof *mesh);
+    RTCDevice device = mesh ? rtcNewDevice(NULL) : NULL;
+    if (!device) {
+        fprintf(stderr, "aoview: Embree could not create a device (error %d)\n", (int)rtcGetDeviceError(NULL));
+        free(mesh);
+        return NULL;
+    }
+    rtcSetDeviceErrorFunction(device, report, NULL);
+    mesh->device = device;
+    RTCScene scene = mesh->scene = rtcNewScene(device);
+    RTCGeometry g = scene ? rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE) : NULL;
+    /* Embree's own copies: it reads 16 bytes at a time past the last position. */
+    float *p = g ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                           vertex_count) : NULL;
+    uint32_t *i3 = p ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
+                                               triangle_count) : NULL;
+    bool ok = i3 != NULL;
+    if (ok) {
+        memcpy(p, positions, 3 * sizeof(float) * vertex_count);
+        memcpy(i3, indices, 3 * sizeof(uint32_t) * triangle_count);
+        rtcCommitGeometry(g);
+        rtcAttachGeometry(scene, g);
+        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+        rtcCommitScene(scene);
+        ok = rtcGetDeviceError(device) == RTC_ERROR_NONE;
+    }
+    if (g)
+        rtcReleaseGeometry(g);
+    if (!ok) {
+        fprintf(stderr, "aoview: Embree could not build the mesh (out of memory?)\n");
+        ao_tracer_arrays_destroy(mesh);
+        return NULL;
+    }
+    double side = 0.0;
+    for (int k = 0; k < 3; k++) {
+        mesh->lo[k] = INFINITY, mesh->hi[k] = -INFINITY;
+        for (size_t v = 0; v < vertex_count; v++) {
+            mesh->lo[k] = fmin(mesh->lo[k], positions[3 * v + k]);
+            mesh->hi[k] = fmax(mesh->hi[k], positions[3 * v + k]);
+        }
+        side = fmax(side, mesh->hi[k] - mesh->lo[k]);
+    }
+    for (int k = 0; k < 3; k++)
+        mesh->lo[k] -= FAR * side, mesh->hi[k] += FAR * side;
+    return mesh;
+}
+
+void ao_tracer_arrays_destroy(struct ao_tracer_arrays *mesh)
+{
+    if (!mesh)
+        return;
+    if (mesh->scene)
+        rtcReleaseScene(mesh->scene);
+    rtcReleaseDevice(mesh->device);
+    free(mesh);
+}
+
+/* The ray o + t d, t >= tnear, brought to the mesh as the derivation above says: into *out, its
+ * direction d * *scale, with *skip (the t of the part skipped, in the units of that direction):
+ * the caller's t is (*skip + Embree's t) * *scale. False when it meets nothing. */
+static bool bring(const struct ao_tracer_arrays *mesh, const float o[3], const float d[3], float tnear,
+                  struct RTCRay *out, double *skip, double *scale)
+{
+    float most = fmaxf(fmaxf(fabsf(d[0]), fabsf(d[1])), fabsf(d[2]));
+    if (!(most > 0.0f))
+        return false;
+    int e;
+    frexpf(most, &e);
+    *scale = ldexp(1.0, 1 - e);                     /* most * *scale is in [1, 2) */
+    float ds[3] = {ldexpf(d[0], 1 - e), ldexpf(d[1], 1 - e), ldexpf(d[2], 1 - e)};
+    double near = tnear / *scale, enter = -INFINITY, leave = INFINITY;
+    bool inside = true;
+    for (int k = 0; k < 3; k++) {
+        inside = inside && o[k] >= mesh->lo[k] && o[k] <= mesh->hi[k];
+        if (ds[k] != 0.0f) {
+            double a = (mesh->lo[k] - o[k]) / ds[k], b = (mesh->hi[k] - o[k]) / ds[k];
+            enter = fmax(enter, fmin(a, b));
+            leave = fmin(leave, fmax(a, b));
+        } else if (o[k] < mesh->lo[k] || o[k] > mesh->hi[k]) {
+            return false;
+        }
+    }
+    *skip = 0.0;
+    if (inside) {
+        to_single(o[0], o[1], o[2], ds[0], ds[1], ds[2], INFINITY, out);
+        out->tnear = (float)near;
+        return true;
+    }
+    *skip = fmax(enter, near);
+    if (*skip > leave)
+        return false;
+    to_single((float)(o[0] + *skip * ds[0]), (float)(o[1] + *skip * ds[1]), (float)(o[2] + *skip * ds[2]), ds[0],
+              ds[1], ds[2], INFINITY, out);
+    return true;
+}
+
+/* ao_tracer_intersect_arrays's job: the rays, the mesh, the outputs, the next ray to take. */
+struct arrays_job {
+    const struct ao_tracer_arrays *mesh;
     const float *origins, *directions;
     size_t count;
-    float *t;
+    float tnear;
+    double *t;
     int32_t *ids;
-    float *barys;
+    double *barys;
     atomic_size_t next;
 };
 
@@ -620,69 +750,38 @@ static void intersect_arrays_job(void *user, int self)
             return;
         size_t end = job->count - first < RUN ? job->count : first + RUN;
         for (size_t i = first; i < end; i++) {
-            const float *o = job->origins + 3 * i, *d = job->directions + 3 * i;
             _Alignas(16) struct RTCRayHit rh;
-            to_single(o[0], o[1], o[2], d[0], d[1], d[2], INFINITY, &rh.ray);
+            double skip, scale;
             rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-            rtcIntersect1(job->scene, &context, &rh);
+            if (bring(job->mesh, job->origins + 3 * i, job->directions + 3 * i, job->tnear, &rh.ray, &skip, &scale))
+                rtcIntersect1(job->mesh->scene, &context, &rh);
             bool hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-            float u = hit ? rh.hit.u : 0.0f, v = hit ? rh.hit.v : 0.0f;
-            job->t[i] = hit ? rh.ray.tfar : INFINITY;
+            double u = hit ? rh.hit.u : 0.0, v = hit ? rh.hit.v : 0.0;
+            job->t[i] = hit ? (skip + rh.ray.tfar) * scale : INFINITY;
             job->ids[i] = hit ? (int32_t)rh.hit.primID : -1;
-            job->barys[3 * i] = hit ? 1.0f - u - v : 0.0f;
+            job->barys[3 * i] = hit ? 1.0 - u - v : 0.0;
             job->barys[3 * i + 1] = u;
             job->barys[3 * i + 2] = v;
         }
     }
 }
 
-bool ao_tracer_intersect_arrays(const float *positions, size_t vertex_count, const uint32_t *indices,
-                                size_t triangle_count, const float *origins, const float *directions, size_t count,
-                                int threads, float *t, int32_t *ids, float *barys)
+bool ao_tracer_intersect_arrays(const struct ao_tracer_arrays *mesh, const float *origins, const float *directions,
+                                size_t count, float tnear, int threads, double *t, int32_t *ids, double *barys)
 {
-    RTCDevice device = rtcNewDevice(NULL);
-    if (!device) {
-        fprintf(stderr, "aoview: Embree could not create a device (error %d)\n", (int)rtcGetDeviceError(NULL));
+    struct ao_pool *pool = ao_pool_create(threads, ao_tracer_thread_init);
+    if (!pool)
         return false;
-    }
-    rtcSetDeviceErrorFunction(device, report, NULL);
-    RTCScene scene = rtcNewScene(device);
-    RTCGeometry g = scene ? rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE) : NULL;
-    /* Embree's own copies: it reads 16 bytes at a time past the last position. */
-    float *p = g ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
-                                           vertex_count) : NULL;
-    uint32_t *i3 = p ? rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
-                                               triangle_count) : NULL;
-    struct ao_pool *pool = NULL;
-    bool ok = i3 != NULL;
-    if (ok) {
-        memcpy(p, positions, 3 * sizeof(float) * vertex_count);
-        memcpy(i3, indices, 3 * sizeof(uint32_t) * triangle_count);
-        rtcCommitGeometry(g);
-        rtcAttachGeometry(scene, g);
-        rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
-        rtcCommitScene(scene);
-        ok = rtcGetDeviceError(device) == RTC_ERROR_NONE;
-    }
-    if (!ok)
-        fprintf(stderr, "aoview: Embree could not build the mesh (out of memory?)\n");
-    else if ((ok = (pool = ao_pool_create(threads, ao_tracer_thread_init)) != NULL)) {
-        struct arrays_job job = {.scene = scene, .origins = origins, .directions = directions, .count = count,
-                                 .t = t, .ids = ids, .barys = barys};
+    struct arrays_job job = {.mesh = mesh, .origins = origins, .directions = directions, .count = count,
+                             .tnear = tnear, .t = t, .ids = ids, .barys = barys};
 #if defined(__SSE__)
-        unsigned modes = _mm_getcsr();   /* the caller's floating-point modes, given back */
+    unsigned modes = _mm_getcsr();   /* the caller's floating-point modes, given back */
 #endif
-        ao_tracer_thread_init();
-        ao_pool_run(pool, intersect_arrays_job, &job);
+    ao_tracer_thread_init();
+    ao_pool_run(pool, intersect_arrays_job, &job);
 #if defined(__SSE__)
-        _mm_setcsr(modes);
+    _mm_setcsr(modes);
 #endif
-    }
     ao_pool_destroy(pool);
-    if (g)
-        rtcReleaseGeometry(g);
-    if (scene)
-        rtcReleaseScene(scene);
-    rtcReleaseDevice(device);
-    return ok;
+    return true;
 }

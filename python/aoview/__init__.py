@@ -15,7 +15,8 @@ import numpy as np
 
 from . import _core
 
-__all__ = ['Scene', 'Pass', 'render', 'passes', 'exact', 'ray_mesh_intersect', 'view']
+__all__ = ['Scene', 'Pass', 'render', 'passes', 'exact', 'ray_mesh_intersect', 'ray_mesh_intersect_precompute',
+           'RayMeshIntersector', 'view']
 
 # Keyword arguments that are aoview options taking a value, and the two on/off switches; `size` is
 # (width, height).
@@ -52,27 +53,40 @@ def _argv(settings, allowed, where):
     return argv
 
 
-def _real_array(a, name, columns):
-    """a as a C-contiguous native float32 array of shape (n, columns), n >= 1, every value finite
-    (TypeError for a non-numeric dtype, ValueError for a shape, an empty array, or a value that is
-    not finite, or not one once single precision)."""
+def _real_array(a, name, columns, allow_empty=False):
+    """a copied into a C-contiguous native float32 array of shape (n, columns), n >= 1 (or 0 where
+    allowed), every value finite (TypeError for a non-numeric dtype, ValueError for a shape, an
+    empty array, or a value that is not finite, or not one once single precision). The copy is
+    checked, not the caller's array, which another thread may change meanwhile."""
     a = np.asarray(a)
     if a.dtype.kind not in 'fiu':
         raise TypeError(f'{name}: expected an array of real numbers, got dtype {a.dtype}')
     if a.ndim != 2 or a.shape[1] != columns:
         raise ValueError(f'{name}: expected shape (n, {columns}), got {a.shape}')
-    if a.shape[0] == 0:
+    if a.shape[0] == 0 and not allow_empty:
         raise ValueError(f'{name}: empty')
     with np.errstate(over='ignore', invalid='ignore'):
-        f = np.ascontiguousarray(a, dtype=np.float32)
-    if not np.isfinite(f).all():
-        row = int(np.argmax(~np.isfinite(f).all(axis=1)))
-        raise ValueError(f'{name}: row {row} is not finite in single precision: {a[row].tolist()}')
+        f = np.array(a, dtype=np.float32, order='C', copy=True)
+    finite = np.isfinite(f).all(axis=1)
+    if not finite.all():
+        row = int(np.argmin(finite))
+        raise ValueError(f'{name}: row {row} is not finite in single precision: {f[row].tolist()}')
     return f
 
 
+def _in_reach(f, name):
+    """ValueError naming the first row of f with a coordinate beyond what Embree takes (see
+    _RAY_LIMIT)."""
+    far = (np.abs(f) > _RAY_LIMIT).any(axis=1)
+    if far.any():
+        row = int(np.argmax(far))
+        raise ValueError(f'{name}: row {row} holds {f[row].tolist()}, beyond the {_RAY_LIMIT:.4g} '
+                         'that ray_mesh_intersect takes (docs/python.md)')
+
+
 def _index_array(a, name, vertices):
-    """a as a C-contiguous uint32 array of shape (m, 3), m >= 1, every index in [0, vertices)."""
+    """a copied into a C-contiguous uint32 array of shape (m, 3), m >= 1, every index in [0,
+    vertices); the copy is checked, as _real_array's."""
     a = np.asarray(a)
     if a.dtype.kind not in 'iu':
         raise TypeError(f'{name}: expected an array of integers, got dtype {a.dtype}')
@@ -80,12 +94,13 @@ def _index_array(a, name, vertices):
         raise ValueError(f'{name}: expected shape (m, 3), got {a.shape}')
     if a.shape[0] == 0:
         raise ValueError(f'{name}: empty')
+    a = np.array(a, order='C', copy=True)
     bad = ((a < 0) | (a >= vertices)).any(axis=1)
     if bad.any():
         row = int(np.argmax(bad))
         raise ValueError(f'{name}: row {row} holds a vertex index out of range ({vertices} vertices): '
                          f'{a[row].tolist()}')
-    return np.ascontiguousarray(a, dtype=np.uint32)
+    return a.astype(np.uint32)
 
 
 def _triple(value, name):
@@ -151,7 +166,7 @@ class Scene:
             if n.shape != v.shape:
                 raise ValueError(f'normals: expected shape {v.shape} (one per vertex), got {n.shape}')
             with np.errstate(over='ignore', invalid='ignore'):
-                n = np.ascontiguousarray(n, dtype=np.float32)
+                n = np.array(n, dtype=np.float32, order='C', copy=True)
         rows = []
         for i, sphere in enumerate(spheres or ()):
             if not isinstance(sphere, (tuple, list)) or len(sphere) not in (2, 3):
@@ -314,28 +329,92 @@ def exact(scene, *, size=None, aa=None, spp=None):
     return _image(out, scene)
 
 
-def ray_mesh_intersect(origins, directions, vertices, faces, *, threads=None):
-    """Closest hits of the rays origins[i] + t directions[i], t > 0, on the triangle mesh (vertices
-    (n, 3), faces (m, 3)), traced by Embree on every core (or `threads`), as
-    gpytoolbox.ray_mesh_intersect returns them: hit_distances (k,) float64 (t in the units of
-    the directions; inf on a miss), triangle_hit_ids (k,) int64 (-1 on a miss), barys (k, 3)
-    float64 (the weights of the triangle's three corners at the hit; zeros on a miss). Computed in
-    single precision."""
-    o, d = np.asarray(origins), np.asarray(directions)
-    if o.ndim == 2 and o.shape[0] == 0 and o.shape[1:] == d.shape[1:] == (3,) and d.shape[0] == 0:
-        return np.zeros(0), np.zeros(0, dtype=np.int64), np.zeros((0, 3))
-    o, d = _real_array(o, 'origins', 3), _real_array(d, 'directions', 3)
-    if len(o) != len(d):
-        raise ValueError(f'origins and directions: {len(o)} and {len(d)} rays')
-    v = _real_array(vertices, 'vertices', 3)
-    f = _index_array(faces, 'faces', len(v))
-    chosen = _core.parse(_argv(dict(threads=threads), ('threads',), 'ray_mesh_intersect'))
-    k = len(o)
-    t = np.empty(k, np.float32)
-    ids = np.empty(k, np.int32)
-    barys = np.empty((k, 3), np.float32)
-    _core.intersect(v, len(v), f, len(f), o, d, k, chosen or _core.cores(), t, ids, barys)
-    return t.astype(np.float64), ids.astype(np.int64), barys.astype(np.float64)
+# What ray_mesh_intersect takes (tracer.h and tracer.c derive both): every coordinate of the
+# vertices, origins and directions within 2^60 = 1.153e18 in magnitude (Embree aborts the process on
+# a ray past 1.844e18), a mesh from 2^-12 to 2^31 across (the range of aoview's scenes, within
+# which Embree's triangle test neither overflows nor flushes to zero).
+_RAY_LIMIT = _core.ARRAYS_LIMIT
+_MESH_EXTENT = (_core.MIN_EXTENT, _core.MAX_EXTENT)
+
+# gpytoolbox's Embree path reports no hit nearer than this along a ray (in the units of its direction).
+TNEAR = 1e-4
+
+
+class RayMeshIntersector:
+    """A triangle mesh's Embree BVH, built once for many batches of rays: as gpytoolbox's
+    ray_mesh_intersect_precompute(V, F). intersect(origins, directions) is
+    ray_mesh_intersect(origins, directions, V, F) without the build; the object is passed as
+    ray_mesh_intersect(..., intersector=it) too. V and F are the mesh's copies (float64, int32)."""
+
+    def __init__(self, V, F):
+        v = _real_array(V, 'vertices', 3)
+        f = _index_array(F, 'faces', len(v))
+        _in_reach(v, 'vertices')
+        lo, hi = v.min(axis=0), v.max(axis=0)
+        axis = int(np.argmax(hi.astype(np.float64) - lo))
+        side = float(hi[axis]) - float(lo[axis])
+        if not _MESH_EXTENT[0] <= side <= _MESH_EXTENT[1]:
+            raise ValueError(f'vertices: the mesh is {side:.3g} across (rows {int(np.argmin(v[:, axis]))} and '
+                             f'{int(np.argmax(v[:, axis]))}); ray_mesh_intersect takes meshes from '
+                             f'{_MESH_EXTENT[0]:.3g} to {_MESH_EXTENT[1]:.3g} across (docs/python.md)')
+        self._mesh = _core.Mesh(v, len(v), f, len(f))
+        self._V = v.astype(np.float64)
+        self._F = f.astype(np.int32)
+
+    @property
+    def V(self):
+        """The vertices (n, 3) float64, as the mesh holds them (single precision)."""
+        return self._V
+
+    @property
+    def F(self):
+        """The faces (m, 3) int32."""
+        return self._F
+
+    def intersect(self, origins, directions, *, tnear=TNEAR, threads=None):
+        """The closest hits of the rays origins[i] + t directions[i], t >= tnear, as
+        ray_mesh_intersect returns them."""
+        o = _real_array(origins, 'origins', 3, allow_empty=True)
+        d = _real_array(directions, 'directions', 3, allow_empty=True)
+        if len(o) != len(d):
+            raise ValueError(f'origins and directions: {len(o)} and {len(d)} rays')
+        _in_reach(o, 'origins')
+        _in_reach(d, 'directions')
+        if isinstance(tnear, bool) or not isinstance(tnear, numbers.Real) or not 0.0 <= float(tnear) < np.inf:
+            raise ValueError(f'tnear: expected a finite number from 0, got {tnear!r}')
+        chosen = _core.parse(_argv(dict(threads=threads), ('threads',), 'ray_mesh_intersect'))
+        k = len(o)
+        t = np.empty(k, np.float64)
+        ids = np.empty(k, np.int32)
+        barys = np.empty((k, 3), np.float64)
+        if k:
+            self._mesh.intersect(o, d, k, float(tnear), chosen or _core.cores(), t, ids, barys)
+        return t, ids, barys
+
+
+def ray_mesh_intersect_precompute(V, F):
+    """gpytoolbox's ray_mesh_intersect_precompute: the mesh's BVH built once (a RayMeshIntersector),
+    for its intersect(origins, directions) or ray_mesh_intersect(..., intersector=it)."""
+    return RayMeshIntersector(V, F)
+
+
+def ray_mesh_intersect(cam_pos, cam_dir, V, F, use_embree=True, C=None, W=None, CH=None, tri_ind=None,
+                       intersector=None, *, tnear=TNEAR, threads=None):
+    """Closest hits of the rays cam_pos[i] + t cam_dir[i], t >= tnear (1e-4, as gpytoolbox's Embree
+    path), on the triangle mesh (V (n, 3), F (m, 3)), traced by Embree on every core (or
+    `threads`), as gpytoolbox.ray_mesh_intersect returns them: hit_distances (k,) float64 (t in the
+    units of the directions; inf on a miss), triangle_hit_ids (k,) int32 (-1 on a miss), barys (k,
+    3) float64 (the weights of the triangle's three corners at the hit; zeros on a miss). Computed
+    in single precision. gpytoolbox's signature: use_embree, C, W, CH and tri_ind are accepted and
+    change nothing (aoview always traces with Embree; C, W, CH, tri_ind are gpytoolbox's own tree for
+    its Python path); intersector, a RayMeshIntersector (ray_mesh_intersect_precompute), traces on
+    its BVH, and V and F are then not read."""
+    if intersector is None:
+        intersector = RayMeshIntersector(V, F)
+    elif not isinstance(intersector, RayMeshIntersector):
+        raise TypeError(f'intersector: expected aoview.ray_mesh_intersect_precompute(V, F), got '
+                        f'{type(intersector).__name__}')
+    return intersector.intersect(cam_pos, cam_dir, tnear=tnear, threads=threads)
 
 
 def view(scene, **settings):

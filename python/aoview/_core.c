@@ -587,33 +587,44 @@ static PyObject *core_exact(PyObject *module, PyObject *args)
     return Py_BuildValue("s", facts.kind);
 }
 
-/* intersect(positions float32 (n,3), n, indices uint32 (m,3), m, origins float32 (k,3),
- * directions float32 (k,3), k, threads, t float32 (k,), ids int32 (k,), barys float32 (k,3)). */
-static PyObject *core_intersect(PyObject *module, PyObject *args)
+/* ------------------------------------------------------------------ Mesh: a BVH for ray batches */
+
+typedef struct {
+    PyObject_HEAD
+    struct ao_tracer_arrays *mesh;
+} MeshObject;
+
+static void mesh_dealloc(MeshObject *self)
 {
-    (void)module;
-    PyObject *o[7];
-    Py_ssize_t n, m, k;
+    ao_tracer_arrays_destroy(self->mesh);
+    Py_TYPE(self)->tp_free((PyObject *)self);
+}
+
+/* intersect(origins float32 (k,3), directions float32 (k,3), k, tnear, threads, t float64 (k,),
+ * ids int32 (k,), barys float64 (k,3)): the closest hits, written into the last three. */
+static PyObject *mesh_intersect(MeshObject *self, PyObject *args)
+{
+    PyObject *o[5];
+    Py_ssize_t k;
+    float tnear;
     int threads;
-    if (!PyArg_ParseTuple(args, "OnOnOOniOOO", &o[0], &n, &o[1], &m, &o[2], &o[3], &k, &threads, &o[4], &o[5], &o[6]))
+    if (!PyArg_ParseTuple(args, "OOnfiOOO", &o[0], &o[1], &k, &tnear, &threads, &o[2], &o[3], &o[4]))
         return NULL;
-    static const char *const names[7] = {"vertices", "faces", "origins", "directions", "hit_distances",
-                                         "triangle_hit_ids", "barys"};
-    const size_t sizes[7] = {12, 12, 12, 12, 4, 4, 12};
-    const size_t counts[7] = {(size_t)n, (size_t)m, (size_t)k, (size_t)k, (size_t)k, (size_t)k, (size_t)k};
-    Py_buffer b[7];
+    static const char *const names[5] = {"origins", "directions", "hit_distances", "triangle_hit_ids", "barys"};
+    const size_t sizes[5] = {12, 12, 8, 4, 24};
+    Py_buffer b[5];
     int got = 0;
-    for (; got < 7; got++)
-        if (!get_buffer(o[got], &b[got], sizes[got], counts[got], got >= 4, names[got]))
+    for (; got < 5; got++)
+        if (!get_buffer(o[got], &b[got], sizes[got], (size_t)k, got >= 2, names[got]))
             break;
-    bool ok = got == 7;
+    bool ok = got == 5;
     if (ok) {
         struct capture c;
         ok = capture_begin(&c);
         if (ok) {
             Py_BEGIN_ALLOW_THREADS
-            ok = ao_tracer_intersect_arrays(b[0].buf, (size_t)n, b[1].buf, (size_t)m, b[2].buf, b[3].buf, (size_t)k,
-                                            threads, b[4].buf, b[5].buf, b[6].buf);
+            ok = ao_tracer_intersect_arrays(self->mesh, b[0].buf, b[1].buf, (size_t)k, tnear, threads, b[2].buf,
+                                            b[3].buf, b[4].buf);
             Py_END_ALLOW_THREADS
             if (ok)
                 capture_end(&c);
@@ -627,6 +638,61 @@ static PyObject *core_intersect(PyObject *module, PyObject *args)
         return NULL;
     Py_RETURN_NONE;
 }
+
+static PyMethodDef mesh_methods[] = {
+    {"intersect", (PyCFunction)mesh_intersect, METH_VARARGS, "the closest hits of a batch of rays"},
+    {NULL, NULL, 0, NULL},
+};
+
+/* Mesh(positions float32 (n,3), n, indices uint32 (m,3), m): the mesh's BVH, built with the GIL
+ * released (the arrays are copied). */
+static PyObject *mesh_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
+{
+    PyObject *o[2];
+    Py_ssize_t n, m;
+    if (kwds && PyDict_Size(kwds) > 0) {
+        PyErr_SetString(PyExc_TypeError, "Mesh() takes no keyword arguments");
+        return NULL;
+    }
+    if (!PyArg_ParseTuple(args, "OnOn", &o[0], &n, &o[1], &m))
+        return NULL;
+    Py_buffer b[2];
+    if (!get_buffer(o[0], &b[0], 12, (size_t)n, false, "vertices"))
+        return NULL;
+    if (!get_buffer(o[1], &b[1], 12, (size_t)m, false, "faces")) {
+        PyBuffer_Release(&b[0]);
+        return NULL;
+    }
+    MeshObject *self = (MeshObject *)type->tp_alloc(type, 0);
+    struct capture c;
+    if (self && capture_begin(&c)) {
+        Py_BEGIN_ALLOW_THREADS
+        self->mesh = ao_tracer_arrays_create(b[0].buf, (size_t)n, b[1].buf, (size_t)m);
+        Py_END_ALLOW_THREADS
+        if (self->mesh)
+            capture_end(&c);
+        else
+            capture_raise(&c, PyExc_MemoryError, "aoview: the mesh could not be built");
+    }
+    PyBuffer_Release(&b[0]);
+    PyBuffer_Release(&b[1]);
+    if (self && !self->mesh) {
+        Py_DECREF(self);
+        return NULL;
+    }
+    return (PyObject *)self;
+}
+
+static PyTypeObject MeshType = {
+    PyVarObject_HEAD_INIT(NULL, 0)
+    .tp_name = "aoview._core.Mesh",
+    .tp_basicsize = sizeof(MeshObject),
+    .tp_dealloc = (destructor)mesh_dealloc,
+    .tp_flags = Py_TPFLAGS_DEFAULT,
+    .tp_doc = "A triangle mesh's Embree BVH, for batches of rays.",
+    .tp_methods = mesh_methods,
+    .tp_new = mesh_new,
+};
 
 /* parse(argv): checks argv as aoview's command line; ValueError with its message. */
 static PyObject *core_parse(PyObject *module, PyObject *list)
@@ -653,7 +719,6 @@ static PyMethodDef core_methods[] = {
     {"from_arrays", core_from_arrays, METH_VARARGS, "from_arrays(scene, name, ...)"},
     {"start", core_start, METH_VARARGS, "start(scene, argv, reference, every_pass) -> Run"},
     {"exact", core_exact, METH_VARARGS, "exact(scene, argv, out) -> kind"},
-    {"intersect", core_intersect, METH_VARARGS, "intersect(...)"},
     {"parse", core_parse, METH_O, "parse(argv) -> --threads (0: the default)"},
     {"cores", core_cores, METH_NOARGS, "the number of cores"},
     {NULL, NULL, 0, NULL},
@@ -665,14 +730,18 @@ static struct PyModuleDef core_module = {PyModuleDef_HEAD_INIT, "aoview._core",
 
 PyMODINIT_FUNC PyInit__core(void)
 {
-    if (PyType_Ready(&SceneType) < 0 || PyType_Ready(&RunType) < 0)
+    if (PyType_Ready(&SceneType) < 0 || PyType_Ready(&RunType) < 0 || PyType_Ready(&MeshType) < 0)
         return NULL;
     PyObject *m = PyModule_Create(&core_module);
     if (!m)
         return NULL;
     Py_INCREF(&SceneType);
-    if (PyModule_AddObject(m, "Scene", (PyObject *)&SceneType) < 0) {
-        Py_DECREF(&SceneType);
+    Py_INCREF(&MeshType);
+    if (PyModule_AddObject(m, "Scene", (PyObject *)&SceneType) < 0 ||
+        PyModule_AddObject(m, "Mesh", (PyObject *)&MeshType) < 0 ||
+        PyModule_AddObject(m, "ARRAYS_LIMIT", PyFloat_FromDouble(AO_TRACER_ARRAYS_LIMIT)) < 0 ||
+        PyModule_AddObject(m, "MIN_EXTENT", PyFloat_FromDouble(AO_SCENE_MIN_EXTENT)) < 0 ||
+        PyModule_AddObject(m, "MAX_EXTENT", PyFloat_FromDouble(AO_SCENE_MAX_EXTENT)) < 0) {
         Py_DECREF(m);
         return NULL;
     }

@@ -204,7 +204,7 @@ def test_ray_mesh_intersect_against_brute_force():
     directions[:200] = -directions[:200]   # mostly misses
     t, ids, barys = aoview.ray_mesh_intersect(origins, directions, v, f)
     assert t.shape == (n,) and ids.shape == (n,) and barys.shape == (n, 3)
-    assert t.dtype == np.float64 and ids.dtype == np.int64 and barys.dtype == np.float64
+    assert t.dtype == np.float64 and ids.dtype == np.int32 and barys.dtype == np.float64
     bt, bids, bbarys = moller_trumbore(origins, directions, v, f)
     same = ids == bids
     # Rays the two disagree on must be ties: a hit within rounding of an edge (the other triangle

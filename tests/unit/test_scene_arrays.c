@@ -1,7 +1,7 @@
 /* Scenes from arrays (ao_scene_from_arrays, the Python module's Scene.from_arrays) against the
  * scene aoview makes of an OBJ file holding the same arrays: the same meshes, normals, placements and
- * camera, bit for bit; spheres, a given camera and bad arrays; and ao_tracer_intersect_arrays
- * against the scene's own tracer on the same mesh. */
+ * camera, bit for bit; spheres, a given camera and bad arrays; and ao_tracer_intersect_arrays'
+ * rays against the mesh, scaled, moved far off and leaving its surface. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -149,17 +149,20 @@ static void test_bad_arrays(void **state)
     }
 }
 
-/* ao_tracer_intersect_arrays finds what the scene's tracer finds on the same mesh without a ground:
- * the same triangles at the same distances (the scene's local frame is a shift by its origin, so t
- * agrees to rounding), misses as gpytoolbox has them. */
+/* ao_tracer_intersect_arrays on the same mesh: each hit's point from its weights lies on its ray
+ * at t, misses as gpytoolbox has them; the same rays with their directions scaled by 2^40 or 2^-40
+ * give the same triangles and weights and t scaled back exactly (tracer.c scales directions by
+ * powers of two); rays from 10^15 away (brought to the mesh) the same triangles as from nearby, at
+ * t within the mesh's rounding, not 10^15's; nothing nearer than tnear. */
 static void test_intersect_arrays(void **state)
 {
     (void)state;
     enum { RAYS = 4000 };
     float *origins = malloc(sizeof(float) * 3 * RAYS), *directions = malloc(sizeof(float) * 3 * RAYS);
-    float *t = malloc(sizeof(float) * RAYS), *barys = malloc(sizeof(float) * 3 * RAYS);
-    int32_t *ids = malloc(sizeof(int32_t) * RAYS);
-    assert_true(origins && directions && t && barys && ids);
+    float *moved = malloc(sizeof(float) * 3 * RAYS);
+    double *t = malloc(sizeof(double) * 2 * RAYS), *barys = malloc(sizeof(double) * 6 * RAYS);
+    int32_t *ids = malloc(sizeof(int32_t) * 2 * RAYS);
+    assert_true(origins && directions && moved && t && barys && ids);
     srand(7);
     for (int i = 0; i < RAYS; i++) {
         origins[3 * i] = 0.5f, origins[3 * i + 1] = 0.5f, origins[3 * i + 2] = 3.0f;
@@ -167,28 +170,79 @@ static void test_intersect_arrays(void **state)
         directions[3 * i + 1] = 2.0f * ((float)rand() / (float)RAND_MAX) - 1.0f;
         directions[3 * i + 2] = -2.0f;   /* not unit: t in its units */
     }
-    assert_true(ao_tracer_intersect_arrays(POSITIONS, VERTICES, INDICES, TRIANGLES, origins, directions, RAYS, 2, t,
-                                           ids, barys));
+    struct ao_tracer_arrays *mesh = ao_tracer_arrays_create(POSITIONS, VERTICES, INDICES, TRIANGLES);
+    assert_non_null(mesh);
+    assert_true(ao_tracer_intersect_arrays(mesh, origins, directions, RAYS, 0.0f, 2, t, ids, barys));
     int hits = 0;
     for (int i = 0; i < RAYS; i++) {
         if (ids[i] < 0) {
             assert_true(isinf(t[i]));
-            assert_true(barys[3 * i] == 0.0f && barys[3 * i + 1] == 0.0f && barys[3 * i + 2] == 0.0f);
+            assert_true(barys[3 * i] == 0.0 && barys[3 * i + 1] == 0.0 && barys[3 * i + 2] == 0.0);
             continue;
         }
         hits++;
         assert_true(ids[i] < 4);   /* never the degenerate one */
         const uint32_t *v = &INDICES[3 * ids[i]];
         for (int k = 0; k < 3; k++) {   /* the hit point from the weights is on the ray at t */
-            float p = barys[3 * i] * POSITIONS[3 * v[0] + k] + barys[3 * i + 1] * POSITIONS[3 * v[1] + k] +
-                      barys[3 * i + 2] * POSITIONS[3 * v[2] + k];
+            double p = barys[3 * i] * POSITIONS[3 * v[0] + k] + barys[3 * i + 1] * POSITIONS[3 * v[1] + k] +
+                       barys[3 * i + 2] * POSITIONS[3 * v[2] + k];
             assert_float_equal(p, origins[3 * i + k] + t[i] * directions[3 * i + k], 1e-5);
         }
-        assert_float_equal(barys[3 * i] + barys[3 * i + 1] + barys[3 * i + 2], 1.0f, 1e-6);
+        assert_float_equal(barys[3 * i] + barys[3 * i + 1] + barys[3 * i + 2], 1.0, 1e-6);
     }
     printf("%d of %d rays hit\n", hits, RAYS);
     assert_true(hits > RAYS / 20 && hits < RAYS / 2);
-    free(origins), free(directions), free(t), free(barys), free(ids);
+    for (int e = -40; e <= 40; e += 80) {
+        float *scaled = moved;
+        for (int i = 0; i < 3 * RAYS; i++)
+            scaled[i] = ldexpf(directions[i], e);
+        assert_true(ao_tracer_intersect_arrays(mesh, origins, scaled, RAYS, 0.0f, 1, t + RAYS, ids + RAYS,
+                                               barys + 3 * RAYS));
+        for (int i = 0; i < RAYS; i++) {
+            assert_int_equal(ids[RAYS + i], ids[i]);
+            assert_true(ldexp(t[RAYS + i], e) == t[i]);
+            assert_memory_equal(&barys[3 * (RAYS + i)], &barys[3 * i], 3 * sizeof(double));
+        }
+    }
+    /* Straight down from z = 3 and from z = 10^15 (exact in float), over the strip. */
+    for (int i = 0; i < RAYS; i++) {
+        origins[3 * i] = moved[3 * i] = 2.2f * ((float)rand() / (float)RAND_MAX) - 0.1f;
+        origins[3 * i + 1] = moved[3 * i + 1] = 1.2f * ((float)rand() / (float)RAND_MAX) - 0.1f;
+        origins[3 * i + 2] = 3.0f, moved[3 * i + 2] = 1e15f;
+        directions[3 * i] = directions[3 * i + 1] = 0.0f, directions[3 * i + 2] = -2.0f;
+    }
+    assert_true(ao_tracer_intersect_arrays(mesh, origins, directions, RAYS, 0.0f, 2, t, ids, barys));
+    assert_true(ao_tracer_intersect_arrays(mesh, moved, directions, RAYS, 0.0f, 2, t + RAYS, ids + RAYS,
+                                           barys + 3 * RAYS));
+    hits = 0;
+    for (int i = 0; i < RAYS; i++) {
+        assert_int_equal(ids[RAYS + i], ids[i]);
+        hits += ids[i] >= 0;
+        if (ids[i] >= 0)   /* t within the float rounding of the mesh's box, not of 10^15 */
+            assert_float_equal(t[RAYS + i] - t[i], (1e15f - 3.0) / 2.0, 1e-3);
+    }
+    assert_true(hits > RAYS / 2);
+    /* From points of the square z = 0 (triangles 0 and 1) up and towards the wall x = 1: with
+     * tnear 0 some meet their own triangle at t = 0 (as the rays of gpytoolbox's course code,
+     * which leave surface points unmoved), with tnear 1e-4 none is nearer. */
+    for (int i = 0; i < RAYS; i++) {
+        moved[3 * i] = (float)rand() / (float)RAND_MAX, moved[3 * i + 1] = (float)rand() / (float)RAND_MAX;
+        moved[3 * i + 2] = 0.0f;
+        directions[3 * i] = 1.0f, directions[3 * i + 1] = 0.1f, directions[3 * i + 2] = 0.5f;
+    }
+    int near = 0;
+    for (int pass = 0; pass < 2; pass++) {
+        float tnear = pass ? 1e-4f : 0.0f;
+        assert_true(ao_tracer_intersect_arrays(mesh, moved, directions, RAYS, tnear, 2, t, ids, barys));
+        for (int i = 0; i < RAYS; i++) {
+            assert_true(ids[i] < 0 || t[i] >= tnear);
+            near += ids[i] >= 0 && t[i] < 1e-4;
+        }
+        assert_true(pass ? near == 0 : near > RAYS / 10);
+        near = 0;
+    }
+    ao_tracer_arrays_destroy(mesh);
+    free(origins), free(directions), free(moved), free(t), free(barys), free(ids);
 }
 
 int main(void)
