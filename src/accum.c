@@ -1,9 +1,10 @@
 /* Accumulation buffer; see accum.h. */
 #include "accum.h"
 
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include "text.h"
 
 bool ao_accum_init(struct ao_accum *a, int width, int height)
 {
@@ -14,7 +15,7 @@ bool ao_accum_init(struct ao_accum *a, int width, int height)
     a->count = calloc(pixels, sizeof *a->count);
     a->odd_sum = calloc(pixels, sizeof *a->odd_sum);
     if (!a->sum || !a->count || !a->odd_sum) {
-        fprintf(stderr, "aoview: out of memory for a %dx%d accumulation buffer\n", width, height);
+        ao_text_report("aoview: out of memory for a %dx%d accumulation buffer", width, height);
         ao_accum_finish(a);
         return false;
     }

@@ -11,6 +11,7 @@
 
 #include "cli.h"
 #include "sampling.h"
+#include "text.h"
 
 /* One side: its renderer and configuration, what the turns know of its current run, and what the
  * window shows of it. */
@@ -119,7 +120,7 @@ struct ao_compare *ao_compare_create(const struct ao_render_config *config, cons
 {
     struct ao_compare *c = calloc(1, sizeof *c);
     if (!c) {
-        fprintf(stderr, "aoview: out of memory for the comparison\n");
+        ao_text_report("aoview: out of memory for the comparison");
         return NULL;
     }
     pthread_mutex_init(&c->lock, NULL);

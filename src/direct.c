@@ -5,10 +5,10 @@
 #include "direct.h"
 
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 
 #include "simd.h"
+#include "text.h"
 
 /* The rule of ao_direct_suits, measured on 25 scenes (the shipped ones and random spheres and quads,
  * one core, SSE2 code): the loops cost about 2.5 ns per primitive per occlusion ray, whatever
@@ -57,7 +57,7 @@ struct ao_direct *ao_direct_create(const struct ao_scene *scene)
     struct ao_direct *d = calloc(1, sizeof *d + ns * sizeof(struct sphere) + nt * sizeof(struct triangle) +
                                         nt * sizeof(struct source));
     if (!d) {
-        fprintf(stderr, "aoview: out of memory creating the direct tracer\n");
+        ao_text_report("aoview: out of memory creating the direct tracer");
         return NULL;
     }
     d->sphere_count = ns;

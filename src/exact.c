@@ -11,6 +11,7 @@
 #include "exact_image.h"
 #include "image.h"
 #include "options.h"
+#include "program.h"
 #include "scene.h"
 #include "scene_load.h"
 #include "tracer.h"
@@ -83,6 +84,7 @@ int main(int argc, char **argv)
 {
     struct ao_options opts;
     char message[512];
+    ao_program_init();
     if (!ao_cli_parse(argc, argv, &opts, message, sizeof message)) {
         fprintf(stderr, "aoview-exact: %s (try --help)\n", message);
         return EXIT_USAGE;

@@ -16,6 +16,7 @@
 #include <openexr.h>
 
 #include "file.h"
+#include "text.h"
 
 /* What the library's callbacks see through user_data. */
 struct stream {
@@ -462,9 +463,9 @@ bool ao_exr_read(const char *path, int want_width, int want_height, float **rgb,
     free(data);
     if (!ok) {
         if (f.quote && s.message[0])
-            fprintf(stderr, "%s: %s (%s)\n", path, f.why, s.message);
+            ao_text_report("%s: %s (%s)", path, f.why, s.message);
         else
-            fprintf(stderr, "%s: %s\n", path, f.why);
+            ao_text_report("%s: %s", path, f.why);
         return false;
     }
     *width = w;

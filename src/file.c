@@ -264,8 +264,7 @@ FILE *ao_file_open_output(const char *path, const char *what, bool *created)
         }
     }
     if (!file) {
-        char name[AO_TEXT_SIZE];
-        fprintf(stderr, "%s: cannot write %s: %s\n", what, ao_text_escape(path, name, sizeof name),
+        ao_text_report("%s: cannot write %s: %s", what, path,
                 err == ENXIO     ? "a FIFO that no process reads"
                 : err == ENOTSUP ? "a block device (a FIFO, a terminal or /dev/null takes rows; a disk does not)"
                 : err == EROFS   ? "it is read-only (no one may write it): it is left as it is"

@@ -1,10 +1,10 @@
 /* The frames' triple buffer; see frames.h. */
 #include "frames.h"
 
-#include <stdio.h>
 #include <stdlib.h>
 
 #include "buffer.h"
+#include "text.h"
 
 /* In `middle`: the frame there is newer than what the consumer has. */
 enum { FRESH = 4 };
@@ -39,7 +39,7 @@ struct ao_frame *ao_frames_back_stamped(struct ao_frames *fs, int width, int hei
     size_t *room = fs->room[fs->back];
     if (!ao_buffer_grow(&f->rgb, &room[0], 3 * (size_t)width * (size_t)height) ||
         !ao_buffer_grow(&f->tile_error, &room[1], (size_t)tiles)) {
-        fprintf(stderr, "aoview: out of memory for %dx%d frames\n", width, height);
+        ao_text_report("aoview: out of memory for %dx%d frames", width, height);
         return NULL;
     }
     f->width = width;

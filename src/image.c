@@ -136,12 +136,10 @@ void ao_image_encode_srgb8_bgra(const float *rgb, size_t pixels, uint8_t *out)
 
 static void report(const char *path, const char *reason, int err)
 {
-    char name[AO_TEXT_SIZE];
-    ao_text_escape(path, name, sizeof name);
     if (err)
-        fprintf(stderr, "%s: %s (%s)\n", name, reason, strerror(err));
+        ao_text_report("%s: %s (%s)", path, reason, strerror(err));
     else
-        fprintf(stderr, "%s: %s\n", name, reason);
+        ao_text_report("%s: %s", path, reason);
 }
 
 static bool fail(struct failure *out, const char *reason, int err)
@@ -598,7 +596,7 @@ static bool read_pfm(const char *path, int want_width, int want_height, float **
     if (read_header(f, &w, &h, &little_endian, &cr, &why)) {
         if (want_width && (w != want_width || h != want_height)) {
             fclose(f);
-            fprintf(stderr, "%s: the image is %dx%d, not the %dx%d needed\n", path, w, h,
+            ao_text_report("%s: the image is %dx%d, not the %dx%d needed", path, w, h,
                     want_width, want_height);
             return false;
         }
@@ -639,8 +637,7 @@ bool ao_image_read_png(const char *path, uint8_t **rgb, int *width, int *height)
     int w, h, channels;
     uint8_t *pixels = stbi_load(path, &w, &h, &channels, 3);
     if (!pixels) {
-        char name[AO_TEXT_SIZE];
-        fprintf(stderr, "%s: cannot read PNG (%s)\n", ao_text_escape(path, name, sizeof name), stbi_failure_reason());
+        ao_text_report("%s: cannot read PNG (%s)", path, stbi_failure_reason());
         return false;
     }
     *rgb = pixels;

@@ -15,6 +15,7 @@
 #include "config.h"
 #include "headless.h"
 #include "image.h"
+#include "program.h"
 #include "text.h"
 #include "window.h"
 
@@ -243,6 +244,7 @@ int main(int argc, char **argv)
 {
     struct ao_options opts;
     char message[512];
+    ao_program_init();
     if (!ao_app_begin())
         return AO_EXIT_RUNTIME;
     if (!ao_cli_parse(argc, argv, &opts, message, sizeof message)) {

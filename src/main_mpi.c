@@ -18,6 +18,7 @@
 #include "cluster_faults.h"
 #include "config.h"
 #include "image.h"
+#include "program.h"
 #include "window.h"
 
 /* After an interruption rank 0 waits ANSWER_SECONDS for the other ranks to answer (mpirun sends
@@ -357,6 +358,7 @@ int main(int argc, char **argv)
 {
     /* Before MPI starts its threads, so that they all inherit the mask. */
     struct ao_app app = {0};
+    ao_program_init();
     if (!ao_app_begin())
         return AO_EXIT_RUNTIME;
     ao_app_block_signals(&app);

@@ -39,7 +39,6 @@ bool ao_options_render(const struct ao_options *opts, const struct ao_scene *sce
     struct ao_view view;
     if (ao_camera_view(&settings->camera, width, height, &view))
         return true;
-    char name[AO_TEXT_SIZE];
-    fprintf(stderr, "%s: the camera cannot form an image\n", ao_text_escape(scene->name, name, sizeof name));
+    ao_text_report("%s: the camera cannot form an image", scene->name);
     return false;
 }

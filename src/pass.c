@@ -2,12 +2,12 @@
 #include "pass.h"
 
 #include <math.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "clock.h"
 #include "sum.h"
+#include "text.h"
 
 /* --spppp auto: the first pass after a restart takes one sample per pixel, so that the first
  * frame comes at once; then each pass of a half (even, odd) takes AUTO_PER_RAY samples, then
@@ -42,7 +42,7 @@ bool ao_pass_allocate(struct ao_run *r)
     }
     if (!r->tiles || !r->tile_stamps || !r->work || !r->mine ||
         (share && (!r->pass_sums || !r->records || (!share->follows && !r->all_records)))) {
-        fprintf(stderr, "aoview: out of memory for a %dx%d image\n", r->width, r->height);
+        ao_text_report("aoview: out of memory for a %dx%d image", r->width, r->height);
         return false;
     }
     return true;

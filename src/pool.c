@@ -4,8 +4,9 @@
 #include <pthread.h>
 #include <stdatomic.h>
 #include <stdint.h>
-#include <stdio.h>
 #include <stdlib.h>
+
+#include "text.h"
 
 struct ao_pool {
     pthread_mutex_t lock;
@@ -15,6 +16,7 @@ struct ao_pool {
     bool quit;                       /* workers exit */
     ao_pool_job *job;
     void *user;
+    const struct ao_text_sink *sink; /* ao_pool_run's caller's: the workers' route for its job */
     void (*thread_init)(void);
     atomic_int started;              /* numbers the workers */
     int workers;
@@ -37,6 +39,7 @@ static void *worker_main(void *arg)
         seen = p->serial;
         ao_pool_job *job = p->job;
         void *user = p->user;
+        ao_text_route(p->sink);
         pthread_mutex_unlock(&p->lock);
         job(user, self);
         pthread_mutex_lock(&p->lock);
@@ -51,7 +54,7 @@ struct ao_pool *ao_pool_create(int threads, void (*thread_init)(void))
 {
     struct ao_pool *p = calloc(1, sizeof *p);
     if (!p || !(p->ids = calloc((size_t)threads, sizeof *p->ids))) {
-        fprintf(stderr, "aoview: out of memory starting the renderer\n");
+        ao_text_report("aoview: out of memory starting the renderer");
         free(p);
         return NULL;
     }
@@ -63,7 +66,7 @@ struct ao_pool *ao_pool_create(int threads, void (*thread_init)(void))
     while (p->workers + 1 < threads && pthread_create(&p->ids[p->workers], NULL, worker_main, p) == 0)
         p->workers++;
     if (p->workers + 1 < threads) {
-        fprintf(stderr, "aoview: could not start %d render threads\n", threads);
+        ao_text_report("aoview: could not start %d render threads", threads);
         ao_pool_destroy(p);
         return NULL;
     }
@@ -92,6 +95,7 @@ void ao_pool_run(struct ao_pool *p, ao_pool_job *job, void *user)
     pthread_mutex_lock(&p->lock);
     p->job = job;
     p->user = user;
+    p->sink = ao_text_current();
     p->busy = p->workers;
     p->serial++;
     pthread_cond_broadcast(&p->start);

@@ -6,7 +6,6 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -14,6 +13,7 @@
 #include "pass.h"
 #include "preview.h"
 #include "render_share.h"
+#include "text.h"
 #include "tracer.h"
 
 struct ao_render {
@@ -31,6 +31,7 @@ struct ao_render {
     pthread_t thread;
     bool started;
     struct ao_frame_info last_info;      /* the render thread's facts when it stopped */
+    const struct ao_text_sink *sink;     /* ao_render_create's caller's, the render thread's route */
 };
 
 /* ---- previews: run by the render thread between a restart and the first pass ---- */
@@ -277,6 +278,7 @@ static void *render_main(void *arg)
 {
     struct ao_render *r = arg;
     struct loop l = {.info = {.restarts = UINT64_MAX}};
+    ao_text_route(r->sink);
     ao_tracer_thread_init();
     pthread_mutex_lock(&r->lock);
     while (pass_due(r, &l)) {
@@ -310,7 +312,7 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
 {
     struct ao_render *r = calloc(1, sizeof *r);
     if (!r) {
-        fprintf(stderr, "aoview: out of memory starting the renderer\n");
+        ao_text_report("aoview: out of memory starting the renderer");
         return NULL;
     }
     struct ao_run *run = &r->run;
@@ -327,7 +329,7 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
     pthread_cond_init(&r->finished, NULL);
     run->lanes = aligned_alloc(_Alignof(struct ao_lane), (size_t)config->threads * sizeof *run->lanes);
     if (!run->lanes) {
-        fprintf(stderr, "aoview: out of memory starting the renderer\n");
+        ao_text_report("aoview: out of memory starting the renderer");
         ao_render_destroy(r);
         return NULL;
     }
@@ -338,9 +340,10 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
         ao_render_destroy(r);
         return NULL;
     }
+    r->sink = ao_text_current();
     r->started = pthread_create(&r->thread, NULL, render_main, r) == 0;
     if (!r->started) {
-        fprintf(stderr, "aoview: could not start the render thread\n");
+        ao_text_report("aoview: could not start the render thread");
         ao_render_destroy(r);
         return NULL;
     }

@@ -1,10 +1,16 @@
-/* Escaping user text for one-line messages, and the reports made of them; see text.h. */
+/* Escaping user text for one-line messages, and the messages' way to the host's sink; see text.h. */
 #include "text.h"
 
 #include <assert.h>
 #include <stdarg.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <string.h>
+
+/* The process's sink (ao_text_set_sink), and this thread's route (ao_text_route; NULL: the
+ * process's). */
+static _Atomic(const struct ao_text_sink *) process_sink;
+static _Thread_local const struct ao_text_sink *route;
 
 /* The escape for the character at s, written into esc where it is not a constant, and the bytes
  * it stands for in *used (1, or 2 for a UTF-8 C1 control); NULL when the byte is kept as it is. */
@@ -59,14 +65,46 @@ const char *ao_text_escape(const char *s, char *out, size_t size)
     return out;
 }
 
+void ao_text_set_sink(const struct ao_text_sink *sink)
+{
+    atomic_store(&process_sink, sink);
+}
+
+const struct ao_text_sink *ao_text_route(const struct ao_text_sink *sink)
+{
+    const struct ao_text_sink *before = route;
+    route = sink;
+    return before;
+}
+
+const struct ao_text_sink *ao_text_current(void)
+{
+    return route ? route : atomic_load(&process_sink);
+}
+
+/* Formats, escapes and hands the line to this thread's sink. */
+static void emit(enum ao_text_level level, const char *format, va_list args)
+{
+    char text[AO_TEXT_SIZE + 4096], line[4 * sizeof text]; /* a path of PATH_MAX and its reason */
+    vsnprintf(text, sizeof text, format, args);
+    ao_text_escape(text, line, sizeof line);
+    const struct ao_text_sink *sink = ao_text_current();
+    if (sink && sink->write)
+        sink->write(sink->user, level, line);
+}
+
 void ao_text_report(const char *format, ...)
 {
-    /* Formatted, then escaped, and written with one call so that lines of several threads do not
-     * interleave. */
-    char text[1024], line[4 * sizeof text + 2];
     va_list args;
     va_start(args, format);
-    vsnprintf(text, sizeof text, format, args);
+    emit(AO_TEXT_ERROR, format, args);
     va_end(args);
-    fprintf(stderr, "%s\n", ao_text_escape(text, line, sizeof line));
+}
+
+void ao_text_note(const char *format, ...)
+{
+    va_list args;
+    va_start(args, format);
+    emit(AO_TEXT_NOTE, format, args);
+    va_end(args);
 }

@@ -1,5 +1,7 @@
 /* User-supplied text (file names, option values) made safe to quote inside a one-line message, and
- * the one-line reports on stderr that every failure prints. */
+ * the core's messages: one line each, escaped, handed to the sink its host installed (the programs:
+ * stderr; the Python module: the call's exception or warnings). The core never writes to a
+ * descriptor itself. */
 #ifndef AO_TEXT_H
 #define AO_TEXT_H
 
@@ -14,9 +16,40 @@ enum { AO_TEXT_SIZE = 1024 };
  * names) as they are; ends in "..." where it does not fit. Returns out. Pure; any thread. */
 const char *ao_text_escape(const char *s, char *out, size_t size);
 
-/* Prints the printf-formatted text and a newline to stderr as one line: control characters (a
- * newline in a file name or a JSON string, an escape sequence in a scene token) are written as
- * \n, \r, \t or \xNN, so that a report never spans lines or drives the terminal. Any thread. */
+/* How much a message matters to its host: a note (the call goes on: "read as decoded", a BVH kept)
+ * or an error (the call fails, with this line as its reason). */
+enum ao_text_level { AO_TEXT_NOTE, AO_TEXT_ERROR };
+
+/* Where the core's messages go: write(user, level, line) gets one line, already escaped, without a
+ * newline, on the thread whose call made it (write NULL: dropped). The host keeps the sink (and
+ * what user points to) alive while any thread is routed to it. */
+struct ao_text_sink {
+    void (*write)(void *user, enum ao_text_level level, const char *line);
+    void *user;
+};
+
+/* Installs the process's sink, where every thread's messages go unless routed elsewhere (the
+ * programs: stderr, ao_program_init); NULL, as before any call, drops them. Main thread, before
+ * the threads that report start. */
+void ao_text_set_sink(const struct ao_text_sink *sink);
+
+/* Routes this thread's messages to sink (NULL: back to the process's) until it is routed again,
+ * and returns the route it replaces (NULL: the process's), for the caller to put back. The threads
+ * the core starts for a call (the thread team's workers during a job, the render thread, a
+ * tracer's second build) are routed to their starter's sink. Any thread; this thread only. */
+const struct ao_text_sink *ao_text_route(const struct ao_text_sink *sink);
+
+/* The sink this thread's messages go to now: its route, else the process's (NULL: dropped). Any
+ * thread. */
+const struct ao_text_sink *ao_text_current(void);
+
+/* One error line to this thread's sink: the printf-formatted text with control characters (a
+ * newline in a file name or a JSON string, an escape sequence in a scene token) written as \n,
+ * \r, \t or \xNN, so that a message never spans lines or drives the terminal. Any thread. */
 void ao_text_report(const char *format, ...);
+
+/* One note line, escaped as ao_text_report's: something the host may want to know that does not
+ * fail the call. Any thread. */
+void ao_text_note(const char *format, ...);
 
 #endif

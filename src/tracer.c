@@ -14,6 +14,7 @@
 #include "clock.h"
 #include "direct.h"
 #include "pool.h"
+#include "text.h"
 #if defined(__SSE__)
 #include <pmmintrin.h>
 #include <xmmintrin.h>
@@ -31,12 +32,22 @@ struct bvhs {
  * by the switch). */
 struct upgrade {
     pthread_t thread;
+    const struct ao_text_sink *sink;   /* its starter's: its thread's route */
     bool pending, started;
     atomic_bool done, cancel;
     bool ok;
     const struct ao_scene *source;
     struct bvhs built;
     struct ao_tracer_stats stats;
+};
+
+/* The first error Embree reported on a device since it was last said. Embree may call its error
+ * function on a thread of its own (a build's), where no message may go: the error waits here for
+ * the thread whose call failed to say it (say_errors). */
+struct embree_errors {
+    pthread_mutex_t lock;
+    int code;                            /* RTC_ERROR_NONE: none */
+    char message[256];
 };
 
 struct ao_tracer {
@@ -48,16 +59,55 @@ struct ao_tracer {
     unsigned spheres_id;                 /* RTC_INVALID_GEOMETRY_ID when absent */
     struct ao_tracer_stats stats;
     struct upgrade upgrade;
+    struct embree_errors errors;         /* the device's, Embree's only */
     _Atomic int64_t embree_bytes, embree_peak;   /* Embree's memory monitor */
     struct ao_ray_recorder *occlusion_recorder, *eye_recorder;  /* benchmarks only */
 };
 
-static void report(void *user, enum RTCError code, const char *message)
+/* Embree's error function: keeps the device's first error for say_errors, on whatever thread. */
+static void record_error(void *user, enum RTCError code, const char *message)
 {
-    (void)user;
+    struct embree_errors *e = user;
     if (code == RTC_ERROR_CANCELLED) /* an upgrade's build, cancelled as its tracer goes */
         return;
-    fprintf(stderr, "aoview: Embree error %d: %s\n", (int)code, message ? message : "(no message)");
+    pthread_mutex_lock(&e->lock);
+    if (e->code == RTC_ERROR_NONE) {
+        e->code = (int)code;
+        snprintf(e->message, sizeof e->message, "%s", message ? message : "(no message)");
+    }
+    pthread_mutex_unlock(&e->lock);
+}
+
+/* A new device whose errors e keeps (its lock initialized here, destroyed by the caller after the
+ * device); NULL after one message. */
+static RTCDevice new_device(struct embree_errors *e)
+{
+    RTCDevice device = rtcNewDevice(NULL);
+    if (!device) {
+        ao_text_report("aoview: Embree could not create a device (error %d)", (int)rtcGetDeviceError(NULL));
+        return NULL;
+    }
+    pthread_mutex_init(&e->lock, NULL);
+    e->code = RTC_ERROR_NONE;
+    rtcSetDeviceErrorFunction(device, record_error, e);
+    return device;
+}
+
+/* Says the error e keeps, if any, at level, on the calling thread, and forgets it. */
+static void say_errors(struct embree_errors *e, enum ao_text_level level)
+{
+    pthread_mutex_lock(&e->lock);
+    int code = e->code;
+    char message[sizeof e->message];
+    memcpy(message, e->message, sizeof message);
+    e->code = RTC_ERROR_NONE;
+    pthread_mutex_unlock(&e->lock);
+    if (code == RTC_ERROR_NONE)
+        return;
+    if (level == AO_TEXT_ERROR)
+        ao_text_report("aoview: Embree error %d: %s", code, message);
+    else
+        ao_text_note("aoview: Embree error %d: %s", code, message);
 }
 
 /* Embree's memory monitor: what the device holds now and at most (Embree calls it from its build
@@ -228,6 +278,7 @@ static void *build_upgrade(void *user)
 {
     struct ao_tracer *t = user;
     struct upgrade *u = &t->upgrade;
+    ao_text_route(u->sink);
     ao_tracer_thread_init();
     u->ok = build(t, u->source, u->source->bvh, &u->built, &u->stats, &u->cancel);
     atomic_store(&u->done, true);
@@ -256,9 +307,10 @@ static void start_upgrade(struct ao_tracer *t)
     u->pending = false;
     atomic_store(&u->done, false);
     atomic_store(&u->cancel, false);
+    u->sink = ao_text_current();
     u->started = pthread_create(&u->thread, NULL, build_upgrade, t) == 0;
     if (!u->started)
-        fprintf(stderr, "aoview: no thread for the faster BVH's build; tracing on with the quick one\n");
+        ao_text_note("aoview: no thread for the faster BVH's build; tracing on with the quick one");
 }
 
 bool ao_tracer_switch(struct ao_tracer *tracer)
@@ -270,9 +322,10 @@ bool ao_tracer_switch(struct ao_tracer *tracer)
         return false;
     pthread_join(u->thread, NULL);
     u->started = false;
+    say_errors(&tracer->errors, AO_TEXT_NOTE);
     if (!u->ok) { /* out of memory beside the quick BVH: keep it */
         release_bvhs(&u->built, tracer->mesh_count);
-        fprintf(stderr, "aoview: the faster BVH did not fit beside the quick one; tracing on with the quick one\n");
+        ao_text_note("aoview: the faster BVH did not fit beside the quick one; tracing on with the quick one");
         return false;
     }
     release_bvhs(&tracer->bvhs, tracer->mesh_count);
@@ -288,7 +341,7 @@ static struct ao_tracer *create(const struct ao_scene *scene, enum ao_backend ba
 {
     struct ao_tracer *t = calloc(1, sizeof *t);
     if (!t) {
-        fprintf(stderr, "aoview: out of memory creating the tracer\n");
+        ao_text_report("aoview: out of memory creating the tracer");
         return NULL;
     }
     /* Scenes of a few primitives skip Embree: testing each one directly is faster (direct.c). */
@@ -300,20 +353,18 @@ static struct ao_tracer *create(const struct ao_scene *scene, enum ao_backend ba
         return t;
     }
     t->spheres_id = RTC_INVALID_GEOMETRY_ID;
-    t->device = rtcNewDevice(NULL);
-    if (!t->device) {
-        fprintf(stderr, "aoview: Embree could not create a device (error %d)\n", (int)rtcGetDeviceError(NULL));
+    if (!(t->device = new_device(&t->errors))) {
         free(t);
         return NULL;
     }
-    rtcSetDeviceErrorFunction(t->device, report, NULL);
     rtcSetDeviceMemoryMonitorFunction(t->device, embree_memory_monitor, t);
     t->mesh_count = scene->mesh_count;
     t->spheres_id = scene->sphere_count ? (unsigned)scene->instance_count : RTC_INVALID_GEOMETRY_ID;
     bool ok = build(t, scene, bvh, &t->bvhs, &t->stats, NULL);
     t->scene = t->bvhs.scene;
+    say_errors(&t->errors, ok ? AO_TEXT_NOTE : AO_TEXT_ERROR);
     if (!ok) {
-        fprintf(stderr, "aoview: Embree could not build the scene (out of memory?)\n");
+        ao_text_report("aoview: Embree could not build the scene (out of memory?)");
         ao_tracer_destroy(t);
         return NULL;
     }
@@ -338,8 +389,10 @@ void ao_tracer_destroy(struct ao_tracer *tracer)
         release_bvhs(&tracer->upgrade.built, tracer->mesh_count);
     }
     release_bvhs(&tracer->bvhs, tracer->mesh_count);
-    if (tracer->device)
+    if (tracer->device) {
         rtcReleaseDevice(tracer->device);
+        pthread_mutex_destroy(&tracer->errors.lock);
+    }
     free(tracer);
 }
 
@@ -619,6 +672,7 @@ enum { FAR = 16 };
 
 struct ao_tracer_arrays {
     RTCDevice device;
+    struct embree_errors errors;   /* the device's */
     RTCScene scene;
     double lo[3], hi[3];   /* the box around the positions grown by FAR times its largest side */
 };
@@ -627,14 +681,15 @@ struct ao_tracer_arrays *ao_tracer_arrays_create(const float *positions, size_t 
                                                  size_t triangle_count)
 {
     struct ao_tracer_arrays *mesh = calloc(1, sizeof *mesh);
-    RTCDevice device = mesh ? rtcNewDevice(NULL) : NULL;
+    if (!mesh) {
+        ao_text_report("aoview: out of memory for the mesh's tracer");
+        return NULL;
+    }
+    RTCDevice device = mesh->device = new_device(&mesh->errors);
     if (!device) {
-        fprintf(stderr, "aoview: Embree could not create a device (error %d)\n", (int)rtcGetDeviceError(NULL));
         free(mesh);
         return NULL;
     }
-    rtcSetDeviceErrorFunction(device, report, NULL);
-    mesh->device = device;
     RTCScene scene = mesh->scene = rtcNewScene(device);
     RTCGeometry g = scene ? rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE) : NULL;
     /* Embree's own copies: it reads 16 bytes at a time past the last position. */
@@ -654,8 +709,9 @@ struct ao_tracer_arrays *ao_tracer_arrays_create(const float *positions, size_t 
     }
     if (g)
         rtcReleaseGeometry(g);
+    say_errors(&mesh->errors, ok ? AO_TEXT_NOTE : AO_TEXT_ERROR);
     if (!ok) {
-        fprintf(stderr, "aoview: Embree could not build the mesh (out of memory?)\n");
+        ao_text_report("aoview: Embree could not build the mesh (out of memory?)");
         ao_tracer_arrays_destroy(mesh);
         return NULL;
     }
@@ -680,6 +736,7 @@ void ao_tracer_arrays_destroy(struct ao_tracer_arrays *mesh)
     if (mesh->scene)
         rtcReleaseScene(mesh->scene);
     rtcReleaseDevice(mesh->device);
+    pthread_mutex_destroy(&mesh->errors.lock);
     free(mesh);
 }
 

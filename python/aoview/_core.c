@@ -3,8 +3,8 @@
  * Python half (__init__.py) checks and converts. Options come as the command line's argv and go
  * through its own parser (cli.h), so that every default, range and message is aoview's. The GIL is
  * released while anything traces; a render waits in slices of SIGNAL_POLL seconds, checking for
- * Ctrl-C between them. Core messages (one line on stderr each) are caught and raised as
- * ValueError. */
+ * Ctrl-C between them. The core's messages come to each call's own sink (messages.h): its errors
+ * become its exception, its notes Python warnings. */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 
@@ -23,6 +23,7 @@
 #include "cli.h"
 #include "exact_image.h"
 #include "image.h"
+#include "messages.h"
 #include "options.h"
 #include "render.h"
 #include "scene.h"
@@ -33,65 +34,7 @@
 /* Seconds between two checks for a pending signal while a render is waited for. */
 static const double SIGNAL_POLL = 0.02;
 
-/* ------------------------------------------------------------------ messages */
-
-/* What the core writes to stderr during a call, caught so that it becomes the exception's text:
- * descriptor 2 points at a temporary file meanwhile. */
-struct capture {
-    FILE *file;
-    int saved;
-};
-
-static bool capture_begin(struct capture *c)
-{
-    fflush(stderr);
-    c->file = tmpfile();
-    c->saved = c->file ? dup(2) : -1;
-    if (c->saved < 0 || dup2(fileno(c->file), 2) < 0) {
-        if (c->saved >= 0)
-            close(c->saved);
-        if (c->file)
-            fclose(c->file);
-        PyErr_SetString(PyExc_OSError, "aoview: cannot catch the core's messages (no temporary file)");
-        return false;
-    }
-    return true;
-}
-
-/* Restores stderr and raises `type` with what was caught (its lines joined by "; ", the trailing
- * newline dropped), or `fallback` when nothing was. */
-static void capture_raise(struct capture *c, PyObject *type, const char *fallback)
-{
-    fflush(stderr);
-    dup2(c->saved, 2);
-    close(c->saved);
-    char text[2048] = "";
-    rewind(c->file);
-    size_t n = fread(text, 1, sizeof text - 1, c->file);
-    fclose(c->file);
-    text[n] = '\0';
-    while (n > 0 && (text[n - 1] == '\n' || text[n - 1] == '\r'))
-        text[--n] = '\0';
-    for (char *p = text; *p; p++)
-        if (*p == '\n')
-            *p = ';';
-    if (type)
-        PyErr_SetString(type, n ? text : fallback);
-}
-
-/* Restores stderr, passing on what was caught (warnings, notes) to the real stderr. */
-static void capture_end(struct capture *c)
-{
-    fflush(stderr);
-    dup2(c->saved, 2);
-    close(c->saved);
-    char text[4096];
-    rewind(c->file);
-    size_t n;
-    while ((n = fread(text, 1, sizeof text, c->file)) > 0)
-        fwrite(text, 1, n, stderr);
-    fclose(c->file);
-}
+/* ------------------------------------------------------------------ options and buffers */
 
 /* Parses argv (a list of str, argv[0] first) as aoview's command line; false with ValueError set to
  * the CLI's message. The strings must live as long as opts is used: *keep holds them. */
@@ -195,18 +138,16 @@ static struct ao_tracer *scene_tracer(SceneObject *self)
 {
     if (self->tracer)
         return self->tracer;
-    struct capture c;
-    if (!capture_begin(&c))
-        return NULL;
+    struct ao_messages messages;
     struct ao_tracer *t;
+    ao_messages_begin(&messages);
     Py_BEGIN_ALLOW_THREADS
     t = ao_tracer_create(&self->scene);
     Py_END_ALLOW_THREADS
-    if (!t) {
-        capture_raise(&c, PyExc_MemoryError, "aoview: the tracer could not be built");
+    if (!ao_messages_close(&messages, t != NULL, PyExc_MemoryError, "aoview: the tracer could not be built")) {
+        ao_tracer_destroy(t);
         return NULL;
     }
-    capture_end(&c);
     if (self->tracer) /* another thread built one meanwhile (the GIL was released) */
         ao_tracer_destroy(t);
     else
@@ -227,19 +168,15 @@ static PyObject *core_load(PyObject *module, PyObject *args)
     if (!parse_options(list, &opts, &keep))
         return NULL;
     struct ao_scene_options load = ao_options_scene(&opts);
-    struct capture c;
-    bool ok = false;
-    if (capture_begin(&c)) {
-        Py_BEGIN_ALLOW_THREADS
-        ok = ao_scene_load(&self->scene, path, &load);
-        Py_END_ALLOW_THREADS
-        if (ok)
-            capture_end(&c);
-        else
-            capture_raise(&c, PyExc_ValueError, "aoview: the scene could not be loaded");
-    }
-    Py_DECREF(keep);
+    struct ao_messages messages;
+    bool ok;
+    ao_messages_begin(&messages);
+    Py_BEGIN_ALLOW_THREADS
+    ok = ao_scene_load(&self->scene, path, &load);
+    Py_END_ALLOW_THREADS
     self->loaded = ok;
+    ok = ao_messages_close(&messages, ok, PyExc_ValueError, "aoview: the scene could not be loaded");
+    Py_DECREF(keep);
     if (!ok)
         return NULL;
     Py_RETURN_NONE;
@@ -287,24 +224,19 @@ static PyObject *core_from_arrays(PyObject *module, PyObject *args)
                                          .albedo = {albedo[0], albedo[1], albedo[2]}, .spheres = spheres,
                                          .sphere_count = (size_t)k, .camera = cam == Py_None ? NULL : &camera};
         struct ao_scene_options load = ao_options_scene(&opts);
-        struct capture c;
-        ok = capture_begin(&c);
-        if (ok) {
-            Py_BEGIN_ALLOW_THREADS
-            ok = ao_scene_from_arrays(&self->scene, &arrays, &load);
-            Py_END_ALLOW_THREADS
-            if (ok)
-                capture_end(&c);
-            else
-                capture_raise(&c, PyExc_ValueError, "aoview: the scene could not be made");
-        }
+        struct ao_messages messages;
+        ao_messages_begin(&messages);
+        Py_BEGIN_ALLOW_THREADS
+        ok = ao_scene_from_arrays(&self->scene, &arrays, &load);
+        Py_END_ALLOW_THREADS
+        self->loaded = ok;
+        ok = ao_messages_close(&messages, ok, PyExc_ValueError, "aoview: the scene could not be made");
     }
     PyMem_Free(spheres);
     for (int i = 0; i < 5; i++)
         if (b[i].obj)
             PyBuffer_Release(&b[i]);
     Py_DECREF(keep);
-    self->loaded = ok;
     if (!ok)
         return NULL;
     Py_RETURN_NONE;
@@ -328,6 +260,8 @@ typedef struct {
     bool every_pass;           /* the render thread waits in on_pass until step has taken the pass */
     bool closing;              /* no waiting in on_pass any more */
     bool finished;             /* the last pass was taken */
+    struct ao_messages messages;   /* the render thread's route, kept while it runs */
+    bool messages_live;            /* begun and not finished */
 } RunObject;
 
 /* The renderer's on_pass (render thread): records the pass, wakes step and, when every pass is
@@ -364,6 +298,8 @@ static void run_close(RunObject *r)
 static void run_dealloc(RunObject *self)
 {
     run_close(self);
+    if (self->messages_live)
+        ao_messages_finish(&self->messages);
     pthread_cond_destroy(&self->changed);
     pthread_mutex_destroy(&self->lock);
     free(self->reference);
@@ -444,6 +380,10 @@ static PyObject *run_step(RunObject *self, PyObject *args)
     pthread_mutex_unlock(&self->lock);
     if (info.done)
         run_close(self);
+    if (!ao_messages_warn(&self->messages, true)) {
+        run_close(self);
+        return NULL;
+    }
     return info_dict(&info);
 }
 
@@ -495,11 +435,12 @@ static PyObject *core_start(PyObject *module, PyObject *args)
     r->scene = scene;
     r->every_pass = every_pass;
     struct ao_tracer *tracer;
-    struct capture c;
-    if (!parse_options(list, &r->opts, &r->argv) || !(tracer = scene_tracer(scene)) || !capture_begin(&c)) {
+    if (!parse_options(list, &r->opts, &r->argv) || !(tracer = scene_tracer(scene))) {
         Py_DECREF(r);
         return NULL;
     }
+    ao_messages_begin(&r->messages);   /* the render thread keeps this route */
+    r->messages_live = true;
     bool ok = ao_options_render(&r->opts, &scene->scene, tracer, &r->config, &r->settings);
     int w = r->settings.width, h = r->settings.height;
     if (ok && PyUnicode_Check(reference)) {
@@ -507,8 +448,8 @@ static PyObject *core_start(PyObject *module, PyObject *args)
         ok = path && ao_image_read_linear_sized(path, w, h, &r->reference);
     } else if (ok && reference != Py_None) {
         Py_buffer view;
-        capture_end(&c);
         if (!get_buffer(reference, &view, 3 * sizeof(float), (size_t)w * (size_t)h, false, "reference")) {
+            ao_messages_end(&r->messages);
             Py_DECREF(r);
             return NULL;
         }
@@ -517,12 +458,9 @@ static PyObject *core_start(PyObject *module, PyObject *args)
             memcpy(r->reference, view.buf, (size_t)view.len);
         PyBuffer_Release(&view);
         if (!r->reference) {
+            ao_messages_end(&r->messages);
             Py_DECREF(r);
             return PyErr_NoMemory();
-        }
-        if (!capture_begin(&c)) {
-            Py_DECREF(r);
-            return NULL;
         }
     }
     if (ok) {
@@ -534,11 +472,16 @@ static PyObject *core_start(PyObject *module, PyObject *args)
         ok = (r->render = ao_render_create(&r->config, &r->settings)) != NULL;
     }
     if (!ok) {
-        capture_raise(&c, PyExc_ValueError, "aoview: the render could not start");
+        r->messages_live = false;
+        ao_messages_close(&r->messages, false, PyExc_ValueError, "aoview: the render could not start");
         Py_DECREF(r);
         return NULL;
     }
-    capture_end(&c);
+    ao_messages_end(&r->messages);
+    if (!ao_messages_warn(&r->messages, false)) {
+        Py_DECREF(r);
+        return NULL;
+    }
     return (PyObject *)r;
 }
 
@@ -568,6 +511,8 @@ static PyObject *core_exact(PyObject *module, PyObject *args)
     struct ao_exact_facts facts;
     char why[256];
     bool ok;
+    struct ao_messages messages;
+    ao_messages_begin(&messages);
     Py_BEGIN_ALLOW_THREADS
 #if defined(__SSE__)
     unsigned modes = _mm_getcsr();   /* aoview-exact's modes while it traces, then the caller's */
@@ -580,10 +525,10 @@ static PyObject *core_exact(PyObject *module, PyObject *args)
     Py_END_ALLOW_THREADS
     PyBuffer_Release(&view);
     Py_DECREF(keep);
-    if (!ok) {
-        PyErr_Format(PyExc_ValueError, "%s: %s", scene->scene.name, why);
+    char reason[sizeof why + sizeof scene->scene.name + 2];
+    snprintf(reason, sizeof reason, "%s: %s", scene->scene.name, why);
+    if (!ao_messages_close(&messages, ok, PyExc_ValueError, reason))
         return NULL;
-    }
     return Py_BuildValue("s", facts.kind);
 }
 
@@ -619,18 +564,13 @@ static PyObject *mesh_intersect(MeshObject *self, PyObject *args)
             break;
     bool ok = got == 5;
     if (ok) {
-        struct capture c;
-        ok = capture_begin(&c);
-        if (ok) {
-            Py_BEGIN_ALLOW_THREADS
-            ok = ao_tracer_intersect_arrays(self->mesh, b[0].buf, b[1].buf, (size_t)k, tnear, threads, b[2].buf,
-                                            b[3].buf, b[4].buf);
-            Py_END_ALLOW_THREADS
-            if (ok)
-                capture_end(&c);
-            else
-                capture_raise(&c, PyExc_MemoryError, "aoview: the rays could not be traced");
-        }
+        struct ao_messages messages;
+        ao_messages_begin(&messages);
+        Py_BEGIN_ALLOW_THREADS
+        ok = ao_tracer_intersect_arrays(self->mesh, b[0].buf, b[1].buf, (size_t)k, tnear, threads, b[2].buf,
+                                        b[3].buf, b[4].buf);
+        Py_END_ALLOW_THREADS
+        ok = ao_messages_close(&messages, ok, PyExc_MemoryError, "aoview: the rays could not be traced");
     }
     for (int i = 0; i < got; i++)
         PyBuffer_Release(&b[i]);
@@ -664,20 +604,19 @@ static PyObject *mesh_new(PyTypeObject *type, PyObject *args, PyObject *kwds)
         return NULL;
     }
     MeshObject *self = (MeshObject *)type->tp_alloc(type, 0);
-    struct capture c;
-    if (self && capture_begin(&c)) {
+    bool ok = false;
+    if (self) {
+        struct ao_messages messages;
+        ao_messages_begin(&messages);
         Py_BEGIN_ALLOW_THREADS
         self->mesh = ao_tracer_arrays_create(b[0].buf, (size_t)n, b[1].buf, (size_t)m);
         Py_END_ALLOW_THREADS
-        if (self->mesh)
-            capture_end(&c);
-        else
-            capture_raise(&c, PyExc_MemoryError, "aoview: the mesh could not be built");
+        ok = ao_messages_close(&messages, self->mesh != NULL, PyExc_MemoryError, "aoview: the mesh could not be built");
     }
     PyBuffer_Release(&b[0]);
     PyBuffer_Release(&b[1]);
-    if (self && !self->mesh) {
-        Py_DECREF(self);
+    if (!ok) {
+        Py_XDECREF(self);
         return NULL;
     }
     return (PyObject *)self;

@@ -1,6 +1,8 @@
 /* aoview's Python module, its window (aoview._window): view() opens aoview's GLFW window on a scene
  * with the command line's settings and keys, through the GL library; built only with the front
- * ends, and imported only by view(), so that `import aoview` loads no GL. */
+ * ends, and imported only by view(), so that `import aoview` loads no GL. Its own copy of the core
+ * sends the window's messages to the call's sink (messages.h): errors into the exception, notes to
+ * Python's warnings. */
 #define PY_SSIZE_T_CLEAN
 #include <Python.h>
 
@@ -8,6 +10,7 @@
 #include <unistd.h>
 
 #include "cli.h"
+#include "messages.h"
 #include "options.h"
 #include "render.h"
 #include "scene_object.h"
@@ -52,6 +55,8 @@ static PyObject *window_view(PyObject *module, PyObject *args)
     struct ao_tracer *tracer = NULL;
     struct ao_render *render = NULL;
     enum ao_window_result result = AO_WINDOW_FAILED;
+    struct ao_messages messages;
+    ao_messages_begin(&messages);
     Py_BEGIN_ALLOW_THREADS
     tracer = ao_tracer_create(&scene->scene);
     if (tracer && ao_options_render(&opts, &scene->scene, tracer, &config, &settings)) {
@@ -69,12 +74,12 @@ static PyObject *window_view(PyObject *module, PyObject *args)
     ao_tracer_destroy(tracer);
     Py_END_ALLOW_THREADS
     PyMem_Free(argv);
-    if (result == AO_WINDOW_OK)
-        Py_RETURN_NONE;
-    PyErr_SetString(PyExc_RuntimeError, !render                         ? "aoview: the render could not start"
-                                        : result == AO_WINDOW_NO_DISPLAY ? "aoview: no display to open a window on"
-                                                                         : "aoview: OpenGL failed in the window");
-    return NULL;
+    if (!ao_messages_close(&messages, result == AO_WINDOW_OK, PyExc_RuntimeError,
+                           !render                         ? "aoview: the render could not start"
+                           : result == AO_WINDOW_NO_DISPLAY ? "aoview: no display to open a window on"
+                                                            : "aoview: OpenGL failed in the window"))
+        return NULL;
+    Py_RETURN_NONE;
 }
 
 static PyMethodDef window_methods[] = {

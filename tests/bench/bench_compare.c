@@ -10,6 +10,7 @@
 
 #include "bench_util.h"
 #include "compare.h"
+#include "program.h"
 #include "scene.h"
 #include "scene_load.h"
 #include "tracer.h"
@@ -71,6 +72,7 @@ static struct run measure(const struct ao_scene *scene, const struct ao_tracer *
 
 int main(int argc, char **argv)
 {
+    ao_program_init();
     if (argc < 2) {
         fprintf(stderr, "usage: bench_compare SCENE [SECONDS [RUNS]]\n");
         return 2;

@@ -20,6 +20,7 @@
 #include "glapi.h"
 #include "hud.h"
 #include "image.h"
+#include "program.h"
 #include "shaders/ao_shaders.h"
 
 enum { REPEATS = 9 };
@@ -184,6 +185,7 @@ static void measure(const struct ao_scene *scene, const struct ao_tracer *tracer
 
 int main(int argc, char **argv)
 {
+    ao_program_init();
     if (!glfwInit()) {
         printf("SKIP: no display (run under xvfb-run -a -s \"-screen 0 4320x2440x24\")\n");
         return 77;

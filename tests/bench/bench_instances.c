@@ -18,6 +18,7 @@
 
 #include "bench_meshes.h"
 #include "bench_util.h"
+#include "program.h"
 #include "render.h"
 #include "scene.h"
 #include "scene_load.h"
@@ -85,6 +86,7 @@ static int generate(const char *dir)
 
 int main(int argc, char **argv)
 {
+    ao_program_init();
     if (argc == 3 && strcmp(argv[1], "--generate") == 0)
         return generate(argv[2]);
     int first = 1, rounds = 5;

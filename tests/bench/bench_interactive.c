@@ -18,6 +18,7 @@
 
 #include "bench_util.h"
 #include "config.h"
+#include "program.h"
 #include "render.h"
 #include "scene.h"
 #include "tracer.h"
@@ -173,6 +174,7 @@ static void time_to_error(const struct ao_scene *scene, const struct ao_tracer *
 
 int main(int argc, char **argv)
 {
+    ao_program_init();
     const char *path = argc > 1 ? argv[1] : AO_DEFAULT_SCENE;
     struct ao_scene scene;
     struct ao_tracer *tracer = bench_load(path, &scene);

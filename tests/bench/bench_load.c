@@ -10,11 +10,13 @@
 #include "bench_util.h"
 #include "load/load.h"
 #include "mesh.h"
+#include "program.h"
 
 enum { MAX_FILES = 16, MAX_ROUNDS = 99 };
 
 int main(int argc, char **argv)
 {
+    ao_program_init();
     int first = 1, rounds = 5;
     if (argc > 2 && strcmp(argv[1], "--rounds") == 0) {
         rounds = atoi(argv[2]);

@@ -19,6 +19,7 @@
 #include "config.h"
 #include "image.h"
 #include "preview.h"
+#include "program.h"
 #include "render.h"
 #include "scene.h"
 #include "tracer.h"
@@ -156,6 +157,7 @@ static void measure(const struct ao_scene *scene, const struct ao_tracer *tracer
 
 int main(int argc, char **argv)
 {
+    ao_program_init();
     const char *path = AO_DEFAULT_SCENE;
     int sizes[8][2], count = 0;
     uint32_t reference_spp = 256;

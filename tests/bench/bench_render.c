@@ -16,6 +16,7 @@
 
 #include "bench_util.h"
 #include "mesh.h"
+#include "program.h"
 #include "render.h"
 #include "scene.h"
 #include "scene_load.h"
@@ -355,6 +356,7 @@ static void bench_4k(const struct ao_scene *scene)
 
 int main(int argc, char **argv)
 {
+    ao_program_init();
     setvbuf(stdout, NULL, _IOLBF, 0);
     double bunny = 0, big = 0;
     for (int k = 1; k < argc; k++) {

@@ -30,6 +30,7 @@
 
 #include "bench_meshes.h"
 #include "bench_util.h"
+#include "program.h"
 #include "render.h"
 #include "scene.h"
 #include "scene_load.h"
@@ -225,6 +226,7 @@ static int compare_builds(const char *dir, int rounds)
 
 int main(int argc, char **argv)
 {
+    ao_program_init();
     int first = 1, rounds = 5;
     bool reuse = false, one = false, goal = false, by_build = false;
     for (; first < argc - 1; first++) {

@@ -9,6 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "program.h"
 #include "render.h"
 #include "scene.h"
 #include "scene_load.h"
@@ -56,6 +57,7 @@ static float *render_scaled(const char *text, const char *path, int k, enum ao_b
 
 int main(int argc, char **argv)
 {
+    ao_program_init();
     const char *root = getenv("AO_SOURCE_ROOT");
     if (argc < 4) {
         fprintf(stderr, "usage: AO_SOURCE_ROOT=DIR scale_range KIND(0|1) BACKEND(0 direct|1 embree) K...\n");

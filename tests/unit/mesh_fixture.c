@@ -97,33 +97,12 @@ unsigned char *slurp(const char *path, size_t *size)
     return data;
 }
 
-struct capture capture_begin(void)
-{
-    struct capture c = {.file = tmpfile()};
-    assert_non_null(c.file);
-    fflush(stderr);
-    c.saved = dup(STDERR_FILENO);
-    assert_true(c.saved >= 0);
-    assert_true(dup2(fileno(c.file), STDERR_FILENO) >= 0);
-    return c;
-}
-
-void capture_end(struct capture c, char *err, size_t err_size)
-{
-    fflush(stderr);
-    assert_true(dup2(c.saved, STDERR_FILENO) >= 0);
-    close(c.saved);
-    rewind(c.file);
-    size_t n = fread(err, 1, err_size - 1, c.file);
-    err[n] = '\0';
-    fclose(c.file);
-}
-
 bool load_captured(struct ao_mesh *mesh, const char *path, char *err, size_t err_size)
 {
-    struct capture c = capture_begin();
+    struct capture c;
+    capture_begin(&c);
     bool ok = ao_load_mesh(mesh, path, NULL);
-    capture_end(c, err, err_size);
+    capture_end(&c, err, err_size);
     return ok;
 }
 
@@ -140,9 +119,10 @@ uint64_t medium_charge(uint64_t triangles, uint64_t vertices)
 bool load_within(struct ao_mesh *mesh, const char *path, uint64_t limit, char *err, size_t err_size)
 {
     struct ao_budget budget = {.limit = limit, .bvh = AO_BVH_MEDIUM};
-    struct capture c = capture_begin();
+    struct capture c;
+    capture_begin(&c);
     bool ok = ao_load_mesh(mesh, path, &budget);
-    capture_end(c, err, err_size);
+    capture_end(&c, err, err_size);
     assert_true(budget.used == 0);
     return ok;
 }

@@ -11,6 +11,7 @@
 #include <stdio.h>
 
 #include "budget.h"
+#include "capture.h"
 #include "load/load.h"
 #include "mesh.h"
 
@@ -46,19 +47,7 @@ const char *temp_file(const char *name, const void *bytes, size_t size);
 /* Reads a whole file into a malloc'd buffer. */
 unsigned char *slurp(const char *path, size_t *size);
 
-/* stderr captured into a scratch file, from capture_begin to capture_end. */
-struct capture {
-    FILE *file;
-    int saved;             /* the real stderr's descriptor, put back by capture_end */
-};
-
-/* Starts capturing what is written to stderr. */
-struct capture capture_begin(void);
-
-/* Stops capturing and puts what was written, NUL-terminated and cut to err_size, into err. */
-void capture_end(struct capture c, char *err, size_t err_size);
-
-/* Runs ao_load_mesh with stderr redirected, returning what it printed in err. */
+/* Runs ao_load_mesh with its messages captured (capture.h), returning them in err. */
 bool load_captured(struct ao_mesh *mesh, const char *path, char *err, size_t err_size);
 
 /* The budget's charges at the MEDIUM BVH's rates: a mesh, and meshes with their placements. */
@@ -67,7 +56,7 @@ uint64_t medium_model(uint64_t triangles, uint64_t vertices, uint64_t placements
 /* medium_model's charge of one mesh and no placements. */
 uint64_t medium_charge(uint64_t triangles, uint64_t vertices);
 
-/* Runs ao_load_mesh within a budget of `limit` bytes at the MEDIUM BVH's rates, stderr
+/* Runs ao_load_mesh within a budget of `limit` bytes at the MEDIUM BVH's rates, its messages
  * captured in err; the budget must come back empty, whatever happened. */
 bool load_within(struct ao_mesh *mesh, const char *path, uint64_t limit, char *err, size_t err_size);
 

@@ -14,6 +14,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "capture.h"
 #include "image.h"
 
 /* Each test works in a fresh directory under $TMPDIR (or /tmp), removed afterwards. */
@@ -87,33 +88,24 @@ static unsigned char *read_bytes(const char *path, size_t *size)
     return buf;
 }
 
-/* Runs ao_image_read_pfm on path, expecting failure and exactly one stderr line naming path. */
+/* Runs ao_image_read_pfm on path, expecting failure and exactly one error line naming path. */
 static void expect_pfm_rejected(const char *path)
 {
-    char log[600];
-    snprintf(log, sizeof log, "%s.log", path);
-    fflush(stderr);
-    int saved = dup(2);
-    int fd = open(log, O_WRONLY | O_CREAT | O_TRUNC, 0600);
-    assert_true(saved >= 0 && fd >= 0);
-    dup2(fd, 2);
-    close(fd);
+    struct capture c;
+    capture_begin(&c);
     float *rgb = NULL;
     int w = -1, h = -1;
     bool ok = ao_image_read_pfm(path, &rgb, &w, &h);
-    fflush(stderr);
-    dup2(saved, 2);
-    close(saved);
-    size_t n;
-    unsigned char *text = read_bytes(log, &n);
-    unlink(log);
+    char text[1024];
+    capture_end(&c, text, sizeof text);
+    size_t n = strlen(text);
     assert_false(ok);
     assert_null(rgb);
+    assert_int_equal(c.errors, 1);
     assert_true(n > strlen(path) + 2);
     assert_memory_equal(text, path, strlen(path));
     assert_int_equal(text[n - 1], '\n');
     assert_null(memchr(text, '\n', n - 1));
-    free(text);
 }
 
 /* A PFM file built from a header string and raw payload bytes. */

@@ -21,13 +21,14 @@
 /* How a scene comes in: a path to a scene file or a mesh (ao_scene_load), or text (ao_scene_parse). */
 enum entry { FROM_FILE, FROM_TEXT };
 
-/* Loads (FROM_FILE: path) or parses (FROM_TEXT: text as if from path) with stderr captured in err. */
+/* Loads (FROM_FILE: path) or parses (FROM_TEXT: text as if from path) with its messages captured in err. */
 static bool load_captured_scene(struct ao_scene *scene, enum entry entry, const char *path, const char *text,
                                 const struct ao_scene_options *options, char *err, size_t err_size)
 {
-    struct capture c = capture_begin();
+    struct capture c;
+    capture_begin(&c);
     bool ok = entry == FROM_FILE ? ao_scene_load(scene, path, options) : ao_scene_parse(scene, text, path, options);
-    capture_end(c, err, err_size);
+    capture_end(&c, err, err_size);
     return ok;
 }
 

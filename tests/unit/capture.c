@@ -1,0 +1,28 @@
+/* The core's messages caught for a test; see capture.h. */
+#include "capture.h"
+
+#include <stdio.h>
+#include <string.h>
+
+/* The sink: appends the line and a newline. */
+static void append(void *user, enum ao_text_level level, const char *line)
+{
+    struct capture *c = user;
+    *(level == AO_TEXT_NOTE ? &c->notes : &c->errors) += 1;
+    int n = snprintf(c->text + c->used, sizeof c->text - c->used, "%s\n", line);
+    if (n > 0)
+        c->used += (size_t)n < sizeof c->text - c->used ? (size_t)n : sizeof c->text - c->used - 1;
+}
+
+void capture_begin(struct capture *c)
+{
+    memset(c, 0, sizeof *c);
+    c->sink = (struct ao_text_sink){.write = append, .user = c};
+    c->before = ao_text_route(&c->sink);
+}
+
+void capture_end(struct capture *c, char *err, size_t err_size)
+{
+    ao_text_route(c->before);
+    snprintf(err, err_size, "%s", c->text);
+}
