@@ -15,8 +15,11 @@ import numpy as np
 
 from . import _core
 
-__all__ = ['Scene', 'Pass', 'render', 'passes', 'exact', 'ray_mesh_intersect', 'ray_mesh_intersect_precompute',
-           'RayMeshIntersector', 'view']
+__version__ = _core.__version__
+
+__all__ = ['Scene', 'Pass', 'render', 'passes', 'progressive', 'exact', 'ray_mesh_intersect',
+           'ray_mesh_intersect_precompute', 'RayMeshIntersector', 'view', 'UNIFORM_SAMPLING', 'HEMISPHERE_SAMPLING',
+           'COSINE_SAMPLING', 'TNEAR']
 
 # Keyword arguments that are aoview options taking a value, and the two on/off switches; `size` is
 # (width, height).
@@ -216,12 +219,15 @@ class Scene:
 
 class Pass:
     """One pass of a render: image (the running average after it), number (1 for the first), spp
-    (the most samples a pixel has, as --stats' spp), mean_spp, spppp, seconds (render time so far),
-    error (the estimated relative RMSE, nan until known), rmse (against the reference, nan
-    without), eye_rays, shadow_rays, mrays_per_s, converged, done (the last pass)."""
+    (the most samples a pixel has, as --stats' spp), mean_spp (the samples a pixel has on average),
+    target_spp (the planned total: what spp reaches at the end unless the render stops sooner),
+    spppp, seconds (render time so far), error (the estimated relative RMSE, nan until known), rmse
+    (against the reference, nan without), eye_rays, shadow_rays, mrays_per_s, converged, done (the
+    last pass). A display of "spp X of Y" shows mean_spp of target_spp: with adaptive sampling spp
+    reaches target_spp in the busiest tiles while the others still take samples."""
 
-    __slots__ = ('image', 'number', 'spp', 'mean_spp', 'spppp', 'seconds', 'error', 'rmse', 'eye_rays',
-                 'shadow_rays', 'mrays_per_s', 'converged', 'done')
+    __slots__ = ('image', 'number', 'spp', 'target_spp', 'mean_spp', 'spppp', 'seconds', 'error', 'rmse',
+                 'eye_rays', 'shadow_rays', 'mrays_per_s', 'converged', 'done')
 
     def __init__(self, image, info):
         self.image = image
@@ -314,6 +320,32 @@ def passes(scene, *, reference=None, **settings):
     leaving the loop (break, an exception, the iterator dropped) stops it."""
     run, w, h = _start(scene, settings, reference, True, 'passes')
     return _iterate(run, w, h, scene)
+
+
+# The course's names for the sampling of directions (its sampling_type): aoview's --sampling words.
+UNIFORM_SAMPLING = 'uniform'
+HEMISPHERE_SAMPLING = 'hemisphere'
+COSINE_SAMPLING = 'cosine'
+
+
+def progressive(scene, jitter=True, total_spp=100, spppp=1, sampling_type=COSINE_SAMPLING, *, size=None, seed=None,
+                threads=None, ao_distance=None, shading=None, below_surface=None, reference=None):
+    """The course's progressive loop (progressive_render_display(jitter, total_spp, spppp,
+    sampling_type)) as an iterator of Pass: exactly ceil(total_spp / spppp) passes of spppp samples
+    per pixel each (the last may pass total_spp: 10 and 4 give 3 passes, 12 spp), each pass one eye
+    ray per pixel (jittered over the pixel when jitter is true, else through its centre) with
+    spppp directions drawn at random (the textbook estimator: sampler='random', adaptive=False).
+    sampling_type: UNIFORM_SAMPLING ('uniform', over the sphere), HEMISPHERE_SAMPLING or
+    COSINE_SAMPLING. The other settings are render()'s."""
+    for name, value in (('total_spp', total_spp), ('spppp', spppp)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+            raise ValueError(f'{name}: expected a whole number from 1, got {value!r}')
+    if not isinstance(jitter, (bool, np.bool_)):
+        raise TypeError(f'jitter: expected True or False, got {jitter!r}')
+    count = -(-int(total_spp) // int(spppp))
+    return passes(scene, reference=reference, aa=bool(jitter), spp=count * int(spppp), spppp=int(spppp),
+                  sampling=sampling_type, sampler='random', adaptive=False, size=size, seed=seed, threads=threads,
+                  ao_distance=ao_distance, shading=shading, below_surface=below_surface)
 
 
 def exact(scene, *, size=None, aa=None, spp=None):

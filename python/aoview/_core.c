@@ -21,6 +21,7 @@
 #endif
 
 #include "cli.h"
+#include "config.h"
 #include "exact_image.h"
 #include "image.h"
 #include "messages.h"
@@ -318,7 +319,8 @@ static PyObject *run_close_method(RunObject *self, PyObject *unused)
 /* The facts of a pass as a dict. */
 static PyObject *info_dict(const struct ao_frame_info *i)
 {
-    return Py_BuildValue("{s:I,s:I,s:I,s:d,s:d,s:d,s:K,s:K,s:d,s:d,s:d,s:O}", "pass", i->pass, "spp", i->spp,
+    return Py_BuildValue("{s:I,s:I,s:I,s:I,s:d,s:d,s:d,s:K,s:K,s:d,s:d,s:d,s:O}", "pass", i->pass, "spp", i->spp,
+                         "target_spp", i->target_spp,
                          "spppp", i->spppp, "mean_spp", i->mean_spp, "seconds", i->seconds, "error", i->error,
                          "eye_rays", (unsigned long long)i->eye_rays, "shadow_rays",
                          (unsigned long long)i->shadow_rays, "rmse", i->rmse, "converged", i->converged,
@@ -680,7 +682,8 @@ PyMODINIT_FUNC PyInit__core(void)
         PyModule_AddObject(m, "Mesh", (PyObject *)&MeshType) < 0 ||
         PyModule_AddObject(m, "ARRAYS_LIMIT", PyFloat_FromDouble(AO_TRACER_ARRAYS_LIMIT)) < 0 ||
         PyModule_AddObject(m, "MIN_EXTENT", PyFloat_FromDouble(AO_SCENE_MIN_EXTENT)) < 0 ||
-        PyModule_AddObject(m, "MAX_EXTENT", PyFloat_FromDouble(AO_SCENE_MAX_EXTENT)) < 0) {
+        PyModule_AddObject(m, "MAX_EXTENT", PyFloat_FromDouble(AO_SCENE_MAX_EXTENT)) < 0 ||
+        PyModule_AddStringConstant(m, "__version__", AO_VERSION) < 0) {
         Py_DECREF(m);
         return NULL;
     }
