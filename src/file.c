@@ -4,7 +4,6 @@
 #include <errno.h>
 #include <fcntl.h>
 #include <pthread.h>
-#include <signal.h>
 #include <stdatomic.h>
 #include <stdarg.h>
 #include <stdint.h>
@@ -68,41 +67,93 @@ bool ao_file_read_prefix(int fd, size_t length, char **data, const char **why)
     return true;
 }
 
-/* The line a SIGBUS prints while a file is mapped: another process shrank it under the parser.
- * Empty (length 0) while none is mapped. One mapping at a time: loads run one after another. */
-static char bus_line[AO_TEXT_SIZE + 64]; /* the escaped name and the message fit */
-static atomic_size_t bus_length;
+/* Whether ao_file_map_budget maps files (ao_file_set_mapping). */
+static atomic_bool mapping = true;
 
-/* SIGBUS while a file is mapped: its one line and exit status 1 (as any runtime error); otherwise
- * what SIGBUS does by default. */
-static void on_bus(int sig)
+/* The live mappings (from ao_file_map_budget to ao_file_unmap), each with the line a SIGBUS in it
+ * says, for a program's SIGBUS handler (ao_file_mapped_line). Lock-free, so that several threads
+ * may map at once and a signal handler may look: a slot is claimed by setting `used`, filled, then
+ * published by storing its start; released by clearing start before the file is unmapped, so that
+ * a published slot always names a live mapping. A file mapped while every slot is taken is read. */
+enum { MAPPING_SLOTS = 64 };
+static struct mapping {
+    atomic_bool used;
+    _Atomic uintptr_t start;   /* 0: not published */
+    atomic_size_t length;      /* the file's bytes (its NUL lies in the same page) */
+    size_t line_length;
+    char line[AO_TEXT_SIZE + 64]; /* the escaped name and the message fit */
+} mappings[MAPPING_SLOTS];
+
+void ao_file_set_mapping(bool on)
 {
-    size_t length = atomic_load(&bus_length);
-    if (length == 0) {
-        signal(sig, SIG_DFL);
-        raise(sig);
-        return;
-    }
-    if (write(STDERR_FILENO, bus_line, length) < 0) {
-        /* nowhere left to say it */
-    }
-    _exit(EXIT_FAILURE);
+    atomic_store(&mapping, on);
 }
 
-/* The first length bytes of the open file fd, a NUL after them, into *data: mapped read-only
- * (*mapped) when the file ends inside a page, whose rest the system fills with zeros (POSIX) so
- * that the NUL is there; read when it ends at a page's end or cannot be mapped. False with the
- * reason in *why. */
-static bool map_file(int fd, size_t length, char **data, bool *mapped, const char **why)
+/* Publishes the mapping of path at bytes (length bytes) in a free slot; false when none is free. */
+static bool publish_mapping(const char *path, const void *bytes, size_t length)
 {
-    void *bytes = length % (size_t)sysconf(_SC_PAGESIZE) != 0 ? mmap(NULL, length, PROT_READ, MAP_PRIVATE, fd, 0)
-                                                              : MAP_FAILED;
+    for (size_t k = 0; k < MAPPING_SLOTS; k++) {
+        struct mapping *m = &mappings[k];
+        bool free_slot = false;
+        if (!atomic_compare_exchange_strong(&m->used, &free_slot, true))
+            continue;
+        char name[AO_TEXT_SIZE];
+        int n = snprintf(m->line, sizeof m->line, "%s: the file shrank while it was being read\n",
+                         ao_text_escape(path, name, sizeof name));
+        m->line_length = n > 0 && (size_t)n < sizeof m->line ? (size_t)n : strlen(m->line);
+        atomic_store(&m->length, length);
+        atomic_store(&m->start, (uintptr_t)bytes);
+        return true;
+    }
+    return false;
+}
+
+/* Unpublishes the mapping at bytes, if it was published (before it is unmapped). */
+static void withdraw_mapping(const void *bytes)
+{
+    for (size_t k = 0; k < MAPPING_SLOTS; k++) {
+        struct mapping *m = &mappings[k];
+        if (atomic_load(&m->start) == (uintptr_t)bytes) {
+            atomic_store(&m->start, 0);
+            atomic_store(&m->used, false);
+            return;
+        }
+    }
+}
+
+const char *ao_file_mapped_line(const void *address, size_t *length)
+{
+    uintptr_t at = (uintptr_t)address;
+    for (size_t k = 0; k < MAPPING_SLOTS; k++) {
+        struct mapping *m = &mappings[k];
+        uintptr_t start = atomic_load(&m->start);
+        size_t bytes = atomic_load(&m->length);
+        /* start read again: a slot refilled in between for another mapping reads as that mapping,
+         * which does not hold the address of this thread's fault */
+        if (start && start == atomic_load(&m->start) && at >= start && at - start <= bytes) {
+            *length = m->line_length;
+            return m->line;
+        }
+    }
+    return NULL;
+}
+
+/* The first length bytes of the open file fd at path, a NUL after them, into *data: mapped
+ * read-only (*mapped, published for ao_file_mapped_line) when the file ends inside a page, whose
+ * rest the system fills with zeros (POSIX) so that the NUL is there; read when the host asked for
+ * no mappings, the file ends at a page's end, or it cannot be mapped or published. False with the
+ * reason in *why. */
+static bool map_file(int fd, const char *path, size_t length, char **data, bool *mapped, const char **why)
+{
+    bool may = atomic_load(&mapping) && length % (size_t)sysconf(_SC_PAGESIZE) != 0;
+    void *bytes = may ? mmap(NULL, length, PROT_READ, MAP_PRIVATE, fd, 0) : MAP_FAILED;
+    if (bytes != MAP_FAILED && !publish_mapping(path, bytes, length)) {
+        munmap(bytes, length);
+        bytes = MAP_FAILED;
+    }
     *mapped = bytes != MAP_FAILED;
     if (!*mapped)
         return ao_file_read_prefix(fd, length, data, why);
-    struct sigaction action = {.sa_handler = on_bus}; /* set at each mapping, whatever came since */
-    sigemptyset(&action.sa_mask);
-    sigaction(SIGBUS, &action, NULL);
     posix_madvise(bytes, length, POSIX_MADV_SEQUENTIAL);
     *data = bytes;
     return true;
@@ -126,7 +177,7 @@ static bool read_file(const char *path, struct ao_budget *budget, bool *mapped, 
         ao_budget_explain(budget, charge, why, sizeof why);
         reason = why;
     }
-    if (!reason && (mapped ? map_file(fd, (size_t)st.st_size, text, mapped, &reason)
+    if (!reason && (mapped ? map_file(fd, path, (size_t)st.st_size, text, mapped, &reason)
                         : ao_file_read_prefix(fd, (size_t)st.st_size, text, &reason))) {
         *size = (size_t)st.st_size;
         ao_file_note_input(fd, path);
@@ -153,12 +204,8 @@ bool ao_file_read_budget(const char *path, struct ao_budget *budget, char **text
 
 bool ao_file_map_budget(const char *path, struct ao_budget *budget, const char **text, size_t *size, bool *mapped)
 {
-    char *bytes = NULL, name[AO_TEXT_SIZE];
-    int n = snprintf(bus_line, sizeof bus_line, "%s: the file shrank while it was being read\n",
-                     ao_text_escape(path, name, sizeof name));
+    char *bytes = NULL;
     bool ok = read_file(path, budget, mapped, &bytes, size);
-    if (ok && *mapped && n > 0)
-        atomic_store(&bus_length, (size_t)n);
     *text = bytes;
     return ok;
 }
@@ -166,7 +213,7 @@ bool ao_file_map_budget(const char *path, struct ao_budget *budget, const char *
 void ao_file_unmap(const char *text, size_t size, bool mapped)
 {
     if (mapped) {
-        atomic_store(&bus_length, 0);
+        withdraw_mapping(text);
         munmap((void *)(uintptr_t)text, size);
     } else
         free((void *)(uintptr_t)text);

@@ -1,5 +1,6 @@
 /* Whole-file reading shared by the scene and mesh loaders (charged to the scene budget, the files
- * read remembered as inputs), and opening a stream output (--stats). */
+ * read remembered as inputs, big ones mapped), and opening a stream output (--stats). Failures are
+ * reported as one line each (ao_text_report). */
 #ifndef AO_FILE_H
 #define AO_FILE_H
 
@@ -11,7 +12,7 @@
 
 /* Reads the regular file at path into a malloc'd NUL-terminated buffer the caller frees, its
  * length (without the NUL) in *size. Refuses directories, FIFOs and devices without blocking; on
- * failure prints one "path: reason" line to stderr and returns false. Any thread. */
+ * failure reports one "path: reason" line and returns false. Any thread. */
 bool ao_file_read(const char *path, char **text, size_t *size);
 
 /* Opens path to write a stream into (--stats) without truncating it, so that an existing file is
@@ -21,7 +22,7 @@ bool ao_file_read(const char *path, char **text, size_t *size);
  * Written through: a symbolic link (its target), a FIFO, a character device (a terminal,
  * /dev/null); refused: a block device, and a regular file no one may write (read-only even for
  * root). *created: this call created the file. NULL after one line "what: cannot write path:
- * reason". Main thread (signals end the wait). */
+ * reason" (reported). Main thread (signals end the wait). */
 FILE *ao_file_open_output(const char *path, const char *what, bool *created);
 
 /* ao_file_read charging the file's size plus one (the NUL) to budget before anything is allocated:
@@ -31,11 +32,22 @@ bool ao_file_read_budget(const char *path, struct ao_budget *budget, char **text
 
 /* ao_file_read_budget without a copy, for big files read once: the file is mapped read-only
  * (*mapped; its pages are the page cache's, so nothing is zeroed or copied), a NUL after it; a
- * file whose length is a whole number of pages (no room for the NUL), or that cannot be mapped, is
- * read. Release it with ao_file_unmap, then give back the charge. A file another process shrinks
- * while it is mapped ends this one with "path: the file shrank while it was being read" and status
- * 1 (a SIGBUS handler; other SIGBUS keep their default). One mapping at a time. Any thread. */
+ * file whose length is a whole number of pages (no room for the NUL), that cannot be mapped, or
+ * any file while the host has turned mapping off (ao_file_set_mapping), is read. Release it with
+ * ao_file_unmap, then give back the charge. Reading a mapped file that another process shrank
+ * raises SIGBUS; the core installs no handler: a program's looks the address up with
+ * ao_file_mapped_line. Any thread, several at once. */
 bool ao_file_map_budget(const char *path, struct ao_budget *budget, const char **text, size_t *size, bool *mapped);
+
+/* Whether ao_file_map_budget maps files (true, as before any call) or reads them all. A host that
+ * cannot end the process on a SIGBUS (the Python module) turns mapping off, so that a file shrunk
+ * under a load is that load's error ("read error"). Any thread; from the next load on. */
+void ao_file_set_mapping(bool on);
+
+/* The line "path: the file shrank while it was being read\n" of the live mapping (ao_file_map_budget,
+ * not yet released) that holds address, its length in *length; NULL when none does. Lock-free and
+ * async-signal-safe: for a program's SIGBUS handler (si_addr), which the core never installs. */
+const char *ao_file_mapped_line(const void *address, size_t *length);
 
 /* Releases what ao_file_map_budget gave (text, size and mapped as it gave them). */
 void ao_file_unmap(const char *text, size_t size, bool mapped);

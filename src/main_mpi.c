@@ -358,13 +358,15 @@ int main(int argc, char **argv)
 {
     /* Before MPI starts its threads, so that they all inherit the mask. */
     struct ao_app app = {0};
-    ao_program_init();
     if (!ao_app_begin())
         return AO_EXIT_RUNTIME;
     ao_app_block_signals(&app);
     int rank, size;
     if (!ao_cluster_init(&argc, &argv, &rank, &size))
         return AO_EXIT_RUNTIME;
+    /* After MPI_Init, whose SIGBUS handler (Open MPI's backtraces) the program's replaces; the core
+     * has said nothing yet. */
+    ao_program_init();
     struct ao_options opts;
     double copy = SAFETY_COPY_SECONDS;
     int status = parse(argc, argv, rank, &opts, &copy);

@@ -21,8 +21,11 @@ const char *ao_text_escape(const char *s, char *out, size_t size);
 enum ao_text_level { AO_TEXT_NOTE, AO_TEXT_ERROR };
 
 /* Where the core's messages go: write(user, level, line) gets one line, already escaped, without a
- * newline, on the thread whose call made it (write NULL: dropped). The host keeps the sink (and
- * what user points to) alive while any thread is routed to it. */
+ * newline (write NULL: dropped). It runs on the thread that made the message: a call's own thread,
+ * or one the core started for it (the workers of a job, the render thread), so several at once.
+ * The host keeps the sink (and what user points to) alive while any thread is routed to it: for
+ * a renderer, until ao_render_destroy; for a tracer building a second BVH, until
+ * ao_tracer_destroy. */
 struct ao_text_sink {
     void (*write)(void *user, enum ao_text_level level, const char *line);
     void *user;

@@ -23,6 +23,7 @@
 #include "cli.h"
 #include "config.h"
 #include "exact_image.h"
+#include "file.h"
 #include "image.h"
 #include "messages.h"
 #include "options.h"
@@ -673,6 +674,9 @@ PyMODINIT_FUNC PyInit__core(void)
 {
     if (PyType_Ready(&SceneType) < 0 || PyType_Ready(&RunType) < 0 || PyType_Ready(&MeshType) < 0)
         return NULL;
+    /* The interpreter cannot end on a SIGBUS: the core reads files rather than map them, so that a
+     * file shrunk under a load is that load's error. */
+    ao_file_set_mapping(false);
     PyObject *m = PyModule_Create(&core_module);
     if (!m)
         return NULL;

@@ -8,15 +8,18 @@
 static void append(void *user, enum ao_text_level level, const char *line)
 {
     struct capture *c = user;
+    pthread_mutex_lock(&c->lock);
     *(level == AO_TEXT_NOTE ? &c->notes : &c->errors) += 1;
     int n = snprintf(c->text + c->used, sizeof c->text - c->used, "%s\n", line);
     if (n > 0)
         c->used += (size_t)n < sizeof c->text - c->used ? (size_t)n : sizeof c->text - c->used - 1;
+    pthread_mutex_unlock(&c->lock);
 }
 
 void capture_begin(struct capture *c)
 {
     memset(c, 0, sizeof *c);
+    pthread_mutex_init(&c->lock, NULL);
     c->sink = (struct ao_text_sink){.write = append, .user = c};
     c->before = ao_text_route(&c->sink);
 }
@@ -24,5 +27,7 @@ void capture_begin(struct capture *c)
 void capture_end(struct capture *c, char *err, size_t err_size)
 {
     ao_text_route(c->before);
-    snprintf(err, err_size, "%s", c->text);
+    pthread_mutex_destroy(&c->lock);
+    if (err)
+        snprintf(err, err_size, "%s", c->text);
 }

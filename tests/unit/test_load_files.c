@@ -1,13 +1,16 @@
 /* What every mesh load shares about its file: the extension chooses the format in any case; a
  * missing file, a directory, an unknown extension, an unreadable file each refused with one line;
- * a mapped file shrunk under the parser ends the process with one line; random changes to valid
- * files load or fail cleanly. */
+ * a mapped file shrunk under the parser ends a program (its SIGBUS handler, program.c) with one
+ * line, and the core alone installs no handler; mappings of several threads at once, each found
+ * by its address; mapping turned off; random changes to valid files load or fail cleanly. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <pthread.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +19,7 @@
 #include <unistd.h>
 
 #include "file.h"
+#include "program.h"
 
 #include "mesh_fixture.h"
 
@@ -63,11 +67,12 @@ static void test_unreadable_file(void **state)
     expect_failure(path, ": ", "cannot open: Permission denied");
 }
 
-/* A mapped file that another process shrinks under the parser: reading past its new end ends the
- * process with the file's one line and status 1, not a crash (run in a child, which it ends). */
-static void test_file_shrunk_while_mapped(void **state)
+/* Runs a child that maps a file of 3 pages and more, shrinks it to 10 bytes and reads its last
+ * byte, after ao_program_init when `program`, else with SIGBUS as by default (not cmocka's
+ * handler, which would run the other tests in the child); its status in *status, and what it
+ * wrote on stderr in line. */
+static void shrink_in_child(bool program, int *status, char *line, size_t size)
 {
-    (void)state;
     static char bytes[3 * 4096 + 100];
     memset(bytes, '#', sizeof bytes);
     const char *path = temp_file("shrinks.obj", bytes, sizeof bytes);
@@ -76,6 +81,10 @@ static void test_file_shrunk_while_mapped(void **state)
     pid_t child = fork();
     assert_true(child >= 0);
     if (child == 0) {
+        if (program)
+            ao_program_init();
+        else
+            signal(SIGBUS, SIG_DFL);
         dup2(err[1], STDERR_FILENO);
         const char *text;
         size_t size;
@@ -87,16 +96,106 @@ static void test_file_shrunk_while_mapped(void **state)
         _exit(0);
     }
     close(err[1]);
-    char line[256] = "";
-    ssize_t got = read(err[0], line, sizeof line - 1);
+    ssize_t got = read(err[0], line, size - 1);
+    line[got > 0 ? got : 0] = '\0';
     close(err[0]);
+    assert_int_equal(waitpid(child, status, 0), child);
+}
+
+/* A mapped file that another process shrinks under the parser: in a program, reading past its new
+ * end ends the process with the file's one line and status 1, not a crash (run in a child, which
+ * it ends). */
+static void test_file_shrunk_while_mapped(void **state)
+{
+    (void)state;
     int status;
-    assert_int_equal(waitpid(child, &status, 0), child);
+    char line[256];
+    shrink_in_child(true, &status, line, sizeof line);
     assert_true(WIFEXITED(status));
     assert_int_equal(WEXITSTATUS(status), 1);
-    assert_true(got > 0);
     if (!strstr(line, "shrinks.obj: the file shrank while it was being read\n"))
         fail_msg("stderr: %s", line);
+}
+
+/* The core alone (a library's host that installed no handler) neither catches the SIGBUS nor ends
+ * the process itself: SIGBUS's default, and nothing written. */
+static void test_core_installs_no_handler(void **state)
+{
+    (void)state;
+    int status;
+    char line[256];
+    shrink_in_child(false, &status, line, sizeof line);
+    assert_true(WIFSIGNALED(status));
+    assert_int_equal(WTERMSIG(status), SIGBUS);
+    assert_string_equal(line, "");
+}
+
+/* One thread's mapping for test_mappings_of_threads: its file's name and what the lookups found. */
+struct mapper {
+    pthread_barrier_t *together;
+    char name[4300];
+    bool mapped, own_found, others_missed, gone_after;
+};
+
+/* Maps the file, waits until every thread holds its own, looks its first byte, its NUL, a byte a
+ * page past its end (another thread's mapping, or none) and a byte of its stack up, then releases
+ * it and looks again. */
+static void *map_and_look(void *arg)
+{
+    struct mapper *m = arg;
+    const char *text;
+    size_t size, length;
+    ao_file_map_budget(m->name, NULL, &text, &size, &m->mapped);
+    pthread_barrier_wait(m->together);
+    const char *line = ao_file_mapped_line(text, &length), *end = ao_file_mapped_line(text + size, &length);
+    char expected[4400];
+    snprintf(expected, sizeof expected, "%s: the file shrank while it was being read\n", m->name);
+    m->own_found = line && end == line && strcmp(line, expected) == 0 && length == strlen(expected);
+    m->others_missed = ao_file_mapped_line(text + size + 4096, &length) != line &&
+                       !ao_file_mapped_line(expected, &length);
+    pthread_barrier_wait(m->together);
+    ao_file_unmap(text, size, m->mapped);
+    m->gone_after = !ao_file_mapped_line(text, &length);
+    return NULL;
+}
+
+/* Four threads map four files at once: each address finds its own file's line, none after the
+ * release. With mapping turned off, the same file is read. */
+static void test_mappings_of_threads(void **state)
+{
+    (void)state;
+    enum { THREADS = 4 };
+    static char bytes[4096 + 100];
+    memset(bytes, '#', sizeof bytes);
+    pthread_barrier_t together;
+    pthread_barrier_init(&together, NULL, THREADS);
+    struct mapper mappers[THREADS];
+    pthread_t ids[THREADS];
+    for (int k = 0; k < THREADS; k++) {
+        char file[8];
+        snprintf(file, sizeof file, "m%d", k);
+        mappers[k] = (struct mapper){.together = &together};
+        snprintf(mappers[k].name, sizeof mappers[k].name, "%s", temp_file(file, bytes, sizeof bytes));
+    }
+    for (int k = 0; k < THREADS; k++)
+        assert_int_equal(pthread_create(&ids[k], NULL, map_and_look, &mappers[k]), 0);
+    for (int k = 0; k < THREADS; k++) {
+        pthread_join(ids[k], NULL);
+        assert_true(mappers[k].mapped && mappers[k].own_found && mappers[k].others_missed && mappers[k].gone_after);
+    }
+    pthread_barrier_destroy(&together);
+
+    const char *text;
+    size_t size, length;
+    bool mapped;
+    ao_file_set_mapping(false);
+    assert_true(ao_file_map_budget(mappers[0].name, NULL, &text, &size, &mapped));
+    /* the same file, its own mapping released above */
+    ao_file_set_mapping(true);
+    assert_false(mapped);
+    assert_int_equal(size, sizeof bytes);
+    assert_null(ao_file_mapped_line(text, &length));
+    ao_file_unmap(text, size, mapped);
 }
 
 /* Random byte changes to valid files (fixed seed) load or fail cleanly, never anything else. */
@@ -149,6 +248,8 @@ int main(void)
         cmocka_unit_test(test_file_errors),
         cmocka_unit_test(test_unreadable_file),
         cmocka_unit_test(test_file_shrunk_while_mapped),
+        cmocka_unit_test(test_core_installs_no_handler),
+        cmocka_unit_test(test_mappings_of_threads),
         cmocka_unit_test(test_mutations),
     };
     return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);
