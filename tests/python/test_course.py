@@ -3,9 +3,8 @@ only gpytoolbox's import swapped for aoview's, converges to aoview.exact's image
 signature (use_embree, C, W, CH, tri_ind, intersector) and its near-hit rule (tnear 1e-4) for rays
 leaving surface points unmoved; the reusable intersector answers as the plain call; progressive()
 renders exactly ceil(total_spp / spppp) passes of spppp, the CLI's image of that many samples bit for
-bit; the type stubs hold for Debian's mypy. Run by `meson test --suite python`."""
+bit. Run by `meson test --suite python`."""
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -250,54 +249,3 @@ def test_pass_says_spp_x_of_y_while_adaptive_sampling_runs():
     assert means == sorted(means) and means[-1] <= 100
     frozen = [p for p in got if p.spp == 100]
     assert len(frozen) >= 2 and frozen[0].mean_spp < frozen[-1].mean_spp
-
-
-# ---------------------------------------------------------------- types
-
-def test_the_stubs_hold_for_mypy(tmp_path):
-    """Debian's mypy checks an example of every entry point against the stubs (none of its lines is
-    an error), and finds the errors in a wrong one (an unknown setting, a setting of the wrong type,
-    a result used as what it is not)."""
-    probe = subprocess.run(['/usr/bin/python3', '-m', 'mypy', '--version'], capture_output=True)
-    if probe.returncode != 0:
-        pytest.skip('mypy is not installed (python3-mypy)')
-    good = tmp_path / 'good.py'
-    good.write_text('''
-import numpy as np
-import numpy.typing as npt
-import aoview
-from aoview import ray_mesh_intersect
-
-scene = aoview.Scene.from_arrays(np.zeros((3, 3)), [[0, 1, 2]], ground=True, camera=None)
-other = aoview.Scene.load('scene.obj', crease_angle=30.0, bvh='compact', scene_budget='1G')
-image: npt.NDArray[np.float32] = aoview.render(scene, size=(64, 48), spp=16, sampling='cosine', aa=False,
-                                               target_error=0.01, threads=2, below_surface='trace')
-for p in aoview.passes(scene, spppp='auto', sampler='sobol', reference=image):
-    print(p.number, p.image.shape, p.error)
-for p in aoview.progressive(scene, True, 10, 4, aoview.UNIFORM_SAMPLING, size=(32, 24)):
-    print(f'spp {p.mean_spp:.0f} of {p.target_spp}')
-t, ids, barys = ray_mesh_intersect(np.zeros((1, 3)), np.ones((1, 3)), np.zeros((3, 3)), [[0, 1, 2]],
-                                   use_embree=True)
-rmi = aoview.ray_mesh_intersect_precompute(np.zeros((3, 3)), [[0, 1, 2]])
-t2, ids2, barys2 = rmi.intersect(np.zeros((1, 3)), np.ones((1, 3)), tnear=0.0)
-t3 = ray_mesh_intersect(t, t, None, None, intersector=rmi)[0]
-exact: npt.NDArray[np.float32] = aoview.exact(scene, size=(16, 12), aa=True)
-version: str = aoview.__version__
-''')
-    bad = tmp_path / 'bad.py'
-    bad.write_text('''
-import aoview
-scene = aoview.Scene.load('x.obj')
-aoview.render(scene, spp='many')
-aoview.render(scene, colour=True)
-n: int = aoview.ray_mesh_intersect([[0, 0, 0]], [[0, 0, 1]], [[0, 0, 0]], [[0, 0, 0]])[0]
-aoview.progressive(scene, sampling_type='gaussian')
-''')
-    env = dict(os.environ, MYPYPATH='')
-    run = subprocess.run(['/usr/bin/python3', '-m', 'mypy', '--no-incremental', '--cache-dir', os.devnull,
-                          '--strict-optional', 'good.py', 'bad.py'], capture_output=True, text=True, env=env,
-                         cwd=tmp_path)
-    errors = [line for line in run.stdout.splitlines() if ': error:' in line]
-    assert not [e for e in errors if e.startswith('good.py')], run.stdout
-    lines = sorted(int(e.split(':')[1]) for e in errors if e.startswith('bad.py'))
-    assert lines == [4, 5, 6, 7], run.stdout
