@@ -5,7 +5,8 @@ and saves a strip of the passes it showed into a PNG.
     PYTHONPATH=build/python /usr/bin/python3 examples/progressive.py [SCENE] [-o progressive.png]
 
 progressive_render_display(jitter, total_spp, spppp, sampling_type) of the base code becomes
-aoview.passes(scene, aa=jitter, spp=total_spp, spppp=spppp, sampling=sampling_type)."""
+aoview.progressive(scene, jitter, total_spp, spppp, sampling_type): ceil(total_spp / spppp) passes
+of spppp samples per pixel, as the base code's."""
 import argparse
 import os
 
@@ -31,11 +32,10 @@ def progressive_render_display(scene, jitter=True, total_spp=256, spppp=8, sampl
         figure, axes = plt.subplots()
         picture = axes.imshow(np.zeros(size[::-1]), cmap='gray', vmin=0, vmax=1)
     kept = []
-    passes = total_spp // spppp
+    passes = -(-total_spp // spppp)
     keep = set(np.unique(np.geomspace(1, passes, shown).round().astype(int)))
-    for p in aoview.passes(scene, aa=jitter, spp=total_spp, spppp=spppp, sampling=sampling_type, size=size,
-                           adaptive=False):
-        caption = f'pass {p.number}: {p.spp} spp, {p.seconds:.2f} s'
+    for p in aoview.progressive(scene, jitter, total_spp, spppp, sampling_type, size=size):
+        caption = f'pass {p.number}: {p.mean_spp:.0f} of {p.target_spp} spp, {p.seconds:.2f} s'
         if interactive:
             picture.set_data(p.image)
             axes.set_title(caption)
