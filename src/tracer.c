@@ -747,16 +747,26 @@ static bool bring(const struct ao_tracer_arrays *mesh, const float o[3], const f
                   struct RTCRay *out, double *skip, double *scale)
 {
     float most = fmaxf(fmaxf(fabsf(d[0]), fabsf(d[1])), fabsf(d[2]));
-    if (!(most > 0.0f))
+    if (!(most > 0.0f))   /* zero, or subnormal (flushed to zero where Embree traces) */
         return false;
-    int e;
-    frexpf(most, &e);
-    *scale = ldexp(1.0, 1 - e);                     /* most * *scale is in [1, 2) */
-    float ds[3] = {ldexpf(d[0], 1 - e), ldexpf(d[1], 1 - e), ldexpf(d[2], 1 - e)};
-    double near = tnear / *scale, enter = -INFINITY, leave = INFINITY;
-    bool inside = true;
+    /* 2^(1 - e) for most = m 2^e, m in [0.5, 1), from most's exponent bits: e = E - 126 for a
+     * normal float of biased exponent E; |d| <= 2^60 keeps it normal. */
+    uint32_t bits;
+    memcpy(&bits, &most, sizeof bits);
+    uint32_t power = (127u + 1u + 126u - (bits >> 23)) << 23;
+    float by;
+    memcpy(&by, &power, sizeof by);
+    *scale = by;
+    float ds[3] = {d[0] * by, d[1] * by, d[2] * by}, near = tnear / by;
+    *skip = 0.0;
+    if (o[0] >= mesh->lo[0] && o[0] <= mesh->hi[0] && o[1] >= mesh->lo[1] && o[1] <= mesh->hi[1] &&
+        o[2] >= mesh->lo[2] && o[2] <= mesh->hi[2]) {
+        to_single(o[0], o[1], o[2], ds[0], ds[1], ds[2], INFINITY, out);
+        out->tnear = near;
+        return true;
+    }
+    double enter = near, leave = INFINITY;
     for (int k = 0; k < 3; k++) {
-        inside = inside && o[k] >= mesh->lo[k] && o[k] <= mesh->hi[k];
         if (ds[k] != 0.0f) {
             double a = (mesh->lo[k] - o[k]) / ds[k], b = (mesh->hi[k] - o[k]) / ds[k];
             enter = fmax(enter, fmin(a, b));
@@ -765,16 +775,10 @@ static bool bring(const struct ao_tracer_arrays *mesh, const float o[3], const f
             return false;
         }
     }
-    *skip = 0.0;
-    if (inside) {
-        to_single(o[0], o[1], o[2], ds[0], ds[1], ds[2], INFINITY, out);
-        out->tnear = (float)near;
-        return true;
-    }
-    *skip = fmax(enter, near);
-    if (*skip > leave)
+    if (enter > leave)
         return false;
-    to_single((float)(o[0] + *skip * ds[0]), (float)(o[1] + *skip * ds[1]), (float)(o[2] + *skip * ds[2]), ds[0],
+    *skip = enter;
+    to_single((float)(o[0] + enter * ds[0]), (float)(o[1] + enter * ds[1]), (float)(o[2] + enter * ds[2]), ds[0],
               ds[1], ds[2], INFINITY, out);
     return true;
 }

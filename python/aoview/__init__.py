@@ -2,10 +2,11 @@
 
 Scenes come from files (Scene.load) or numpy arrays (Scene.from_arrays); render() returns the
 linear running average as a float32 array, bit for bit the PFM that the aoview command writes with
-the same settings; passes() steps through the passes; exact() is aoview-exact's closed form;
-ray_mesh_intersect() traces a batch of rays against a triangle mesh with Embree, with the shapes
-and miss conventions of gpytoolbox.ray_mesh_intersect; view() opens aoview's window. Settings are the command line's options as
-keyword arguments (--target-error is target_error=...), with the same defaults, checks and
+the same settings; passes() steps through the passes, progressive() through the course's;
+exact() is aoview-exact's closed form; ray_mesh_intersect() traces a batch of rays against a
+triangle mesh with Embree, as gpytoolbox.ray_mesh_intersect does (ray_mesh_intersect_precompute()
+builds the mesh's BVH once); view() opens aoview's window. Settings are the command line's options
+as keyword arguments (--target-error is target_error=...), with the same defaults, checks and
 messages. See docs/python.md.
 """
 import numbers
@@ -56,11 +57,12 @@ def _argv(settings, allowed, where):
     return argv
 
 
-def _real_array(a, name, columns, allow_empty=False):
+def _real_array(a, name, columns, allow_empty=False, limit=None):
     """a copied into a C-contiguous native float32 array of shape (n, columns), n >= 1 (or 0 where
-    allowed), every value finite (TypeError for a non-numeric dtype, ValueError for a shape, an
-    empty array, or a value that is not finite, or not one once single precision). The copy is
-    checked, not the caller's array, which another thread may change meanwhile."""
+    allowed), every value finite and, with a limit, within it in magnitude (TypeError for a
+    non-numeric dtype, ValueError naming the row for a shape, an empty array, a value that is not
+    finite, or not one once single precision, or one past the limit). The copy is checked, not the
+    caller's array, which another thread may change meanwhile."""
     a = np.asarray(a)
     if a.dtype.kind not in 'fiu':
         raise TypeError(f'{name}: expected an array of real numbers, got dtype {a.dtype}')
@@ -70,21 +72,16 @@ def _real_array(a, name, columns, allow_empty=False):
         raise ValueError(f'{name}: empty')
     with np.errstate(over='ignore', invalid='ignore'):
         f = np.array(a, dtype=np.float32, order='C', copy=True)
-    finite = np.isfinite(f).all(axis=1)
-    if not finite.all():
-        row = int(np.argmin(finite))
-        raise ValueError(f'{name}: row {row} is not finite in single precision: {f[row].tolist()}')
+    bound = np.finfo(np.float32).max if limit is None else limit
+    if f.size and not (-bound <= f.min() and f.max() <= bound):   # NaN fails both
+        finite = np.isfinite(f).all(axis=1)
+        if not finite.all():
+            row = int(np.argmin(finite))
+            raise ValueError(f'{name}: row {row} is not finite in single precision: {a[row].tolist()}')
+        row = int(np.argmax((np.abs(f) > bound).any(axis=1)))
+        raise ValueError(f'{name}: row {row} holds {f[row].tolist()}, beyond the {bound:.4g} that '
+                         'ray_mesh_intersect takes (docs/python.md)')
     return f
-
-
-def _in_reach(f, name):
-    """ValueError naming the first row of f with a coordinate beyond what Embree takes (see
-    _RAY_LIMIT)."""
-    far = (np.abs(f) > _RAY_LIMIT).any(axis=1)
-    if far.any():
-        row = int(np.argmax(far))
-        raise ValueError(f'{name}: row {row} holds {f[row].tolist()}, beyond the {_RAY_LIMIT:.4g} '
-                         'that ray_mesh_intersect takes (docs/python.md)')
 
 
 def _index_array(a, name, vertices):
@@ -338,7 +335,9 @@ def progressive(scene, jitter=True, total_spp=100, spppp=1, sampling_type=COSINE
     sampling_type: UNIFORM_SAMPLING ('uniform', over the sphere), HEMISPHERE_SAMPLING or
     COSINE_SAMPLING. The other settings are render()'s."""
     for name, value in (('total_spp', total_spp), ('spppp', spppp)):
-        if isinstance(value, bool) or not isinstance(value, numbers.Integral) or value < 1:
+        if isinstance(value, bool) or not isinstance(value, numbers.Integral):
+            raise TypeError(f'{name}: expected a whole number, got {value!r}')
+        if value < 1:
             raise ValueError(f'{name}: expected a whole number from 1, got {value!r}')
     if not isinstance(jitter, (bool, np.bool_)):
         raise TypeError(f'jitter: expected True or False, got {jitter!r}')
@@ -379,9 +378,8 @@ class RayMeshIntersector:
     ray_mesh_intersect(..., intersector=it) too. V and F are the mesh's copies (float64, int32)."""
 
     def __init__(self, V, F):
-        v = _real_array(V, 'vertices', 3)
+        v = _real_array(V, 'vertices', 3, limit=_RAY_LIMIT)
         f = _index_array(F, 'faces', len(v))
-        _in_reach(v, 'vertices')
         lo, hi = v.min(axis=0), v.max(axis=0)
         axis = int(np.argmax(hi.astype(np.float64) - lo))
         side = float(hi[axis]) - float(lo[axis])
@@ -406,12 +404,10 @@ class RayMeshIntersector:
     def intersect(self, origins, directions, *, tnear=TNEAR, threads=None):
         """The closest hits of the rays origins[i] + t directions[i], t >= tnear, as
         ray_mesh_intersect returns them."""
-        o = _real_array(origins, 'origins', 3, allow_empty=True)
-        d = _real_array(directions, 'directions', 3, allow_empty=True)
+        o = _real_array(origins, 'origins', 3, allow_empty=True, limit=_RAY_LIMIT)
+        d = _real_array(directions, 'directions', 3, allow_empty=True, limit=_RAY_LIMIT)
         if len(o) != len(d):
             raise ValueError(f'origins and directions: {len(o)} and {len(d)} rays')
-        _in_reach(o, 'origins')
-        _in_reach(d, 'directions')
         if isinstance(tnear, bool) or not isinstance(tnear, numbers.Real) or not 0.0 <= float(tnear) < np.inf:
             raise ValueError(f'tnear: expected a finite number from 0, got {tnear!r}')
         chosen = _core.parse(_argv(dict(threads=threads), ('threads',), 'ray_mesh_intersect'))

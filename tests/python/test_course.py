@@ -234,7 +234,7 @@ def test_progressive_renders_the_course_passes(tmp_path, total_spp, spppp):
 
 def test_progressive_refuses_what_the_course_cannot_mean():
     scene = aoview.Scene.load(SPHERE_ON_PLANE)
-    for kwargs, kind in [(dict(total_spp=0), ValueError), (dict(spppp=2.5), ValueError),
+    for kwargs, kind in [(dict(total_spp=0), ValueError), (dict(spppp=2.5), TypeError),
                          (dict(jitter='yes'), TypeError), (dict(sampling_type='gaussian'), ValueError)]:
         with pytest.raises(kind):
             list(aoview.progressive(scene, **kwargs))
