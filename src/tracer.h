@@ -14,7 +14,8 @@
 struct ao_tracer;
 
 /* Builds the tracer for `scene` (which must outlive it), Embree or direct as measured faster; NULL
- * with one message on stderr on failure. Call from one thread; the result is then shared read-only. */
+ * after one message (text.h; Embree's own error first, if it gave one) on failure. Any thread, one
+ * per tracer; the result is then shared read-only. */
 struct ao_tracer *ao_tracer_create(const struct ao_scene *scene);
 
 /* Which code traces: Embree's BVH, or direct.h's loops over every primitive of a small scene. */
@@ -32,8 +33,10 @@ struct ao_tracer *ao_tracer_create_progressive(const struct ao_scene *scene);
 /* For ao_tracer_create_progressive's second build: the first call starts it (the render thread
  * makes it after its first pass, which the build would slow); once it is done, traces with it from
  * now on, frees the LOW BVHs and returns true (false before, and after: nothing to switch; a build
- * that ran out of memory is dropped with one line and LOW traces on). Only while nothing traces
- * with this tracer: the render thread between passes, when its renderer is the tracer's only user. */
+ * that ran out of memory is dropped with one note and LOW traces on). The build's thread is routed
+ * to the sink of the thread that starts it (text.h), which must outlive the tracer. Only while
+ * nothing traces with this tracer: the render thread between passes, when its renderer is the
+ * tracer's only user. */
 bool ao_tracer_switch(struct ao_tracer *tracer);
 
 /* Whether ao_tracer_create_progressive's second build is still to be switched to. Any thread that
@@ -98,7 +101,8 @@ double ao_tracer_time_bare(const struct ao_tracer *tracer, const struct ao_packe
  * floats each; triangle_count triangles, 3 indices below vertex_count each), traced by Embree on
  * `threads` threads (the calling one among them): t[i] (INFINITY on a miss), ids[i] (the triangle,
  * -1 on a miss) and barys[3i..3i+2] (the hit's weights of the triangle's three corners, zero on a
- * miss). False with one message on stderr when memory or threads are short. Any thread. */
+ * miss). False after one message (Embree's own error first, if it gave one) when memory or threads
+ * are short. Any thread. */
 bool ao_tracer_intersect_arrays(const float *positions, size_t vertex_count, const uint32_t *indices,
                                 size_t triangle_count, const float *origins, const float *directions, size_t count,
                                 int threads, float *t, int32_t *ids, float *barys);
