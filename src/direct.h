@@ -17,7 +17,7 @@ struct ao_direct;
  * rule in direct.c). Any thread. */
 bool ao_direct_suits(const struct ao_scene *scene);
 
-/* Copies the scene's geometry (the scene may go away afterwards); NULL with one message on stderr
+/* Copies the scene's geometry (the scene may go away afterwards); NULL after one message (text.h)
  * when memory is short. Works for any scene, but costs time linear in its primitives per ray. */
 struct ao_direct *ao_direct_create(const struct ao_scene *scene);
 

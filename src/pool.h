@@ -12,14 +12,15 @@ struct ao_pool;
 typedef void ao_pool_job(void *user, int self);
 
 /* Starts threads - 1 workers, each calling thread_init (if not NULL) once before its first job;
- * NULL with one message on stderr when memory or threads are short. */
+ * NULL after one message (text.h) when memory or threads are short. */
 struct ao_pool *ao_pool_create(int threads, void (*thread_init)(void));
 
 /* Joins the workers and frees; accepts NULL. Not while a job runs. */
 void ao_pool_destroy(struct ao_pool *pool);
 
-/* Runs job(user, self) on every thread of the team and returns when all of them have returned.
- * One thread at a time (the render thread). */
+/* Runs job(user, self) on every thread of the team and returns when all of them have returned;
+ * the workers' messages go to the calling thread's sink (text.h) meanwhile. One thread at a time
+ * (the render thread). */
 void ao_pool_run(struct ao_pool *pool, ao_pool_job *job, void *user);
 
 #endif

@@ -12,8 +12,9 @@
 /* The renderer; opaque. */
 struct ao_render;
 
-/* Allocates buffers, starts the render thread and its workers with the initial settings; NULL with
- * one message on stderr when memory or threads are short. Call from the main thread. */
+/* Allocates buffers, starts the render thread and its workers with the initial settings; NULL after
+ * one message (text.h) when memory or threads are short. The render thread's messages go to the
+ * calling thread's sink, which must outlive the renderer. Any thread; several renderers at once. */
 struct ao_render *ao_render_create(const struct ao_render_config *config,
                                    const struct ao_settings *settings);
 

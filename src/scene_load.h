@@ -3,7 +3,7 @@
  * placed on a ground quad with a camera framed on it. Three entry points, each with one options
  * struct (NULL or zeroed: the defaults): ao_scene_load for a path, ao_scene_parse for text,
  * ao_scene_from_arrays for a mesh (and spheres) given as arrays in code. Every
- * failure is one "file:line: message" line on stderr, and a scene that would not fit the scene
+ * failure is one "file:line: message" line (text.h's sink), and a scene that would not fit the scene
  * budget is refused before its memory is allocated. */
 #ifndef AO_SCENE_LOAD_H
 #define AO_SCENE_LOAD_H
@@ -43,8 +43,8 @@ struct ao_scene_options {
 };
 
 /* Loads a scene file, or a mesh file (ao_load_is_mesh) placed on a ground quad with a framing
- * camera, with options (NULL: the defaults). On failure prints one "file:line: message" line to
- * stderr, leaves scene empty and returns false. Any one thread per scene. */
+ * camera, with options (NULL: the defaults). On failure reports one "file:line: message" line,
+ * leaves scene empty and returns false. Any one thread per scene. */
 bool ao_scene_load(struct ao_scene *scene, const char *path, const struct ao_scene_options *options);
 
 /* Parses scene text as if read from path (relative mesh paths resolve against its directory),

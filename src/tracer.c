@@ -4,7 +4,6 @@
 #include <math.h>
 #include <pthread.h>
 #include <stdatomic.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -70,10 +69,13 @@ static void record_error(void *user, enum RTCError code, const char *message)
     struct embree_errors *e = user;
     if (code == RTC_ERROR_CANCELLED) /* an upgrade's build, cancelled as its tracer goes */
         return;
+    const char *text = message ? message : "(no message)";
+    size_t length = strnlen(text, sizeof e->message - 1);
     pthread_mutex_lock(&e->lock);
     if (e->code == RTC_ERROR_NONE) {
         e->code = (int)code;
-        snprintf(e->message, sizeof e->message, "%s", message ? message : "(no message)");
+        memcpy(e->message, text, length);
+        e->message[length] = '\0';
     }
     pthread_mutex_unlock(&e->lock);
 }

@@ -14,7 +14,8 @@
 struct ao_tracer;
 
 /* Builds the tracer for `scene` (which must outlive it), Embree or direct as measured faster; NULL
- * with one message on stderr on failure. Call from one thread; the result is then shared read-only. */
+ * after one message (text.h; Embree's own error first, if it gave one) on failure. Any thread, one
+ * per tracer; the result is then shared read-only. */
 struct ao_tracer *ao_tracer_create(const struct ao_scene *scene);
 
 /* Which code traces: Embree's BVH, or direct.h's loops over every primitive of a small scene. */
@@ -32,8 +33,10 @@ struct ao_tracer *ao_tracer_create_progressive(const struct ao_scene *scene);
 /* For ao_tracer_create_progressive's second build: the first call starts it (the render thread
  * makes it after its first pass, which the build would slow); once it is done, traces with it from
  * now on, frees the LOW BVHs and returns true (false before, and after: nothing to switch; a build
- * that ran out of memory is dropped with one line and LOW traces on). Only while nothing traces
- * with this tracer: the render thread between passes, when its renderer is the tracer's only user. */
+ * that ran out of memory is dropped with one note and LOW traces on). The build's thread is routed
+ * to the sink of the thread that starts it (text.h), which must outlive the tracer. Only while
+ * nothing traces with this tracer: the render thread between passes, when its renderer is the
+ * tracer's only user. */
 bool ao_tracer_switch(struct ao_tracer *tracer);
 
 /* Whether ao_tracer_create_progressive's second build is still to be switched to. Any thread that
@@ -104,7 +107,8 @@ struct ao_tracer_arrays;
  * triangle_count triangles, 3 indices below vertex_count each), copied: the caller's arrays may
  * change or go afterwards. The caller checks what tracer.c derives: every coordinate within
  * AO_TRACER_ARRAYS_LIMIT, the box around the positions from AO_SCENE_MIN_EXTENT to
- * AO_SCENE_MAX_EXTENT across. NULL with one message when memory is short. Any thread. */
+ * AO_SCENE_MAX_EXTENT across. NULL after one message (Embree's own error first, if it gave one)
+ * when memory is short. Any thread. */
 struct ao_tracer_arrays *ao_tracer_arrays_create(const float *positions, size_t vertex_count, const uint32_t *indices,
                                                  size_t triangle_count);
 
@@ -115,7 +119,7 @@ void ao_tracer_arrays_destroy(struct ao_tracer_arrays *mesh);
  * AO_TRACER_ARRAYS_LIMIT; directions need not be unit, t is in their units) on the mesh, at
  * t >= tnear (tnear >= 0), traced by Embree on `threads` threads (the calling one among them):
  * t[i] (INFINITY on a miss, and for a zero direction), ids[i] (the triangle, -1 on a miss) and
- * barys[3i..3i+2] (the hit's weights of the triangle's three corners, zero on a miss). False with
+ * barys[3i..3i+2] (the hit's weights of the triangle's three corners, zero on a miss). False after
  * one message when threads are short. Any thread, several at once on one mesh. */
 bool ao_tracer_intersect_arrays(const struct ao_tracer_arrays *mesh, const float *origins, const float *directions,
                                 size_t count, float tnear, int threads, double *t, int32_t *ids, double *barys);

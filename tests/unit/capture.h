@@ -22,6 +22,10 @@ struct capture {
 /* Routes this thread's messages into c (which must stay where it is until capture_end). */
 void capture_begin(struct capture *c);
 
+/* A sink's write that only counts the lines, in the atomic_int user points to (atomically: a job's
+ * workers may write at once): the process's sink, where no line should come. */
+void capture_count(void *user, enum ao_text_level level, const char *line);
+
 /* Routes this thread back and copies what came, NUL-terminated and cut to err_size, into err
  * (NULL: nothing copied, c->text kept). */
 void capture_end(struct capture *c, char *err, size_t err_size);

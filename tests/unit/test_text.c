@@ -73,14 +73,6 @@ static void test_levels(void **state)
     assert_string_equal(c.text, "bad\\nname.scene: line 3\nread as decoded\nx\\x1b[2J\n");
 }
 
-/* A sink that counts its lines (atomically: workers may write at once). */
-static void count_line(void *user, enum ao_text_level level, const char *line)
-{
-    (void)level;
-    (void)line;
-    atomic_fetch_add((atomic_int *)user, 1);
-}
-
 /* What a thread of test_routes_per_thread saw. */
 struct routed {
     int index;
@@ -111,7 +103,7 @@ static void test_routes_per_thread(void **state)
     (void)state;
     enum { THREADS = 4 };
     atomic_int process_lines = 0;
-    const struct ao_text_sink process = {.write = count_line, .user = &process_lines};
+    const struct ao_text_sink process = {.write = capture_count, .user = &process_lines};
     ao_text_set_sink(&process);
     static struct routed routed[THREADS];
     pthread_t ids[THREADS];
@@ -167,7 +159,7 @@ static void test_pool_job_reaches_its_caller(void **state)
 {
     (void)state;
     atomic_int process_lines = 0;
-    const struct ao_text_sink process = {.write = count_line, .user = &process_lines};
+    const struct ao_text_sink process = {.write = capture_count, .user = &process_lines};
     ao_text_set_sink(&process);
     struct ao_pool *pool = ao_pool_create(4, NULL);
     assert_non_null(pool);
@@ -197,7 +189,7 @@ static void test_null_drops(void **state)
     assert_null(ao_text_current());
     ao_text_report("nowhere");
     atomic_int lines = 0;
-    const struct ao_text_sink counting = {.write = count_line, .user = &lines}, mute = {0};
+    const struct ao_text_sink counting = {.write = capture_count, .user = &lines}, mute = {0};
     ao_text_set_sink(&counting);
     ao_text_note("counted");
     const struct ao_text_sink *before = ao_text_route(&mute);

@@ -130,14 +130,6 @@ static void *work(void *arg)
     return NULL;
 }
 
-/* A sink that counts its lines: the process's, which must get none. */
-static void count_line(void *user, enum ao_text_level level, const char *line)
-{
-    (void)level;
-    (void)line;
-    atomic_fetch_add((atomic_int *)user, 1);
-}
-
 /* Whether text holds "worker K" or a path of worker K's ("-K-", "bad-K.") for a K other than own. */
 static bool names_another(const char *text, int own)
 {
@@ -166,7 +158,7 @@ static void test_entry_points_at_once(void **state)
 {
     (void)state;
     atomic_int process_lines = 0;
-    const struct ao_text_sink process = {.write = count_line, .user = &process_lines};
+    const struct ao_text_sink process = {.write = capture_count, .user = &process_lines};
     ao_text_set_sink(&process);
     static struct worker alone[THREADS], together[THREADS];
     pthread_t ids[THREADS];
