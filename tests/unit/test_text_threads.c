@@ -1,9 +1,9 @@
 /* The core's entry points that may run at once (docs/architecture.md#threads) on four threads
  * together, good and bad inputs, each thread routed to its own sink: scenes from a path, a mesh,
  * text and arrays; tracers (Embree) and ray batches (ao_tracer_arrays_create and
- * ao_tracer_intersect_arrays), with their own thread teams; renders on separate scenes, whose render threads report. Each thread must
- * receive exactly the messages it received running alone, and nothing else; the process's sink
- * nothing. In the threads suite, run under ThreadSanitizer by CI. */
+ * ao_tracer_intersect_arrays), with their own thread teams; renders on separate scenes, whose
+ * render threads report. Each thread must receive exactly the messages it received running alone,
+ * and nothing else; the process's sink nothing. In the threads suite, run under ThreadSanitizer by CI. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
