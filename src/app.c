@@ -257,30 +257,6 @@ void ao_app_watch(struct ao_app *app, struct ao_render *render)
     atomic_store(&app->interrupt.rendering, true);
 }
 
-/* The one line saying what the loaders skipped ("aoview: skipped 3 degenerate triangles and 2 line
- * primitives"), when they skipped anything. */
-static void report_skipped(const struct ao_scene *scene)
-{
-    const struct {
-        size_t count;
-        const char *what;
-    } parts[] = {{scene->degenerate_count, "degenerate triangle"}, {scene->point_primitives, "point primitive"},
-                 {scene->line_primitives, "line primitive"}};
-    char line[256];
-    size_t used = 0, n = sizeof parts / sizeof parts[0], left = 0;
-    for (size_t k = 0; k < n; k++)
-        left += parts[k].count > 0;
-    for (size_t k = 0; k < n; k++) {
-        if (!parts[k].count)
-            continue;
-        left--;
-        used += (size_t)snprintf(line + used, sizeof line - used, "%s%zu %s%s", used ? (left ? ", " : " and ") : "",
-                                 parts[k].count, parts[k].what, parts[k].count == 1 ? "" : "s");
-    }
-    if (used)
-        fprintf(stderr, "aoview: skipped %s\n", line);
-}
-
 /* A file as the output checks compare it: an existing file by its identity (through links), one to
  * be made by its folder's identity and its name there. */
 struct file_key {
@@ -403,10 +379,7 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
     if (!(app->tracer = progressive ? ao_tracer_create_progressive(&app->scene) : ao_tracer_create(&app->scene)))
         return AO_EXIT_RUNTIME;
     if (!opts->quiet)
-        report_skipped(&app->scene);
-    if (!opts->quiet && app->scene.notes[0])
-        fprintf(stderr, "aoview: %s\n", ao_text_escape(app->scene.notes, (char[sizeof app->scene.notes * 4]){0},
-                                                        sizeof app->scene.notes * 4));
+        ao_scene_say_notes(&app->scene);
     ao_text_escape(app->scene.name, name, sizeof name);
     struct ao_tracer_stats built;
     ao_tracer_describe(app->tracer, &built);

@@ -6,6 +6,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "text.h"
+
 /* The elements an array of count elements has room for: at least 16, then the next power of two,
  * so that adding one element at a time copies each element about once (a realloc that grows by
  * one element copies the whole array under a sanitizer's allocator, which cost minutes for a scene
@@ -112,4 +114,28 @@ void ao_scene_triangle(const struct ao_scene *scene, size_t instance, size_t pri
             q[r] = (double)a[r] * p.x + (double)a[3 + r] * p.y + (double)a[6 + r] * p.z + (double)a[9 + r];
         corners[k] = ao_vec3_make((float)q[0], (float)q[1], (float)q[2]);
     }
+}
+
+void ao_scene_say_notes(const struct ao_scene *s)
+{
+    const struct {
+        size_t count;
+        const char *what;
+    } parts[] = {{s->degenerate_count, "degenerate triangle"}, {s->point_primitives, "point primitive"},
+                 {s->line_primitives, "line primitive"}};
+    char line[256];
+    size_t used = 0, n = sizeof parts / sizeof parts[0], left = 0;
+    for (size_t k = 0; k < n; k++)
+        left += parts[k].count > 0;
+    for (size_t k = 0; k < n; k++) {
+        if (!parts[k].count)
+            continue;
+        left--;
+        used += (size_t)snprintf(line + used, sizeof line - used, "%s%zu %s%s", used ? (left ? ", " : " and ") : "",
+                                 parts[k].count, parts[k].what, parts[k].count == 1 ? "" : "s");
+    }
+    if (used)
+        ao_text_note("aoview: skipped %s", line);
+    if (s->notes[0])
+        ao_text_note("aoview: %s", s->notes);
 }

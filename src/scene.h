@@ -111,6 +111,11 @@ bool ao_scene_add_albedo(struct ao_scene *scene, struct ao_vec3 rho, uint32_t *i
  * part), after a "; " when there are others; what does not fit is left out. */
 void ao_scene_add_note(struct ao_scene *scene, const char *path, const char *note);
 
+/* Says what a load left out or changed as note lines (text.h) to this thread's sink: the skipped
+ * primitives ("aoview: skipped 2 degenerate triangles and 1 point primitive") and the meshes'
+ * notes ("aoview: name: note; ..."); nothing when there are none. Any thread. */
+void ao_scene_say_notes(const struct ao_scene *scene);
+
 /* Gives the mesh's positions the spare zero entry struct ao_scene promises (realloc: no copy for
  * big arrays, which the C library maps and remaps); false when memory is short. */
 bool ao_scene_pad(struct ao_mesh *mesh);

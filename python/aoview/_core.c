@@ -175,6 +175,8 @@ static PyObject *core_load(PyObject *module, PyObject *args)
     ao_messages_begin(&messages);
     Py_BEGIN_ALLOW_THREADS
     ok = ao_scene_load(&self->scene, path, &load);
+    if (ok)
+        ao_scene_say_notes(&self->scene);
     Py_END_ALLOW_THREADS
     self->loaded = ok;
     ok = ao_messages_close(&messages, ok, PyExc_ValueError, "aoview: the scene could not be loaded");
@@ -230,6 +232,8 @@ static PyObject *core_from_arrays(PyObject *module, PyObject *args)
         ao_messages_begin(&messages);
         Py_BEGIN_ALLOW_THREADS
         ok = ao_scene_from_arrays(&self->scene, &arrays, &load);
+        if (ok)
+            ao_scene_say_notes(&self->scene);
         Py_END_ALLOW_THREADS
         self->loaded = ok;
         ok = ao_messages_close(&messages, ok, PyExc_ValueError, "aoview: the scene could not be made");

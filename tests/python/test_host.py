@@ -88,6 +88,19 @@ def test_threads_get_their_own_messages_and_stderr_stays(tmp_path):
     assert run.stderr.endswith('a line after the threads\n'), run.stderr
 
 
+def test_a_loads_notes_are_warnings_and_not_stderr(tmp_path, capfd):
+    """What a load leaves out (here one degenerate triangle) is a UserWarning of that call, with the
+    line the program prints, and nothing reaches descriptor 2."""
+    path = tmp_path / 'degenerate.obj'
+    path.write_text('v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\nf 1 2 3\nf 1 2 4\n')
+    with pytest.warns(UserWarning, match='^aoview: skipped 1 degenerate triangle$'):
+        aoview.Scene.load(str(path))
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [2, 0, 0]], dtype=np.float64)
+    with pytest.warns(UserWarning, match='^aoview: skipped 1 degenerate triangle$'):
+        aoview.Scene.from_arrays(vertices, np.array([[0, 1, 2], [0, 1, 3]]))
+    assert capfd.readouterr().err == ''
+
+
 # ---------------------------------------------------------------- arrays changed by another thread
 
 def test_an_index_flipped_by_another_thread_never_crashes(tmp_path):
