@@ -136,8 +136,8 @@ void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shado
     uint32_t next;
     struct ao_tile_work work = ao_pass_tile_work(r, t, &next);
     struct ao_vec3 sums[AO_TILE_PIXELS];
-    ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow);
-    ao_pass_add_tile(r, t, &work, next, sums);
+    if (ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow)) /* else cut: the pass is aborted */
+        ao_pass_add_tile(r, t, &work, next, sums);
 }
 
 /* The team's job for a pass without a share: thread `self`'s lane, then what is left of the

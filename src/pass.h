@@ -135,7 +135,8 @@ void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, 
  * thread, between passes. */
 void ao_pass_clear_tile(struct ao_run *r, int t);
 
-/* Traces entry n of the work list and adds its sums; adds the rays traced to *eye and *shadow. */
+/* Traces entry n of the work list and adds its sums, unless the pass was aborted while it traced
+ * them (the tile is left as it was); adds the rays traced to *eye and *shadow. */
 void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shadow);
 
 /* Readies the pass's counters (every lane from its first entry, this process's list whole, nothing

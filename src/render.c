@@ -305,6 +305,13 @@ static void *render_main(void *arg)
 
 /* ---- life cycle and control ---- */
 
+/* The context's cut: the pass in flight is aborted (without a share, whose loans are traced to the
+ * end). */
+static bool tile_cut(const void *run)
+{
+    return ao_pass_aborted(run);
+}
+
 struct ao_render *ao_render_create(const struct ao_render_config *config,
                                    const struct ao_settings *settings)
 {
@@ -321,7 +328,8 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
     ao_frames_init(&run->frames);
     run->ctx = (struct ao_context){.scene = config->scene, .tracer = config->tracer,
                                    .ao_distance = config->ao_distance, .seed = config->seed,
-                                   .sequence = config->sequence, .below = config->below};
+                                   .sequence = config->sequence, .below = config->below,
+                                   .cut = config->share ? NULL : tile_cut, .cut_user = run};
     pthread_mutex_init(&r->lock, NULL);
     pthread_cond_init(&r->wake, NULL);
     pthread_cond_init(&r->finished, NULL);

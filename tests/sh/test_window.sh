@@ -24,6 +24,10 @@
 #                          for the screen says so on one line; the chart keeps the run that went
 #                          on before the window opened; --pixel-size auto is 2 where Xft.dpi
 #                          says the content scale is 2
+#   test_window.sh frames  every finished pass on screen: the bunny at 640x480, --spp 256, watched
+#                          from the X server by tools/window_frames.c (its bounds derived there)
+#   test_window.sh start   --spppp 4096: an image within 0.5 s, A on screen during the first pass,
+#                          and Q, Esc and closing the window each ending the run within 0.2 s
 # Needs AO_BINARY and AO_SOURCE_ROOT (tests/meson.build sets both); exits 77 when Xvfb or
 # xdotool is missing.
 set -u
@@ -54,6 +58,28 @@ if [ -z "${AO_UNDER_XVFB:-}" ]; then
 fi
 . "$(dirname "$0")/lib.sh"
 
+# A sanitizer's build traces some 12 times slower (ThreadSanitizer: the bunny at 1000x700 on one
+# thread, 1.4 Mrays/s where the release build does 16.6), so that what a title waits for (11 spp
+# after a resize, in truth) can take longer than 10 s: its waits are four times as long.
+patience=1
+if ldd "$AO_BINARY" 2>/dev/null | grep -qE 'lib(asan|tsan)'; then patience=4; fi
+
+if [ "$mode" = frames ] || [ "$mode" = start ]; then
+    [ -n "${AO_WINDOW_FRAMES:-}" ] ||
+        skip "tools/window_frames was not built: it needs XTEST and XDAMAGE (Debian: libxtst-dev libxdamage-dev)"
+    bunny=$root/assets/scenes/bunny.scene
+    if [ "$mode" = frames ]; then
+        "$AO_WINDOW_FRAMES" frames --patience $patience "$AO_BINARY" --size 640x480 --spp 256 "$bunny" ||
+            fail "passes missing from the screen"
+    else
+        for key in q Escape close; do
+            "$AO_WINDOW_FRAMES" start --patience $patience "$key" "$AO_BINARY" --size 640x480 --spppp 4096 \
+                --spp 65536 "$bunny" || fail "$key"
+        done
+    fi
+    finish
+fi
+
 fail() {
     echo "FAIL: $*"
     echo "last title: $(xdotool getwindowname "$wid" 2>/dev/null)"
@@ -63,12 +89,6 @@ fail() {
 }
 
 title() { xdotool getwindowname "$wid"; }
-
-# A sanitizer's build traces some 12 times slower (ThreadSanitizer: the bunny at 1000x700 on one
-# thread, 1.4 Mrays/s where the release build does 16.6), so that what a title waits for (11 spp
-# after a resize, in truth) can take longer than 10 s: its waits are four times as long.
-patience=1
-if ldd "$AO_BINARY" 2>/dev/null | grep -qE 'lib(asan|tsan)'; then patience=4; fi
 
 # Polls the title until it matches the extended regex $1, for at most 10 s (times patience).
 wait_title() {
