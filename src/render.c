@@ -168,7 +168,8 @@ static bool start_run(struct ao_render *r, const struct ao_settings *s, uint64_t
     /* Nothing measured yet: the previews carry these facts. */
     *info = (struct ao_frame_info){.restarts = restarts, .target_spp = config->target_spp,
                                    .target_error = config->target_error, .time_limit = config->time_limit,
-                                   .spp_left = NAN, .error = NAN, .converged = NAN, .rmse = NAN,
+                                   .pixels = (uint64_t)s->width * (uint64_t)s->height, .error = NAN,
+                                   .converged = NAN, .rmse = NAN,
                                    .sampling = s->sampling, .aa = s->aa, .output = s->output, .shading = s->shading};
     return !s->previews || config->share || preview(r, &s->camera, info);
 }
@@ -220,10 +221,9 @@ static bool step(struct ao_render *r, struct loop *l, bool *finishes, uint64_t *
         return false;
 
     /* Plan the pass: its tiles, its samples (from every process's pixels). */
-    struct ao_next_pass plan;
-    if (!ao_pass_plan(run, s.adaptive, &plan))
+    uint64_t pixels;
+    if (!ao_pass_plan(run, s.adaptive, &pixels))
         return false;
-    uint64_t pixels = plan.pixels;
     uint32_t spppp = ao_pass_prepare(run, &s, pixels);
 
     /* Run it, unless nothing is left to sample (adaptive sampling was just turned on), and survey it. */
