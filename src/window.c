@@ -717,8 +717,9 @@ static bool present(struct viewer *v, const struct ao_settings *settings, bool i
  * (its clock at most every CLOCK_SECONDS), the framebuffer's size, the overlay's or the help's
  * toggle, an expose. At once when the user acted, navigates or nothing renders, and for previews;
  * else a display frame after the last presentation, or later as its cost asks (PRESENT_SHARE), at
- * most PRESENT_LATEST after it. While navigating only new frames are shown. Returns the glfwGetTime() when something waits to be shown, else a negative number;
- * *ok false when an upload failed. */
+ * most PRESENT_LATEST after it. While navigating only new frames are shown. Returns the
+ * glfwGetTime() when something waits to be shown, else a negative number; *ok false when an
+ * upload failed. */
 static double update(struct viewer *v, const struct ao_settings *settings, bool *ok)
 {
     *ok = true;
