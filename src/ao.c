@@ -493,9 +493,10 @@ static void make_eye_rays(const struct ao_context *ctx, const struct tile_stream
 /* One eye ray per pixel of the tile (number `ray` of its eye stream) and `count` AO samples from
  * `first_sample` of its AO stream; adds each pixel's sum of sample values (background on a miss)
  * to sums. The normals view gives each of the `count` samples the value (n + 1) / 2 and a miss
- * black: a unit normal's colour is never black, whereas a background's value could pass for one. */
+ * black: a unit normal's colour is never black, whereas a background's value could pass for one.
+ * False when ctx->cut stopped it. */
 AO_VECTOR_CLONES
-static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile, const struct tile_streams *eye_streams,
+static bool trace_round(const struct ao_context *ctx, const struct ao_tile *tile, const struct tile_streams *eye_streams,
                         const struct tile_streams *ao_streams, uint64_t ray, uint64_t first_sample, int count,
                         struct ao_vec3 *sums, uint64_t *eye_rays, uint64_t *shadow_rays)
 {
@@ -507,6 +508,8 @@ static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile
     bool miss[AO_TILE_PIXELS];
     int x = tile->x0, y = tile->y0; /* the next pixel's column and row */
     for (int first = 0; first < pixels; first += AO_PACKET_SIZE) {
+        if (ctx->cut && ctx->cut(ctx->cut_user))
+            return false;
         struct ao_packet eye = {.count = pixels - first < AO_PACKET_SIZE ? pixels - first : AO_PACKET_SIZE};
         struct ao_hit hits[AO_PACKET_SIZE];
         int column[AO_PACKET_SIZE], row[AO_PACKET_SIZE];
@@ -543,9 +546,10 @@ static void trace_round(const struct ao_context *ctx, const struct ao_tile *tile
                                        : ctx->output == AO_OUTPUT_NORMALS ? ao_vec3_make(0.0f, 0.0f, 0.0f)
                                        : ao_vec3_scale(ctx->scene->background, (float)count));
     *shadow_rays += q.traced;
+    return true;
 }
 
-void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, const struct ao_tile_work *work,
+bool ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, const struct ao_tile_work *work,
                       struct ao_vec3 *sums, uint64_t *eye_rays, uint64_t *shadow_rays)
 {
     int pixels = (tile->x1 - tile->x0) * (tile->y1 - tile->y0);
@@ -557,7 +561,9 @@ void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, 
     if (ctx->output != AO_OUTPUT_NORMALS)
         make_tile_streams(ctx, tile, stream_for_half(ctx, AO_STREAM, work->half), &ao);
     for (int r = 0; r < work->rounds; r++)
-        trace_round(ctx, tile, &eye, &ao, work->first_ray + (uint64_t)r,
-                    work->first_sample + (uint64_t)r * (uint64_t)work->count, work->count, sums, eye_rays,
-                    shadow_rays);
+        if (!trace_round(ctx, tile, &eye, &ao, work->first_ray + (uint64_t)r,
+                         work->first_sample + (uint64_t)r * (uint64_t)work->count, work->count, sums, eye_rays,
+                         shadow_rays))
+            return false;
+    return true;
 }

@@ -28,6 +28,9 @@ struct ao_context {
     enum ao_below below;
     enum ao_output output;
     enum ao_shading shading;
+    bool (*cut)(const void *user);   /* unless NULL: true once the tile being traced is wanted no
+                                        more (its pass aborted), asked between eye-ray packets */
+    const void *cut_user;
 };
 
 /* A shading point: unit normals turned to face the eye ray, and where its occlusion rays start. */
@@ -118,8 +121,10 @@ struct ao_vec3 ao_estimate_surface(const struct ao_context *ctx, const struct ao
  * samples (with AO_OUTPUT_NORMALS, `count` samples of the normal's colour and no AO rays); writes
  * each pixel's sum of sample values (background on a miss, black for normals) to sums, row by row,
  * and adds the rays traced to *eye_rays / *shadow_rays. Eye rays go to the tracer in packets of
- * 16, AO rays in batches of up to AO_BATCH_RAYS gathered across the tile. Any thread. */
-void ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, const struct ao_tile_work *work,
+ * 16, AO rays in batches of up to AO_BATCH_RAYS gathered across the tile. False when ctx->cut
+ * stopped it, its sums unfinished (a large --spppp makes a tile a tenth of a second and more, which
+ * a key or a stop need not wait for). Any thread. */
+bool ao_estimate_tile(const struct ao_context *ctx, const struct ao_tile *tile, const struct ao_tile_work *work,
                       struct ao_vec3 *sums, uint64_t *eye_rays, uint64_t *shadow_rays);
 
 #endif

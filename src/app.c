@@ -30,24 +30,32 @@ double ao_app_mrays_per_second(const struct ao_frame_info *info)
 }
 
 /* Redraws the progress bar: filled, and its percentage, by the share of the run done
- * (ao_progress_share: full only once done); the error "--" while not known; at most every
+ * (ao_progress_share: never back, full only once done), the samples (ao_progress_format_spp), the
+ * error ("--" while not known), the seconds, the time left and the rate, the normals view without
+ * the AO estimate's error, time left and rate (as the window's status); at most every
  * BAR_SECONDS, and at the end. */
 static void draw_bar(struct ao_reporter *rep, const struct ao_frame_info *info)
 {
     ao_progress_add(&rep->eta, info);
-    double now = ao_clock_seconds();
+    double share = ao_progress_share(&rep->eta, info), now = ao_clock_seconds();
     if (!info->done && rep->drawn_at > 0.0 && now - rep->drawn_at < BAR_SECONDS)
         return;
     rep->drawn_at = now;
-    double share = ao_progress_share(&rep->eta, info);
     int filled = (int)(30.0 * share);
-    char left_text[32], error_text[32] = "--";
-    ao_progress_format(ao_progress_left(&rep->eta, info), left_text, sizeof left_text);
-    if (!isnan(info->error))
-        snprintf(error_text, sizeof error_text, "%.2f %%", 100.0 * info->error);
-    fprintf(stderr, "\r[%.*s%*s] %3d %%  spp %u/%u  error %s  %.1f s  %s  %.1f Mrays/s \033[K", filled,
-            "##############################", 30 - filled, "", (int)(100.0 * share), info->spp, info->target_spp,
-            error_text, info->seconds, left_text, ao_app_mrays_per_second(info));
+    char spp[64], figures[128] = "";
+    ao_progress_format_spp(info, spp, sizeof spp);
+    if (info->output != AO_OUTPUT_NORMALS) {
+        char left[32], error[32] = "--";
+        ao_progress_format(ao_progress_left(&rep->eta, info), left, sizeof left);
+        if (!isnan(info->error))
+            snprintf(error, sizeof error, "%.2f %%", 100.0 * info->error);
+        snprintf(figures, sizeof figures, "  error %s  %.1f s  %s  %.1f Mrays/s", error, info->seconds, left,
+                 ao_app_mrays_per_second(info));
+    } else {
+        snprintf(figures, sizeof figures, "  %.1f s", info->seconds);
+    }
+    fprintf(stderr, "\r[%.*s%*s] %3d %%  %s%s \033[K", filled, "##############################", 30 - filled, "",
+            (int)(100.0 * share), spp, figures);
     if (info->done)
         fputc('\n', stderr);
 }

@@ -62,7 +62,8 @@ static struct ao_chart_curve *start_curve(struct ao_chart *chart, const struct a
 
 void ao_chart_add(struct ao_chart *chart, const struct ao_frame_info *info)
 {
-    if (!(info->rmse > 0) || !isfinite(info->rmse) || !(info->seconds > 0) || !isfinite(info->seconds))
+    if (!(info->rmse > 0) || !isfinite(info->rmse) || !(info->seconds > 0) || !isfinite(info->seconds) ||
+        info->output == AO_OUTPUT_NORMALS)
         return;
     struct ao_chart_curve *c = chart->count > 0 ? &chart->curves[chart->count - 1] : NULL;
     if (!c || c->restarts != info->restarts)

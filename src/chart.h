@@ -49,7 +49,8 @@ struct ao_chart_axis {
 /* Adds a frame's (seconds, RMSE) to the curve of its run. A frame of a new run starts a curve,
  * dropping the oldest when AO_CHART_CURVES are kept, or replacing the newest curve when that one
  * has only one point; a full curve is thinned to log-spaced points. Frames without a positive,
- * finite RMSE and time are ignored. Pure. */
+ * finite RMSE and time are ignored, and those of the normals view (whose RMSE against an AO
+ * reference means nothing). Pure. */
 void ao_chart_add(struct ao_chart *chart, const struct ao_frame_info *info);
 
 /* Fills *x and *y with axes spanning every point of every curve, each at least one tick step

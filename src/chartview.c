@@ -131,28 +131,34 @@ static int points_in(const struct ao_chart *chart, const struct plot *p, float x
     return inside;
 }
 
-/* The mode names in their colours, one a line, in the plot's bottom left corner (which falling
- * curves leave empty), or its top right corner when that one covers fewer points. */
+/* The names of the modes of the runs charted, in their colours, one a line, in the plot's bottom
+ * left corner (which falling curves leave empty), or its top right corner when that one covers
+ * fewer points. */
 static void draw_legend(struct ao_hud *hud, const struct ao_chart *chart, const struct plot *p,
                         float scale, float gap)
 {
-    int width = 0, height = 0;
+    bool charted[3] = {false, false, false};
+    for (int k = 0; k < chart->count; k++)
+        charted[chart->curves[k].sampling] = true;
+    int width = 0, height = 0, lines = 0;
     for (int m = 0; m < 3; m++) {
         int w, h;
         ao_hud_measure(hud, ao_sampling_name((enum ao_sampling)m), scale, &w, &h);
-        width = w > width ? w : width;
+        width = charted[m] && w > width ? w : width;
         height = h;
+        lines += charted[m];
     }
-    float w = (float)width, h = (float)(3 * height);
+    float w = (float)width, h = (float)(lines * height);
     float x = p->x0 + gap, y = p->y1 - gap - h;
     if (points_in(chart, p, p->x1 - gap - w, p->y0 + gap, p->x1 - gap, p->y0 + gap + h) <
         points_in(chart, p, x, y, x + w, y + h)) {
         x = p->x1 - gap - w;
         y = p->y0 + gap;
     }
-    for (int m = 0; m < 3; m++)
-        ao_hud_text(hud, ao_sampling_name((enum ao_sampling)m), x, y + (float)(m * height), scale,
-                    MODE_COLOUR[m]);
+    for (int m = 0, line = 0; m < 3; m++)
+        if (charted[m])
+            ao_hud_text(hud, ao_sampling_name((enum ao_sampling)m), x, y + (float)(line++ * height), scale,
+                        MODE_COLOUR[m]);
 }
 
 void ao_chartview_draw(struct ao_hud *hud, const struct ao_chart *chart, int x, int y, int width,

@@ -1,5 +1,5 @@
 /* The viewer's live error chart on screen: chart.h's curves drawn with the overlay's primitives in a
- * translucent panel, log-log axes with labelled ticks, and a legend of the sampling modes. */
+ * translucent panel, log-log axes with labelled ticks, and a legend of the sampling modes charted. */
 #ifndef AO_CHARTVIEW_H
 #define AO_CHARTVIEW_H
 

@@ -38,6 +38,7 @@ struct ao_display {
     bool frame_uploads;             /* the open frame showed a new image */
     double costs[2][AO_DISPLAY_COSTS];  /* the last frames' costs, redraws' then new images' */
     int cost_count[2];              /* how many were measured of each */
+    bool seen[2];                   /* a frame of the kind was presented: the first is not measured */
 };
 
 /* Starts the frame's clock, unless it runs. */
@@ -317,7 +318,9 @@ void ao_display_presented(struct ao_display *d)
 {
     d->gl->Finish();
     int kind = d->frame_uploads;
-    d->costs[kind][d->cost_count[kind]++ % AO_DISPLAY_COSTS] = ao_clock_seconds() - d->frame_start;
+    if (d->seen[kind]) /* the first pays once for the shaders' compilation and the textures */
+        d->costs[kind][d->cost_count[kind]++ % AO_DISPLAY_COSTS] = ao_clock_seconds() - d->frame_start;
+    d->seen[kind] = true;
     d->frame_start = 0.0;
     d->frame_uploads = false;
 }

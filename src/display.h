@@ -63,7 +63,8 @@ void ao_display_draw(struct ao_display *display, int fb_width, int fb_height);
 /* What showing a frame costs, in wall seconds from its first GL call (ao_display_show or draw) to
  * its presentation (ao_display_presented): of a frame with a new image (encoding, upload, blit,
  * overlay, swap) and of a redraw of an image already shown, each the median of the last
- * AO_DISPLAY_COSTS such frames (a one-off, as the first frame's, does not count); 0 before one. */
+ * AO_DISPLAY_COSTS such frames (the first of each kind, which compiles the shaders and makes the
+ * textures, is not measured; a later one-off does not move a median); 0 before one. */
 enum { AO_DISPLAY_COSTS = 5 };
 struct ao_display_cost {
     double new_image, redraw;

@@ -38,12 +38,12 @@ struct ao_frame_info {
     uint32_t target_spp;
     double target_error;     /* the configuration's, 0 for none */
     double time_limit;       /* the configuration's, 0 for none */
-    uint32_t spppp;          /* AO samples per pixel of this pass; 0 before the first */
-    double mean_spp;         /* AO samples per pixel, averaged over the image */
-    double spp_left;         /* AO samples per pixel still to trace, averaged over the image: what the
-                                tiles that join the next pass lack of target_spp (adaptive sampling
-                                may leave them sooner); 0 when none joins (the last pass); NAN
-                                before the first pass */
+    uint32_t spppp;          /* AO samples per pixel of this pass: the most a tile takes in it as the
+                                schedule gives them, whatever a tile lacks of target_spp (the last
+                                passes give each only that); 0 before the first */
+    double mean_spp;         /* AO samples per pixel, averaged over the image (no pixel passes
+                                target_spp) */
+    uint64_t pixels;         /* of the image: its width times its height */
     double error;            /* estimated RMSE relative to the image mean, from the even and odd
                                 passes without a reference; NAN until both halves have a pass */
     double converged;        /* share of the pixels that adaptive sampling leaves out of the next

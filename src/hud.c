@@ -55,7 +55,8 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, const c
                    size_t size)
 {
     const struct ao_frame_info *f = &s->info;
-    bool measured = f->pass > 0, preview = s->block > 1;
+    /* The normals view has no AO error, rate or time left to show (it ends when its picture does). */
+    bool measured = f->pass > 0, preview = s->block > 1, ao = f->output != AO_OUTPUT_NORMALS;
     size_t used = 0;
     out[0] = '\0';
     item(out, size, &used, separator, "%s", s->scene);
@@ -69,8 +70,11 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, const c
         item(out, size, &used, separator, "normals");
     if (f->shading == AO_SHADING_FLAT)
         item(out, size, &used, separator, "flat");
-    item(out, size, &used, separator, "spp %u of %u", (unsigned)f->spp, (unsigned)f->target_spp);
-    if (measured && !preview) {
+    char text[64];
+    ao_progress_format_spp(f, text, sizeof text);
+    if (text[0] && !preview)
+        item(out, size, &used, separator, "%s", text);
+    if (measured && !preview && ao) {
         if (isnan(f->error))
             item(out, size, &used, separator, "error %s", unknown);
         else
@@ -78,11 +82,12 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, const c
     }
     if (measured) {
         item(out, size, &used, separator, "%.1fs", s->seconds);
-        char left[32];
-        ao_progress_format(f->done ? NAN : s->seconds_left, left, sizeof left);
-        if (left[0])
-            item(out, size, &used, separator, "%s", left);
-        if (f->seconds > 0.0)
+        ao_progress_format(f->done || !ao ? NAN : s->seconds_left, text, sizeof text);
+        if (f->done)
+            item(out, size, &used, separator, "finished");
+        else if (text[0])
+            item(out, size, &used, separator, "%s", text);
+        if (f->seconds > 0.0 && ao)
             item(out, size, &used, separator, "%.1f Mrays/s",
                  (double)(f->eye_rays + f->shadow_rays) / f->seconds / 1e6);
     }
@@ -93,11 +98,9 @@ void ao_hud_format(const struct ao_hud_status *s, const char *separator, const c
         item(out, size, &used, separator, "auto %u spp/pass", (unsigned)f->spppp);
     else
         item(out, size, &used, separator, "auto spp/pass");
-    if (s->adaptive && measured && !preview) {
+    if (s->adaptive && measured && !preview)
         item(out, size, &used, separator, "adaptive: %.0f %% converged", 100.0 * f->converged);
-        item(out, size, &used, separator, "mean %.0f spp", f->mean_spp);
-    }
-    if (measured && !preview && !isnan(f->rmse))
+    if (measured && !preview && ao && !isnan(f->rmse))
         item(out, size, &used, separator, "RMSE %.4g", f->rmse);
     else if (s->reference_differs)
         item(out, size, &used, separator, "no RMSE: reference of another size");

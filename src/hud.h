@@ -25,13 +25,16 @@ struct ao_hud_status {
 };
 
 /* Writes the status facts joined by separator into out (always terminated, truncated to size):
- * scene; "WxH", with a preview on screen "WxH preview, N px cells"; sampling
- * mode, "AA on|off", "normals" in the normals view, "flat" with flat shading, "spp X of Y"; then,
- * once a full pass is done (info.pass > 0): "Ns", "~N s left" while estimated, "M Mrays/s", "pass
- * P", "N spp/pass" (or "auto N spp/pass"), and, unless a preview is on screen, "error E %" (E
- * `unknown` until estimated), "adaptive: C % converged" and "mean M spp" when adaptive, "RMSE E"
- * when the frame has one (else "no RMSE: reference of another size" when --reference has another
- * size); "paused" when paused. Every figure shown is measured: a preview's run has none yet. Pure. */
+ * scene; "WxH", with a preview on screen "WxH preview, N px cells"; sampling mode, "AA on|off",
+ * "normals" in the normals view, "flat" with flat shading; then, once a full pass is done
+ * (info.pass > 0), unless a preview is on screen, "mean N spp, up to T" (progress.h) and "error E
+ * %" (E `unknown` until estimated); "Ns", "~N s left" while estimated ("finished" once the run
+ * is), "M Mrays/s"; "pass P", "N
+ * spp/pass" (or "auto N spp/pass"); unless a preview is on screen, "adaptive: C % converged" when
+ * adaptive and "RMSE E" when the frame has one (else "no RMSE: reference of another size" when
+ * --reference has another size); "paused" when paused. Every figure shown is measured (a
+ * preview's run has none yet) and true of the view: the normals view shows no error, time left,
+ * rate or RMSE, which are the AO estimate's. Pure. */
 void ao_hud_format(const struct ao_hud_status *status, const char *separator, const char *unknown, char *out,
                    size_t size);
 

@@ -192,8 +192,10 @@ static int run(struct app *app, const struct ao_options *opts)
         single.sequence = opts->sides[0].sequence;
         first.sampling = opts->sides[0].sampling;
         first.aa = opts->sides[0].aa;
-        first.paused = true;
     }
+    /* The window's renderer waits for the window to open (ao_window_info's resume), which then
+     * has the cores to itself; --compare's stays paused while the window compares. */
+    first.paused = window;
     if (!(base->render = ao_render_create(&single, &first)))
         return AO_EXIT_RUNTIME;
     /* Headless, a signal from now on stops the render and writes what it has (or says that there is
@@ -211,6 +213,7 @@ static int run(struct app *app, const struct ao_options *opts)
                                       .pixel_size = opts->pixel_size,
                                       .difference = opts->view == AO_VIEW_MODE_DIFFERENCE,
                                       .config = &single, .compare = opts->compare != NULL,
+                                      .resume = !opts->compare,
                                       .sides = {opts->sides[0], opts->sides[1]},
                                       .users = {&app->side_reporters[0], &app->side_reporters[1]}};
         enum ao_window_result result = ao_window_run(base->render, &info);
@@ -224,6 +227,7 @@ static int run(struct app *app, const struct ao_options *opts)
             base->render = NULL;
             return run_compare(app, opts, &config, &settings);
         }
+        ao_render_set_settings(base->render, &settings);   /* unpaused: nothing was rendered yet */
     }
     /* A PNG that could not be drawn is refused now rather than after the render. */
     const char *output = opts->output ? opts->output : "aoview.png";

@@ -18,6 +18,13 @@
  * seconds, so that the image stays a function of the seed and settings alone. */
 enum { AUTO_SAMPLES = 1 << 22, AUTO_PER_RAY = 8 };
 
+/* The normals view's picture is final, and its run done, once its estimated error (its
+ * anti-aliasing's: each pass's eye rays are jittered) is below this: an RMSE of a fifth of an 8-bit
+ * step at the image's mean, which no further pass changes visibly. Without anti-aliasing the error
+ * is 0, and the run ends once its tiles are settled. (The bunny at 640x480: 0.2 s, some 40 eye rays
+ * a pixel; docs/views.md.) */
+static const double NORMALS_FINAL = 0.002;
+
 /* ---- a run's memory ---- */
 
 bool ao_pass_allocate(struct ao_run *r)
@@ -82,7 +89,7 @@ bool ao_pass_restart(struct ao_run *r, int width, int height)
     r->busiest = 0;
     r->fastest = 0.0;
     uint64_t pixels = r->config.target_spp ? (uint64_t)r->width * (uint64_t)r->height : 0;
-    r->next[0] = r->next[1] = (struct ao_next_pass){pixels, pixels * r->config.target_spp};
+    r->next[0] = r->next[1] = pixels;
     r->next_known[0] = r->next_known[1] = true;
     r->ungathered = false;
     return true;
@@ -136,8 +143,8 @@ void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shado
     uint32_t next;
     struct ao_tile_work work = ao_pass_tile_work(r, t, &next);
     struct ao_vec3 sums[AO_TILE_PIXELS];
-    ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow);
-    ao_pass_add_tile(r, t, &work, next, sums);
+    if (ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow)) /* else cut: the pass is aborted */
+        ao_pass_add_tile(r, t, &work, next, sums);
 }
 
 /* The team's job for a pass without a share: thread `self`'s lane, then what is left of the
@@ -198,16 +205,16 @@ static int tile_pixels(const struct ao_run *r, int t)
 }
 
 /* Fills the work list with the tiles of this process's (every tile without a share) that the next
- * pass traces, dealt to the threads' shares by tile row, and returns how many pixels they hold
- * and the samples they lack of the target: the tiles ao_tile_wanted picks, with the busiest tile's
- * spp and the largest gain that the last survey found. */
-static struct ao_next_pass select_tiles(struct ao_run *r, bool adaptive)
+ * pass traces, dealt to the threads' shares by tile row, and returns how many pixels they hold:
+ * the tiles ao_tile_wanted picks, with the busiest tile's spp and the largest gain that the last
+ * survey found. */
+static uint64_t select_tiles(struct ao_run *r, bool adaptive)
 {
     /* With a share, one list in row order, the same whatever the threads. */
     int threads = r->config.threads, groups = r->config.share ? 1 : threads, tiles = r->tiles_x * r->tiles_y;
     uint32_t target = r->config.target_spp, busiest = r->busiest;
     double fastest = r->fastest;
-    struct ao_next_pass plan = {0, 0};
+    uint64_t pixels = 0;
     int n = 0;
     for (int k = 0; k < threads; k++) {
         r->lanes[k].begin = n;
@@ -218,22 +225,21 @@ static struct ao_next_pass select_tiles(struct ao_run *r, bool adaptive)
         for (int t = k * r->tiles_x; t < tiles; t++) {
             if (r->mine[t] && ao_tile_wanted(&r->tiles[t], tile_pixels(r, t), target, adaptive, busiest, fastest)) {
                 r->work[n++] = t;
-                plan.pixels += (uint64_t)tile_pixels(r, t);
-                plan.lack += (uint64_t)(target - ao_tile_spp(&r->tiles[t])) * (uint64_t)tile_pixels(r, t);
+                pixels += (uint64_t)tile_pixels(r, t);
             }
             if ((t + 1) % r->tiles_x == 0) /* the end of a row: on to this share's next row */
                 t += (groups - 1) * r->tiles_x;
         }
         r->lanes[k].end = n;
     }
-    return plan;
+    return pixels;
 }
 
 /* What the processes add up or maximise after a pass (struct ao_share_tally's slots). */
 enum { EXACT_VARIANCE, EXACT_MEAN, EXACT_SQUARES };
-enum { TOTAL_EYE, TOTAL_SHADOW, TOTAL_SAMPLES, TOTAL_SHORT, TOTAL_LACK };
+enum { TOTAL_EYE, TOTAL_SHADOW, TOTAL_SAMPLES, TOTAL_SHORT };
 enum { MOST_SECONDS, MOST_GAVE_UP, MOST_SPPPP, MOST_SPP, MOST_BUSIEST, MOST_FASTEST, MOST_UNHALVED, MOST_UNSETTLED };
-_Static_assert((int)EXACT_SQUARES < (int)AO_TALLY_EXACT && (int)TOTAL_LACK < (int)AO_TALLY_TOTAL &&
+_Static_assert((int)EXACT_SQUARES < (int)AO_TALLY_EXACT && (int)TOTAL_SHORT < (int)AO_TALLY_TOTAL &&
                    (int)MOST_UNSETTLED < (int)AO_TALLY_MOST,
                "the tally's slots");
 
@@ -287,7 +293,6 @@ static void tally_tiles(const struct ao_run *r, struct ao_share_tally *tally)
             most[MOST_UNSETTLED] = 1.0;
         if (spp < target) {
             tally->total[TOTAL_SHORT] += (uint64_t)tile_pixels(r, t);
-            tally->total[TOTAL_LACK] += (uint64_t)(target - spp) * (uint64_t)tile_pixels(r, t);
             most[MOST_BUSIEST] = spp > most[MOST_BUSIEST] ? spp : most[MOST_BUSIEST];
             double gain = ao_tile_settled(ts) ? ao_tile_gain(ts, tile_pixels(r, t)) : 0.0;
             most[MOST_FASTEST] = gain > most[MOST_FASTEST] ? gain : most[MOST_FASTEST];
@@ -297,21 +302,20 @@ static void tally_tiles(const struct ao_run *r, struct ao_share_tally *tally)
         ao_sum_normalize(&tally->exact[k]);
 }
 
-bool ao_pass_plan(struct ao_run *r, bool adaptive, struct ao_next_pass *plan)
+bool ao_pass_plan(struct ao_run *r, bool adaptive, uint64_t *pixels)
 {
     if (!r->next_known[adaptive]) {
-        struct ao_next_pass own = select_tiles(r, adaptive);
-        uint64_t values[2] = {own.pixels, own.lack};
+        uint64_t own = select_tiles(r, adaptive);
         const struct ao_render_share *share = r->config.share;
         double start = ao_clock_seconds();
-        if (share && !share->add_up(share->user, values, 2))
+        if (share && !share->add_up(share->user, &own, 1))
             return false;
         if (share)
             r->share_seconds += ao_clock_seconds() - start;
-        r->next[adaptive] = (struct ao_next_pass){values[0], values[1]};
+        r->next[adaptive] = own;
         r->next_known[adaptive] = true;
     }
-    *plan = r->next[adaptive];
+    *pixels = r->next[adaptive];
     return true;
 }
 
@@ -356,17 +360,16 @@ bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive,
     /* The next pass's plan, and what it says of this one. */
     r->busiest = (uint32_t)tally.most[MOST_BUSIEST];
     r->fastest = tally.most[MOST_FASTEST];
-    r->next[0] = (struct ao_next_pass){tally.total[TOTAL_SHORT], tally.total[TOTAL_LACK]};
+    r->next[0] = tally.total[TOTAL_SHORT];
     r->next_known[0] = true;
     r->next_known[1] = false;
-    struct ao_next_pass plan;
-    if (!ao_pass_plan(r, adaptive, &plan))
+    uint64_t next;
+    if (!ao_pass_plan(r, adaptive, &next))
         return false;
-    uint64_t next = plan.pixels;
     info->converged = adaptive ? 1.0 - (double)next / image : 0.0;
-    info->spp_left = (double)plan.lack / image;
-    bool error_reached = r->config.target_error > 0.0 && tally.most[MOST_UNSETTLED] == 0.0 &&
-                         info->error <= r->config.target_error;
+    double target_error = r->ctx.output == AO_OUTPUT_NORMALS ? fmax(r->config.target_error, NORMALS_FINAL)
+                                                             : r->config.target_error;
+    bool error_reached = target_error > 0.0 && tally.most[MOST_UNSETTLED] == 0.0 && info->error <= target_error;
     bool time_up = r->config.time_limit > 0.0 && info->seconds >= r->config.time_limit;
     info->done = next == 0 || error_reached || time_up;
     return true;
@@ -384,12 +387,15 @@ static int pass_samples(const struct ao_settings *s, size_t pixels)
     return cap;
 }
 
-/* The most samples per pixel any tile of the work list takes in this pass. */
+/* The most samples per pixel any tile of the work list takes in this pass as the schedule gives
+ * them, before the target's cap. */
 static uint32_t largest_share(const struct ao_run *r)
 {
     uint32_t most = 0;
+    struct ao_tile_pass uncapped = r->tile_pass;
+    uncapped.target_spp = UINT32_MAX;
     for (int n = 0; n < r->lanes[r->config.threads - 1].end; n++) {
-        struct ao_tile_work w = ao_pass_tile_work(r, r->work[n], NULL);
+        struct ao_tile_work w = ao_tile_work_of(&r->tiles[r->work[n]], &uncapped, NULL);
         uint32_t samples = (uint32_t)(w.rounds * w.count);
         most = samples > most ? samples : most;
     }

@@ -28,12 +28,6 @@ struct ao_lane {
     int begin, end;                      /* its tiles in the work list */
 };
 
-/* The next pass as planned: the pixels it traces, and the AO samples its tiles lack of the
- * target (the work that remains while adaptive sampling keeps them). */
-struct ao_next_pass {
-    uint64_t pixels, lack;
-};
-
 /* One tile of the image as a gather moves it (struct ao_render_share's gather): its running average
  * (its pixels row by row, clipped to the image), its error estimate (as struct ao_frame's), the
  * most samples a pixel of it has and their sum over its pixels. */
@@ -77,12 +71,11 @@ struct ao_run {
 
     /* What the last survey planned (or a restart: nothing sampled yet), for ao_pass_select and the
      * next pass's size: the busiest tile's spp and the largest gain among the tiles short of the
-     * target, and the pixels the next pass traces without and with adaptive sampling and the
-     * samples its tiles lack of the target (known[k]: counted; with adaptive sampling off the
-     * survey counts only the first). */
+     * target, and the pixels the next pass traces without and with adaptive sampling (known[k]:
+     * counted; with adaptive sampling off the survey counts only the first). */
     uint32_t busiest;
     double fastest;
-    struct ao_next_pass next[2];
+    uint64_t next[2];
     bool next_known[2];
 
     /* With a share (aoview-mpi): the tiles this process owns; its work list as one span of entries
@@ -135,7 +128,8 @@ void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, 
  * thread, between passes. */
 void ao_pass_clear_tile(struct ao_run *r, int t);
 
-/* Traces entry n of the work list and adds its sums; adds the rays traced to *eye and *shadow. */
+/* Traces entry n of the work list and adds its sums, unless the pass was aborted while it traced
+ * them (the tile is left as it was); adds the rays traced to *eye and *shadow. */
 void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shadow);
 
 /* Readies the pass's counters (every lane from its first entry, this process's list whole, nothing
@@ -146,10 +140,10 @@ int ao_pass_begin(struct ao_run *r);
  * thread. */
 bool ao_pass_run(struct ao_run *r);
 
-/* The next pass with adaptive sampling (`adaptive`) or without: as the last survey planned it, or
- * planned here (over the processes: every one takes the same path). False when the share stops.
- * Render thread. */
-bool ao_pass_plan(struct ao_run *r, bool adaptive, struct ao_next_pass *plan);
+/* The pixels of the next pass with adaptive sampling (`adaptive`) or without: as the last survey
+ * planned it, or planned here (over the processes: every one takes the same path). False when the
+ * share stops. Render thread. */
+bool ao_pass_plan(struct ao_run *r, bool adaptive, uint64_t *pixels);
 
 /* After a pass this process ran (finished or not), with the pass's rays, seconds and largest share
  * of samples: combines the tally over the processes (with a share), adds the pass's rays and

@@ -46,7 +46,8 @@ void ao_preview_trace(struct ao_preview *p, bool (*stop)(void *user), void *user
         rect.x1 = rect.x0 + TILE < p->width ? rect.x0 + TILE : p->width;
         rect.y1 = rect.y0 + TILE < p->height ? rect.y0 + TILE : p->height;
         struct ao_vec3 sums[TILE * TILE];
-        ao_estimate_tile(&p->ctx, &rect, &work, sums, &rays, &rays);
+        if (!ao_estimate_tile(&p->ctx, &rect, &work, sums, &rays, &rays))
+            return;
         const struct ao_vec3 *s = sums;
         for (int j = rect.y0; j < rect.y1; j++)
             for (int i = rect.x0; i < rect.x1; i++, s++) {

@@ -169,7 +169,8 @@ static bool start_run(struct ao_render *r, const struct ao_settings *s, uint64_t
     /* Nothing measured yet: the previews carry these facts. */
     *info = (struct ao_frame_info){.restarts = restarts, .target_spp = config->target_spp,
                                    .target_error = config->target_error, .time_limit = config->time_limit,
-                                   .spp_left = NAN, .error = NAN, .converged = NAN, .rmse = NAN,
+                                   .pixels = (uint64_t)s->width * (uint64_t)s->height, .error = NAN,
+                                   .converged = NAN, .rmse = NAN,
                                    .sampling = s->sampling, .aa = s->aa, .output = s->output, .shading = s->shading};
     return !s->previews || config->share || preview(r, &s->camera, info);
 }
@@ -221,10 +222,9 @@ static bool step(struct ao_render *r, struct loop *l, bool *finishes, uint64_t *
         return false;
 
     /* Plan the pass: its tiles, its samples (from every process's pixels). */
-    struct ao_next_pass plan;
-    if (!ao_pass_plan(run, s.adaptive, &plan))
+    uint64_t pixels;
+    if (!ao_pass_plan(run, s.adaptive, &pixels))
         return false;
-    uint64_t pixels = plan.pixels;
     uint32_t spppp = ao_pass_prepare(run, &s, pixels);
 
     /* Run it, unless nothing is left to sample (adaptive sampling was just turned on), and survey it. */
@@ -307,6 +307,13 @@ static void *render_main(void *arg)
 
 /* ---- life cycle and control ---- */
 
+/* The context's cut: the pass in flight is aborted (without a share, whose loans are traced to the
+ * end). */
+static bool tile_cut(const void *run)
+{
+    return ao_pass_aborted(run);
+}
+
 struct ao_render *ao_render_create(const struct ao_render_config *config,
                                    const struct ao_settings *settings)
 {
@@ -323,7 +330,8 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
     ao_frames_init(&run->frames);
     run->ctx = (struct ao_context){.scene = config->scene, .tracer = config->tracer,
                                    .ao_distance = config->ao_distance, .seed = config->seed,
-                                   .sequence = config->sequence, .below = config->below};
+                                   .sequence = config->sequence, .below = config->below,
+                                   .cut = config->share ? NULL : tile_cut, .cut_user = run};
     pthread_mutex_init(&r->lock, NULL);
     pthread_cond_init(&r->wake, NULL);
     pthread_cond_init(&r->finished, NULL);

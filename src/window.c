@@ -36,10 +36,14 @@ static bool glfw_running;
  * often between frames. */
 #define CLOCK_SECONDS 0.5
 
-/* While passes run and nobody navigates, the window spends at most this share of the wall time
- * presenting: a frame that cost c seconds to show waits c / PRESENT_SHARE after the last one
- * (display.c measures c), so that the render keeps the cores (docs/performance.md). */
-#define PRESENT_SHARE 0.1
+/* While passes run and nobody navigates, each new frame is presented as it comes, one a display
+ * frame at most (the monitor's refresh interval, 1/60 s where it is not known), and no sooner after
+ * the last presentation than twice what a presentation of its kind costs (display.c measures it),
+ * so that passes that come faster than the window can show them leave the GL thread at least half
+ * its time; but never later than PRESENT_LATEST after the last one, so that a finished pass is on
+ * screen within that (docs/views.md, "Frames"). */
+#define PRESENT_SHARE 0.5
+#define PRESENT_LATEST 0.1
 
 /* A camera change from the mouse makes the window present every new frame at once, and nothing
  * else, for this long (and while a button is held); for as long, the renderer traces no fine
@@ -95,6 +99,7 @@ struct viewer {
     double status_at;                /* glfwGetTime() when it was made */
     uint64_t status_image;           /* the frame taken it was made for */
     double presented_at;             /* glfwGetTime() when the last frame was on screen */
+    double refresh;                  /* the monitor's refresh interval, in seconds */
     double navigated_at;             /* glfwGetTime() of the last camera change from the mouse */
     bool show_hud, show_help, save;
     enum show show;
@@ -417,6 +422,9 @@ static enum ao_window_result open_window(struct viewer *v)
     glfwSetWindowUserPointer(v->window, v);
     glfwMakeContextCurrent(v->window);
     glfwSwapInterval(1);
+    GLFWmonitor *monitor = glfwGetPrimaryMonitor();
+    const GLFWvidmode *mode = monitor ? glfwGetVideoMode(monitor) : NULL;
+    v->refresh = 1.0 / (mode && mode->refreshRate > 0 ? mode->refreshRate : 60);
     if (!ao_glapi_load(&v->gl, glfwGetProcAddress) || !(v->display = ao_display_create(&v->gl)) ||
         !(v->hud = ao_hud_create(&v->gl)))
         return AO_WINDOW_FAILED;
@@ -708,9 +716,10 @@ static bool present(struct viewer *v, const struct ao_settings *settings, bool i
 /* Presents what changed since the last frame on screen: a new frame, a view change, the status
  * (its clock at most every CLOCK_SECONDS), the framebuffer's size, the overlay's or the help's
  * toggle, an expose. At once when the user acted, navigates or nothing renders, and for previews;
- * else once the last presentation's cost allows (PRESENT_SHARE). While navigating only new frames
- * are shown. Returns the glfwGetTime() when something waits to be shown, else a negative number;
- * *ok false when an upload failed. */
+ * else a display frame after the last presentation, or later as its cost asks (PRESENT_SHARE), at
+ * most PRESENT_LATEST after it. While navigating only new frames are shown. Returns the
+ * glfwGetTime() when something waits to be shown, else a negative number; *ok false when an
+ * upload failed. */
 static double update(struct viewer *v, const struct ao_settings *settings, bool *ok)
 {
     *ok = true;
@@ -734,7 +743,8 @@ static double update(struct viewer *v, const struct ao_settings *settings, bool 
     double due = now;
     if (!look && !v->reupload && !navigating && runs && !(image && preview)) {
         struct ao_display_cost cost = ao_display_cost(v->display);
-        due = v->presented_at + (image ? cost.new_image : cost.redraw) / PRESENT_SHARE;
+        double spacing = (image ? cost.new_image : cost.redraw) / PRESENT_SHARE;
+        due = v->presented_at + fmax(v->refresh, fmin(spacing, PRESENT_LATEST));
     }
     if (now < due)
         return due;
@@ -832,11 +842,20 @@ enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_wi
                        .reference_fits = true,
                        .show = info->difference && info->reference ? SHOW_DIFFERENCE : SHOW_IMAGE};
     enum ao_window_result result = open_window(&v);
+    if (result == AO_WINDOW_OK && info->resume) {
+        struct ao_settings s;
+        ao_render_get_settings(render, &s);
+        s.paused = false;
+        s.previews = true;
+        ao_render_set_settings(render, &s);
+    }
     /* --compare: main made the renderer paused; the comparison starts unpaused. */
     if (result == AO_WINDOW_OK && info->compare && !start_compare(&v, false))
         result = AO_WINDOW_FAILED;
     if (result == AO_WINDOW_OK)
         result = loop(&v);
+    if (result != AO_WINDOW_NO_DISPLAY) /* (main goes on headless with it) */
+        ao_render_stop(render);   /* its threads stop at once, leaving the cores to the end below */
     ao_compare_destroy(v.compare);
     ao_hud_destroy(v.hud);
     ao_display_destroy(v.display);

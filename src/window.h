@@ -23,6 +23,9 @@ struct ao_window_info {
     const struct ao_render_config *config;   /* the window's renderer's, for V's two renderers; NULL:
                                                 no V (aoview-mpi) */
     bool compare;            /* --compare: start in the comparison, B being sides[1] */
+    bool resume;             /* the renderer was made paused, so that the window opens on free
+                                cores: it is unpaused, with previews, once the window and its GL
+                                are ready */
     struct ao_compare_side sides[2];
     void *users[2];          /* config->on_pass's argument for each side of a comparison */
 };
@@ -36,8 +39,9 @@ enum ao_window_result {
 
 /* Opens the GLFW window on the running renderer, sized to its image (fitted to the screen), and
  * runs until the user quits, the render following the framebuffer's size; it is the renderer's
- * frame consumer meanwhile. NO_DISPLAY when no window can be opened
- * (main then falls back to headless). Main thread only. */
+ * frame consumer meanwhile, and stops it (ao_render_stop) as the user quits. NO_DISPLAY when no
+ * window can be opened (main then falls back to headless, the renderer untouched). Main thread
+ * only. */
 enum ao_window_result ao_window_run(struct ao_render *render, const struct ao_window_info *info);
 
 /* Wakes the window's event wait (glfwPostEmptyEvent) so that it takes a new frame; a no-op when

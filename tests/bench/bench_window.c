@@ -6,9 +6,9 @@
  * ones whose image differs from the one before (a row through the image's middle, read back from
  * the server). R: the window left alone for --seconds, per its --stats (the last run's last row);
  * H: the same run with --headless, started right after it. Medians of --rounds rounds (window and
- * headless interleaved, so that the machine's load drifts over both). Then the CPU time of the idle
- * window's GL thread (and llvmpipe's) and of the X server against its render threads', which no
- * other load on the machine changes.
+ * headless interleaved, so that the machine's load drifts over both), and the ratio R / H of the
+ * two medians printed. Then the CPU time of the idle window's GL thread (and llvmpipe's) and of
+ * the X server against its render threads', which no other load on the machine changes.
  * Run under Xvfb with room for a 3840x2160 window (the window takes at most 90 % of the screen):
  *   xvfb-run -a -s "-screen 0 4320x2440x24" ./build/tests/bench_window [--aoview build/aoview] [SCENE]
  * or ninja -C build bench-window. Exits 77 without a display. Asserts nothing. */
@@ -314,7 +314,7 @@ static void measure(Display *dpy, int damage_event, const struct options *o, int
     snprintf(seconds, sizeof seconds, "%g", o->seconds);
     snprintf(stats[0], sizeof stats[0], "/tmp/bench_window_%d_w.csv", (int)getpid());
     snprintf(stats[1], sizeof stats[1], "/tmp/bench_window_%d_h.csv", (int)getpid());
-    double orbit[16], distinct[16], idle[16], headless[16], ratio[16], share[16];
+    double orbit[16], distinct[16], idle[16], headless[16], share[16];
     char x_stat[64];
     snprintf(x_stat, sizeof x_stat, "/proc/%ld/stat", x_server());
     int rounds = o->rounds < 16 ? o->rounds : 16;
@@ -361,16 +361,15 @@ static void measure(Display *dpy, int damage_event, const struct options *o, int
         waitpid(pid, NULL, 0);
         headless[round] = last_rate(stats[1]);
         remove(out);
-        ratio[round] = idle[round] / headless[round];
         if (getenv("AO_BENCH_VERBOSE"))
             printf("  round %d: orbit %.1f presented (%.1f distinct), idle %.2f, headless %.2f, drawing %.1f %%\n",
                    round + 1, orbit[round], distinct[round], idle[round], headless[round], 100.0 * share[round]);
     }
     remove(stats[0]);
     remove(stats[1]);
+    double idle_median = bench_median(idle, rounds), headless_median = bench_median(headless, rounds);
     printf("%s: orbit %.0f frames/s presented, idle window %.1f Mrays/s against headless %.1f (%.2f)\n", size,
-           bench_median(orbit, rounds), bench_median(idle, rounds), bench_median(headless, rounds),
-           bench_median(ratio, rounds));
+           bench_median(orbit, rounds), idle_median, headless_median, idle_median / headless_median);
     printf("%s: %.0f distinct frames/s of the orbit; the idle window's drawing and X server took %.1f %% of the CPU "
            "time of its render threads\n", size, bench_median(distinct, rounds), 100.0 * bench_median(share, rounds));
     fflush(stdout);

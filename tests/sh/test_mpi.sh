@@ -139,7 +139,8 @@ quit() {
 
 # drive NAME: from hemisphere sampling with AA, C, A, a resize of the window to 640x400 (the 96x64
 # image's pixel size is 8: 80x50 pixels) and one orbit (a drag as a single mouse move, so that
-# both viewers turn the camera alike); at 64 spp, S saves the image shown (NAME.pfm), Q.
+# both viewers turn the camera alike); once the run has finished (64 spp), S saves the image
+# shown (NAME.pfm), Q.
 drive() {
   local name=$1
   wait_title " — hemisphere — AA on — " || return
@@ -152,7 +153,7 @@ drive() {
   wait_title " — 80x50 — cosine — AA off — " || return
   xdotool mousemove --window "$wid" 300 200 && sleep 0.2 && xdotool mousedown 1 && sleep 0.2 &&
     xdotool mousemove --window "$wid" 360 220 && sleep 0.2 && xdotool mouseup 1
-  wait_title " — spp 64 of 64 — " || return
+  wait_title " — finished — " || return
   sleep 0.5
   press s
   for _ in $(seq 200); do [ -s aoview-1.pfm ] && break; sleep 0.05; done

@@ -48,10 +48,10 @@ done
 done_title=""
 for _ in $(seq 400); do
     title=$(xdotool getwindowname "$wid" 2>/dev/null)
-    case $title in *"64 of 64"*) done_title=$title; break ;; esac
+    case $title in *" — finished — "*) done_title=$title; break ;; esac
     sleep 0.05
 done
-[ -n "$done_title" ] || fail "the title never reached 64 of 64 spp: $(xdotool getwindowname "$wid" 2>/dev/null)"
+[ -n "$done_title" ] || fail "the title never said the run finished: $(xdotool getwindowname "$wid" 2>/dev/null)"
 echo "title: $done_title"
 xdotool key --window "$wid" q 2>/dev/null   # the key-up finds the window gone: said on stderr
 for _ in $(seq 200); do

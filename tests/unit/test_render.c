@@ -647,13 +647,13 @@ static void test_previews_carry_no_measured_figures(void **state)
     assert_int_equal(p->spp, 0);
     assert_int_equal(p->spppp, 0);
     assert_true(p->mean_spp == 0.0 && p->seconds == 0.0 && p->eye_rays == 0 && p->shadow_rays == 0);
-    assert_true(isnan(p->error) && isnan(p->rmse) && isnan(p->converged) && isnan(p->spp_left));
+    assert_true(isnan(p->error) && isnan(p->rmse) && isnan(p->converged) && p->pixels == 256 * 192);
     assert_false(p->done);
     const struct ao_frame_info *first = &counter.passes[0], *second = &counter.passes[1];
     assert_int_equal(first->pass, 1);
     assert_true(isnan(first->error));
     assert_true(isfinite(first->rmse) && first->rmse > 0.0 && isfinite(first->converged) &&
-                isfinite(first->spp_left) && first->seconds > 0.0);
+                first->pixels == 256 * 192 && first->seconds > 0.0);
     assert_true(isfinite(second->error) && second->error > 0.0);
 }
 
