@@ -220,11 +220,15 @@ class Pass:
     target_spp (the planned total: what spp reaches at the end unless the render stops sooner),
     spppp, seconds (render time so far), error (the estimated relative RMSE, nan until known), rmse
     (against the reference, nan without), eye_rays, shadow_rays, mrays_per_s, converged, done (the
-    last pass). A display of "spp X of Y" shows mean_spp of target_spp: with adaptive sampling spp
-    reaches target_spp in the busiest tiles while the others still take samples."""
+    last pass); and how far the render is, as the window's title and the headless line say it:
+    samples ("mean 173 spp, up to 256": with adaptive sampling spp reaches target_spp in the busiest
+    tiles while the others still take samples), progress (the share done, 0 to 1: never less than
+    before, 1 only on the last pass) and seconds_left (an estimate that errs long, nan until known,
+    0 on the last pass)."""
 
     __slots__ = ('image', 'number', 'spp', 'target_spp', 'mean_spp', 'spppp', 'seconds', 'error', 'rmse',
-                 'eye_rays', 'shadow_rays', 'mrays_per_s', 'converged', 'done')
+                 'eye_rays', 'shadow_rays', 'mrays_per_s', 'converged', 'done', 'samples', 'progress',
+                 'seconds_left')
 
     def __init__(self, image, info):
         self.image = image
@@ -233,7 +237,7 @@ class Pass:
             setattr(self, key, info[key])
 
     def __repr__(self):
-        return (f'<aoview.Pass {self.number}: {self.spp} spp, {self.seconds:.3f} s, error {self.error:.4g}, '
+        return (f'<aoview.Pass {self.number}: {self.samples}, {self.seconds:.3f} s, error {self.error:.4g}, '
                 f'rmse {self.rmse:.4g}>')
 
 

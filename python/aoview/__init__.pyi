@@ -62,6 +62,9 @@ class Pass:
     mrays_per_s: float
     converged: float
     done: bool
+    samples: str
+    progress: float
+    seconds_left: float
 
 
 def render(scene: Scene, *, reference: Reference = ..., size: Optional[Tuple[int, int]] = ...,

@@ -27,6 +27,7 @@
 #include "image.h"
 #include "messages.h"
 #include "options.h"
+#include "progress.h"
 #include "render.h"
 #include "scene.h"
 #include "scene_load.h"
@@ -268,6 +269,7 @@ typedef struct {
     bool finished;             /* the last pass was taken */
     struct ao_messages messages;   /* the render thread's route, kept while it runs */
     bool messages_live;            /* begun and not finished */
+    struct ao_progress progress;   /* how far the run is, from the passes step returned (progress.h) */
 } RunObject;
 
 /* The renderer's on_pass (render thread): records the pass, wakes step and, when every pass is
@@ -322,15 +324,19 @@ static PyObject *run_close_method(RunObject *self, PyObject *unused)
 }
 
 /* The facts of a pass as a dict. */
-static PyObject *info_dict(const struct ao_frame_info *i)
+static PyObject *info_dict(const struct ao_frame_info *i, struct ao_progress *progress)
 {
-    return Py_BuildValue("{s:I,s:I,s:I,s:I,s:d,s:d,s:d,s:K,s:K,s:d,s:d,s:d,s:O}", "pass", i->pass, "spp", i->spp,
-                         "target_spp", i->target_spp,
-                         "spppp", i->spppp, "mean_spp", i->mean_spp, "seconds", i->seconds, "error", i->error,
-                         "eye_rays", (unsigned long long)i->eye_rays, "shadow_rays",
+    /* How far the run is, as the window's title and the headless line say it (progress.h). */
+    ao_progress_add(progress, i);
+    char samples[64];
+    ao_progress_format_spp(i, samples, sizeof samples);
+    return Py_BuildValue("{s:I,s:I,s:I,s:I,s:d,s:d,s:d,s:K,s:K,s:d,s:d,s:d,s:O,s:s,s:d,s:d}", "pass", i->pass, "spp",
+                         i->spp, "target_spp", i->target_spp, "spppp", i->spppp, "mean_spp", i->mean_spp, "seconds",
+                         i->seconds, "error", i->error, "eye_rays", (unsigned long long)i->eye_rays, "shadow_rays",
                          (unsigned long long)i->shadow_rays, "rmse", i->rmse, "converged", i->converged,
                          "mrays_per_s", i->seconds > 0 ? (double)(i->eye_rays + i->shadow_rays) / i->seconds * 1e-6 : NAN,
-                         "done", i->done ? Py_True : Py_False);
+                         "done", i->done ? Py_True : Py_False, "samples", samples, "progress",
+                         ao_progress_share(progress, i), "seconds_left", ao_progress_left(progress, i));
 }
 
 /* step(out, always): waits for the next pass (checking for signals every SIGNAL_POLL seconds, the
@@ -391,7 +397,7 @@ static PyObject *run_step(RunObject *self, PyObject *args)
         run_close(self);
         return NULL;
     }
-    return info_dict(&info);
+    return info_dict(&info, &self->progress);
 }
 
 /* (width, height) of the images step writes. */

@@ -62,11 +62,12 @@ static PyObject *window_view(PyObject *module, PyObject *args)
     if (tracer && ao_options_render(&opts, &scene->scene, tracer, &config, &settings)) {
         config.on_pass = wake;
         config.on_preview = wake;
+        settings.paused = true;   /* until the window is up: it opens on free cores (resume below) */
         render = ao_render_create(&config, &settings);
     }
     if (render) {
         struct ao_window_info info = {.scene_name = scene->scene.name, .quiet = opts.quiet, .seed = opts.seed,
-                                      .pixel_size = opts.pixel_size, .config = &config,
+                                      .pixel_size = opts.pixel_size, .config = &config, .resume = true,
                                       .sides = {opts.sides[0], opts.sides[1]}};
         result = ao_window_run(render, &info);
     }

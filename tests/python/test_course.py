@@ -249,3 +249,10 @@ def test_pass_says_spp_x_of_y_while_adaptive_sampling_runs():
     assert means == sorted(means) and means[-1] <= 100
     frozen = [p for p in got if p.spp == 100]
     assert len(frozen) >= 2 and frozen[0].mean_spp < frozen[-1].mean_spp
+    # ... and Pass says it as the window's title and the headless line do: "mean X spp, up to Y",
+    # X rounded down; the share done never falls and reaches 1 only on the last pass; the time
+    # left is 0 there and a number of seconds before it once a pass has been timed.
+    assert all(p.samples == f'mean {int(p.mean_spp)} spp, up to 100' for p in got)
+    shares = [p.progress for p in got]
+    assert shares == sorted(shares) and shares[-1] == 1 and all(s < 1 for s in shares[:-1])
+    assert got[-1].seconds_left == 0 and all(p.seconds_left > 0 for p in got[1:-1])
