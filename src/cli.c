@@ -142,11 +142,13 @@ static const char usage[] =
     "                        beside the PNG (default pfm)\n"
     "  --scene-budget SIZE   memory a scene may take: bytes, or with K, M, G or T\n"
     "                        (powers of 1024); larger scenes are refused before\n"
-    "                        they are loaded (default 1G)\n"
+    "                        they are loaded (default: a quarter of the machine's\n"
+    "                        memory, at least 1G)\n"
     "  --ground on|off       the ground quad under a bare mesh (default on; a .scene\n"
     "                        file has the quads it lists)\n"
     "  --bvh B               medium (fastest rays) | compact (half the memory,\n"
-    "                        slower rays) | low (built 3x sooner, slower rays) |\n"
+    "                        slower rays) | low (built 3x sooner, slower rays;\n"
+    "                        compact too where only that fits the budget) |\n"
     "                        auto: medium, or compact if only that fits the scene\n"
     "                        budget; from 1M triangles low traces while medium is\n"
     "                        built beside it, where the budget holds both (default auto)\n"
@@ -532,7 +534,7 @@ bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, siz
     *opts = (struct ao_options){
         .spp = 0, .spppp = 0, .adaptive = true, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
         .sequence = AO_SEQUENCE_SOBOL, .below = AO_BELOW_REFLECT,
-        .ao_distance = NAN, .scene_budget = AO_BUDGET_DEFAULT, .ground = true, .crease = AO_MESH_CREASE_DEFAULT,
+        .ao_distance = NAN, .scene_budget = ao_budget_default(), .ground = true, .crease = AO_MESH_CREASE_DEFAULT,
     };
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];

@@ -23,12 +23,12 @@ static const float DEFAULT_BACKGROUND = 1.0f;
 enum { PROGRESSIVE_TRIANGLES = 1 << 20, LOW_TRIANGLE = 96 };
 
 /* Records in a placed scene the BVH its budget gives it (ao_budget_bvh: every charge is made by
- * now), with a note when AUTO gave COMPACT, and whether a LOW BVH traces first (with a note when
+ * now), with a note when AUTO or LOW gave a compact one, and whether a LOW BVH traces first (with a note when
  * the budget has no room for it). */
 static void settle_bvh(struct ao_scene *s, const struct ao_budget *budget)
 {
     s->bvh = ao_budget_bvh(budget);
-    if (budget->bvh == AO_BVH_AUTO && s->bvh == AO_BVH_COMPACT)
+    if ((budget->bvh == AO_BVH_AUTO && s->bvh == AO_BVH_COMPACT) || s->bvh == AO_BVH_LOW_COMPACT)
         ao_scene_add_note(s, s->name, "BVH built compact to fit the scene budget (slower rays; a larger "
                                       "--scene-budget gets the faster BVH)");
     if (budget->bvh != AO_BVH_AUTO || s->bvh != AO_BVH_MEDIUM || s->triangle_count < PROGRESSIVE_TRIANGLES)
@@ -59,7 +59,7 @@ static double crease_of(const struct ao_scene_options *options)
 /* The budget options ask for, at their BVH's rates. */
 static struct ao_budget budget_of(const struct ao_scene_options *options)
 {
-    struct ao_budget budget = {.limit = options->budget ? options->budget : AO_BUDGET_DEFAULT, .bvh = options->bvh};
+    struct ao_budget budget = {.limit = options->budget ? options->budget : ao_budget_default(), .bvh = options->bvh};
     return budget;
 }
 

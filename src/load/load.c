@@ -105,7 +105,7 @@ static bool load_single(ao_load_format *load, struct ao_model *model, const char
 bool ao_load_model(struct ao_model *model, const char *path, struct ao_budget *budget, double crease)
 {
     memset(model, 0, sizeof *model);
-    struct ao_budget defaults = {.limit = AO_BUDGET_DEFAULT};
+    struct ao_budget defaults = {.limit = ao_budget_default()};
     budget = budget ? budget : &defaults;
     int format = format_of(path);
     const char *text;
@@ -166,7 +166,7 @@ static bool flatten(const struct ao_model *model, struct ao_mesh *out, const cha
 bool ao_load_mesh(struct ao_mesh *mesh, const char *path, struct ao_budget *budget)
 {
     memset(mesh, 0, sizeof *mesh);
-    struct ao_budget defaults = {.limit = AO_BUDGET_DEFAULT};
+    struct ao_budget defaults = {.limit = ao_budget_default()};
     budget = budget ? budget : &defaults;
     struct ao_model model;
     if (!ao_load_model(&model, path, budget, AO_MESH_CREASE_DEFAULT))
@@ -223,7 +223,7 @@ bool ao_load_model_arrays(struct ao_model *model, const char *name, const float 
                           struct ao_budget *budget, double crease)
 {
     memset(model, 0, sizeof *model);
-    struct ao_budget defaults = {.limit = AO_BUDGET_DEFAULT};
+    struct ao_budget defaults = {.limit = ao_budget_default()};
     budget = budget ? budget : &defaults;
     if (vertex_count >= AO_MESH_INDEX_LIMIT || triangle_count > SIZE_MAX / 12) {
         ao_load_report(name, 0, "too many vertices for 32-bit indices");

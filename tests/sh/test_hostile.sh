@@ -13,8 +13,12 @@ gnu_time=/usr/bin/time
 
 # The bound: a refused input costs the process's baseline (shared libraries, about 60 MB) plus
 # at most the file itself (the loaders read a file whole; the largest here is 100 MB). Sanitizer
-# runtimes add their own shadow memory and quarantine, so their builds get more room.
+# runtimes add their own shadow memory and quarantine, so their builds get more room. Every case
+# runs under --scene-budget 1G (a case's own --scene-budget, later, overrides it): the least
+# default, the budget of a machine of 4 GB or less, so that each case is the same on every machine
+# (what they cost under a larger machine's default: docs/reliability.md).
 limit_mb=200
+least_budget=(--scene-budget 1G)
 if ldd "$bin" 2>/dev/null | grep -qE 'lib(asan|tsan)'; then limit_mb=400; fi
 refused=0 peak_kb=0
 
@@ -23,7 +27,7 @@ refuse() {
   local want=$1 text=$2
   shift 2
   rm -f out.png out.png.tmp* err.txt mem.txt
-  "$gnu_time" -f %M -o mem.txt timeout -s KILL 30 "$bin" --headless -q -o out.png "$@" \
+  "$gnu_time" -f %M -o mem.txt timeout -s KILL 30 "$bin" --headless -q -o out.png "${least_budget[@]}" "$@" \
     2>err.txt >/dev/null
   local got=$? kb
   kb=$(tail -n 1 mem.txt)
@@ -45,8 +49,8 @@ loads() {
   local text=$1
   shift
   rm -f out.pfm err.txt mem.txt
-  "$gnu_time" -f %M -o mem.txt timeout -s KILL 30 "$bin" --headless -q --spp 1 --size 1x1 -o out.pfm "$@" \
-    2>err.txt >/dev/null
+  "$gnu_time" -f %M -o mem.txt timeout -s KILL 30 "$bin" --headless -q --spp 1 --size 1x1 -o out.pfm \
+    "${least_budget[@]}" "$@" 2>err.txt >/dev/null
   local got=$? kb
   kb=$(tail -n 1 mem.txt)
   [ "$kb" -gt "$peak_kb" ] && peak_kb=$kb
@@ -62,7 +66,7 @@ says() {
   local text=$1
   shift
   rm -f out.pfm err.txt
-  timeout -s KILL 30 "$bin" --headless --spp 1 --size 1x1 -o out.pfm "$@" 2>err.txt >/dev/null
+  timeout -s KILL 30 "$bin" --headless --spp 1 --size 1x1 -o out.pfm "${least_budget[@]}" "$@" 2>err.txt >/dev/null
   local got=$?
   if [ "$got" != 0 ]; then fail "$*: exited $got: $(head -c 300 err.txt)"
   elif ! grep -qF -- "$text" err.txt; then fail "$*: no line '$text' in: $(cat err.txt)"

@@ -60,7 +60,7 @@ static void test_defaults(void **state)
     assert_null(o.stats_path);
     assert_null(o.reference_path);
     assert_false(o.quiet || o.help || o.version);
-    assert_true(o.scene_budget == AO_BUDGET_DEFAULT);
+    assert_true(o.scene_budget == ao_budget_default());
     assert_true(o.ground);
     assert_int_equal(o.bvh, AO_BVH_AUTO);
 }
@@ -394,7 +394,7 @@ static void test_usage_lists_every_option(void **state)
     const char *names[] = {"--headless", "-o, --output", "--spp", "--spppp", "--sampling",
                            "--aa", "--no-aa", "--size", "--threads", "--seed", "--ao-distance",
                            "--stats", "--reference", "-q, --quiet", "-h, --help", "--version",
-                           "--time", "--view", "--shading", "--compare A,B", "--scene-budget SIZE", "default 1G", "--ground on|off", "--crease-angle DEG", "N normals", "F flat/Phong", "D difference",
+                           "--time", "--view", "--shading", "--compare A,B", "--scene-budget SIZE", "a quarter of the machine's\n", "memory, at least 1G", "--ground on|off", "--crease-angle DEG", "N normals", "F flat/Phong", "D difference",
                            "default 256", "default cosine", "640x480", "Esc",
                            /* every window key and the mouse buttons */
                            "U/H/C", "A anti-aliasing", "Space pause", "R restart", "+/- samples per pass",

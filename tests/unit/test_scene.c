@@ -257,8 +257,8 @@ static uint64_t least_budget(const struct path *p, struct ao_scene_options optio
 
 /* The BVH through every entry path: AUTO (NULL options) builds MEDIUM; a budget where MEDIUM's
  * charges do not fit but COMPACT's do builds COMPACT, with the note that says so; one where
- * neither fits is refused; asked for, each BVH is built as asked, charged at its own rates, with no
- * note. The same rule on every path (the fault this guards against: the BVH settled in two of four
+ * neither fits is refused; LOW loads where AUTO does, with compact leaves and the note where AUTO
+ * builds COMPACT; asked for, each BVH is built as asked, charged at its own rates, with no note. The same rule on every path (the fault this guards against: the BVH settled in two of four
  * entry points). */
 static void test_bvh_through_every_entry(void **state)
 {
@@ -285,7 +285,7 @@ static void test_bvh_through_every_entry(void **state)
         uint64_t compact = least_budget(p, (struct ao_scene_options){.bvh = AO_BVH_COMPACT});
         uint64_t low = least_budget(p, (struct ao_scene_options){.bvh = AO_BVH_LOW});
         uint64_t automatic = least_budget(p, (struct ao_scene_options){0});
-        if (!(compact < medium && low == medium && automatic == compact))
+        if (!(compact < medium && low == compact && automatic == compact))
             fail_msg("%s: least budgets MEDIUM %llu, COMPACT %llu, LOW %llu, AUTO %llu", p->name,
                      (unsigned long long)medium, (unsigned long long)compact, (unsigned long long)low,
                      (unsigned long long)automatic);
@@ -300,6 +300,12 @@ static void test_bvh_through_every_entry(void **state)
         assert_int_equal(scene.bvh, AO_BVH_COMPACT);
         if (!strstr(scene.notes, "BVH built compact to fit the scene budget"))
             fail_msg("%s: notes \"%s\"", p->name, scene.notes);
+        ao_scene_finish(&scene);
+        options.bvh = AO_BVH_LOW;
+        assert_true(load_captured_scene(&scene, p->entry, p->path, p->text, &options, err, sizeof err));
+        assert_int_equal(scene.bvh, AO_BVH_LOW_COMPACT);
+        if (!strstr(scene.notes, "BVH built compact to fit the scene budget"))
+            fail_msg("%s: LOW's notes \"%s\"", p->name, scene.notes);
         ao_scene_finish(&scene);
         /* Asked for: as asked, no note. */
         for (enum ao_bvh bvh = AO_BVH_MEDIUM; bvh <= AO_BVH_LOW; bvh++) {
@@ -423,17 +429,25 @@ static void test_budget_builds_compact_where_only_that_fits(void **state)
     assert_int_equal(scene.bvh, AO_BVH_COMPACT);
     ao_scene_finish(&scene);
     assert_false(ao_scene_load(&scene, path, &(struct ao_scene_options){.budget = compact - 1}));
-    /* Asked for, each is charged at its own rates, without a note. */
+    /* Asked for, each is charged at its own rates, without a note; LOW at AUTO's, so that it loads
+     * whatever AUTO loads: with compact leaves where only COMPACT's charges fit. */
     struct ao_scene_options asked = {.budget = compact, .bvh = AO_BVH_COMPACT};
     assert_true(ao_scene_load(&scene, path, &asked));
     assert_int_equal(scene.bvh, AO_BVH_COMPACT);
     assert_string_equal(scene.notes, "");
     ao_scene_finish(&scene);
     asked.bvh = AO_BVH_LOW;
+    assert_true(ao_scene_load(&scene, path, &asked));
+    assert_int_equal(scene.bvh, AO_BVH_LOW_COMPACT);
+    assert_string_equal(scene.notes, "one.scene: BVH built compact to fit the scene budget (slower rays; "
+                                     "a larger --scene-budget gets the faster BVH)");
+    ao_scene_finish(&scene);
+    asked.budget = compact - 1;
     assert_false(ao_scene_load(&scene, path, &asked));
     asked.budget = medium;
     assert_true(ao_scene_load(&scene, path, &asked));
     assert_int_equal(scene.bvh, AO_BVH_LOW);
+    assert_string_equal(scene.notes, "");
     ao_scene_finish(&scene);
 }
 
