@@ -40,6 +40,12 @@ enum { AO_BUDGET_TRIANGLE = 120, AO_BUDGET_VERTEX = 60, AO_BUDGET_NODE = 160, AO
  * 75 bytes; 48 for a PFM or EXR alone). */
 enum { AO_BUDGET_MESH = 1280, AO_BUDGET_PIXEL = 76 };
 
+/* What a flattened copy of a mesh (a placement the scene does not instance but copies: scene.h) is
+ * charged beside its triangles and vertices and its placement's AO_BUDGET_INSTANCE: its mesh struct,
+ * its arrays' allocations and the tracer's geometry of its own (measured: 1141 bytes a flattened
+ * placement of a one-triangle mesh, 519-532 an instanced one; docs/reliability.md). */
+enum { AO_BUDGET_COPY = 448 };
+
 /* A triangle's charge when the BVHs are built compact: AO_BUDGET_TRIANGLE less the 64 bytes a
  * triangle by which Embree's compact BVH lowers the peak of a 10M-triangle GLB or binary PLY
  * (docs/reliability.md). */

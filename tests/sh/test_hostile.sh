@@ -340,6 +340,35 @@ refuse 1 "pairs.obj: 524289 distinct position/normal pairs and the table that in
   --scene-budget 64M pairs.obj
 rm -rf image.scene meshes meshes.scene pairs.obj
 
+# ---- every placement charged what it costs (the fourth round): 300,000 `mesh ... translate` lines of
+# a one-triangle OBJ peaked at 346 MB under --scene-budget 256M, flattened copies charged their
+# triangles and vertices only. Now each copy is charged its own structures too (AO_BUDGET_COPY) and
+# AUTO instances what its copies would not fit: 100,000 such lines under each budget are refused at
+# a line or loaded (instanced or flattened), each peaking at most 1.1 times the budget above the
+# process's own baseline (a one-triangle OBJ's peak). Before, 80M flattened them at 108 MB above it.
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' > tri.obj
+python3 -c "
+with open('placed.scene', 'w') as f:
+    f.write('camera eye 0 0 5000 target 0 0 0\\n')
+    f.writelines('mesh tri.obj translate %d %d 0\\n' % (i % 1000, i // 1000) for i in range(100000))"
+"$gnu_time" -f %M -o mem.txt "$bin" --headless -q --spp 1 --size 8x8 -o tri.pfm tri.obj 2>err.txt ||
+  fail "tri.obj: $(cat err.txt)"
+base_kb=$(tail -n 1 mem.txt)
+for budget in 16 48 80 200; do
+  "$gnu_time" -f %M -o mem.txt "$bin" --headless -q --spp 1 --size 8x8 --scene-budget ${budget}M -o placed.pfm \
+    placed.scene 2>err.txt
+  got=$? kb=$(tail -n 1 mem.txt)
+  above=$((kb - base_kb)) most=$((budget * 1024 * 11 / 10))
+  if [ "$got" = 0 ] && [ -s err.txt ] || [ "$got" != 0 ] && [ "$(grep -c 'left of the scene budget' err.txt)" != 1 ]; then
+    fail "placed.scene under ${budget}M exited $got: $(head -c 300 err.txt)"
+  elif [ "$above" -gt "$most" ]; then
+    fail "placed.scene under ${budget}M: $((above / 1024)) MB above the baseline, more than 1.1 times the budget"
+  else
+    echo "placed.scene under ${budget}M: status $got, $((above / 1024)) MB above the baseline"
+  fi
+done
+rm -f tri.obj tri.pfm placed.scene placed.pfm
+
 # ---- glTF as exporters write it, with counts and strides that lie: quantized positions (6-byte
 # elements) claiming a billion elements or a stride shorter than one element
 python3 - <<'PY'

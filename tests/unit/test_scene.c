@@ -366,7 +366,7 @@ static void test_budget_through_every_entry(void **state)
 }
 
 /* One budget covers the whole scene: a mesh file that three lines name is read and charged once,
- * each of its placements once, and each copy of it that flattening makes (a one-triangle mesh
+ * each of its placements once, and each copy of it that flattening makes, its structures too (a one-triangle mesh
  * placed three times is flattened: the mesh moved for the last placement, copied for the others);
  * with one byte less it is instanced, and below the mesh and its placements refused. */
 static void test_scene_budget_covers_every_mesh_line(void **state)
@@ -377,9 +377,10 @@ static void test_scene_budget_covers_every_mesh_line(void **state)
     static const char text[] = "camera eye 0 1 4 target 0 0 0\nmesh tri.obj\nmesh tri.obj translate 1 0 0\n"
                                "mesh tri.obj translate 2 0 0\n";
     const char *path = temp_file("three.scene", text, sizeof text - 1);
-    /* The scene's text, the mesh (and its structures), three placements and two copies, at the MEDIUM
-     * BVH's rates. */
-    uint64_t need = sizeof text + 3 * medium_charge(1, 3) + AO_BUDGET_MESH + 3 * AO_BUDGET_INSTANCE;
+    /* The scene's text, the mesh (and its structures), three placements and two copies (and theirs),
+     * at the MEDIUM BVH's rates. */
+    uint64_t need = sizeof text + 3 * medium_charge(1, 3) + AO_BUDGET_MESH + 3 * AO_BUDGET_INSTANCE +
+                    2 * AO_BUDGET_COPY;
     struct ao_scene_options medium = {.budget = need, .bvh = AO_BVH_MEDIUM};
     struct ao_scene scene;
     assert_true(ao_scene_load(&scene, path, &medium));
