@@ -220,12 +220,19 @@ static bool parse_size(const char *name, const char *value, struct ao_options *o
     return false;
 }
 
+/* True when strtod or strtof, reading value, ended at `end` having read all of it: a number, not an
+ * empty string or blanks before one (which strtod skips). Every real-valued option checks this. */
+static bool whole_number(const char *value, const char *end)
+{
+    return end != value && *end == '\0' && !isspace((unsigned char)*value);
+}
+
 static bool parse_distance(const char *name, const char *value, float *out, char *msg,
                            size_t msg_size)
 {
     char *end;
     float d = strtof(value, &end);
-    if (!isspace((unsigned char)*value) && *end == '\0' && isfinite(d) && d > 0.0f) {
+    if (whole_number(value, end) && isfinite(d) && d > 0.0f) {
         *out = d;
         return true;
     }
@@ -238,7 +245,7 @@ static bool parse_degrees(const char *name, const char *value, double *out, char
 {
     char *end;
     double d = strtod(value, &end);
-    if (!isspace((unsigned char)*value) && *end == '\0' && d >= 0.0 && d <= 180.0) {
+    if (whole_number(value, end) && d >= 0.0 && d <= 180.0) {
         *out = d;
         return true;
     }
@@ -251,7 +258,7 @@ static bool parse_fraction(const char *name, const char *value, double *out, cha
 {
     char *end;
     double e = strtod(value, &end);
-    if (!isspace((unsigned char)*value) && *end == '\0' && e > 0.0 && e <= 1.0) {
+    if (whole_number(value, end) && e > 0.0 && e <= 1.0) {
         *out = e;
         return true;
     }
@@ -264,7 +271,7 @@ static bool parse_seconds(const char *name, const char *value, double *out, char
 {
     char *end;
     double t = strtod(value, &end);
-    if (!isspace((unsigned char)*value) && *end == '\0' && t > 0.0 && t <= MAX_SECONDS) {
+    if (whole_number(value, end) && t > 0.0 && t <= MAX_SECONDS) {
         *out = t;
         return true;
     }

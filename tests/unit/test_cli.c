@@ -387,6 +387,19 @@ static void test_crease_angle(void **state)
     REJECT("--crease-angle", "missing value", "--crease-angle");
 }
 
+/* Every option that takes a real number refuses an empty value and blanks before one, as it
+ * refuses any other value that is not a number (strtod reads '' as 0 and skips blanks). */
+static void test_real_options_refuse_empty_values(void **state)
+{
+    (void)state;
+    static char *const names[] = {"--crease-angle", "--ao-distance", "--target-error", "--time"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        REJECT(names[i], "got ''", names[i], "");
+        REJECT(names[i], "got ' 1'", names[i], " 1");
+        REJECT(names[i], "got ' '", names[i], " ");
+    }
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -425,6 +438,7 @@ int main(void)
         cmocka_unit_test(test_ground),
         cmocka_unit_test(test_bvh),
         cmocka_unit_test(test_crease_angle),
+        cmocka_unit_test(test_real_options_refuse_empty_values),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
