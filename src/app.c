@@ -89,6 +89,8 @@ void ao_app_on_pass(const struct ao_frame_info *info, void *user)
         fprintf(st->file, ",%.3f,%.6g,%.4f\n", info->mean_spp, info->error, info->converged);
         if (fflush(st->file) != 0)
             stats_failed(st);
+        else
+            atomic_store(&st->wrote, true);
     }
     if (rep->progress)
         draw_bar(rep, info);
@@ -173,14 +175,14 @@ const char *ao_app_signal_name(int sig)
 enum ending { ENDING_SILENT, ENDING_LOADING, ENDING_NOTHING_WRITTEN, ENDING_SECOND };
 
 /* Ends the process at once with 128 + sig: removes the temporary files of writes in progress and
- * a --stats file this run created and wrote no row into; then says, in one line, what the ending
+ * a --stats file this run created and got no row into; then says, in one line, what the ending
  * left (write(2): the main thread may hold stderr's lock): for a second signal whether -o was
  * written, which the count of finished writes tells, now that none can begin or end. */
 static void end_at_once(const struct ao_interrupt *in, int sig, enum ending ending)
 {
     ao_image_discard_temporaries();
     const struct ao_stats *st = in->stats;
-    if (st && atomic_load(&st->created) && !atomic_load(&st->started))
+    if (st && atomic_load(&st->created) && !atomic_load(&st->wrote))
         unlink(st->path);
     char line[AO_TEXT_SIZE + 128], name[AO_TEXT_SIZE];
     const char *what = ao_app_signal_name(sig);
@@ -481,7 +483,7 @@ int ao_app_finish(struct ao_app *app, int status)
     struct ao_stats *st = &app->stats;
     if (st->file && fclose(st->file) != 0)
         stats_failed(st);
-    if (st->file && atomic_load(&st->created) && !atomic_load(&st->started))
+    if (st->file && atomic_load(&st->created) && !atomic_load(&st->wrote))   /* none, or none whole: a full disk */
         unlink(st->path);
     st->file = NULL;
     if (st->failed && status == 0)
