@@ -251,7 +251,8 @@ killed)
   kill -KILL "$victim"
   wait "$long_pid"
   status=$?
-  [ "$status" != 0 ] || fail "a killed rank ended the run with status 0"
+  # mpirun's status is the first failed rank's (docs/mpi.md): 128 + SIGKILL; rank 0 exits 1.
+  [ "$status" = 137 ] || fail "a killed rank ended mpirun with status $status, expected 137"
   line=$(grep "^aoview: rank 2 lost (killed or crashed); the last copy, gathered [0-9.]* s ago, stopped at [0-9]* spp" long.err)
   [ -n "$line" ] || fail "no line naming rank 2 and the copy's age: $(cat long.err)"
   age=$(sed -n 's/.* gathered \([0-9.]*\) s ago.*/\1/p' <<<"$line")
@@ -296,6 +297,9 @@ sigint)
   # process group as well, and mpirun takes a second SIGINT for "abort now".
   kill -INT "$(pgrep -P "$long_pid")"
   wait "$long_pid"
+  status=$?
+  # Open MPI ends an interrupted mpirun as an aborted job, status 1, whatever its ranks' (rank 0: 143).
+  [ "$status" = 1 ] || fail "SIGINT to mpirun ended it with status $status, expected 1 (docs/mpi.md)"
   grep -q "^aoview: interrupted by SIGTERM at [0-9]* spp" long.err || fail "no interruption line: $(cat long.err)"
   grep -q "lost" long.err && fail "a rank named lost after SIGINT: $(cat long.err)"
   complete_pfm long.pfm 96 64 || fail "no complete image after SIGINT: $(ls -A)"
