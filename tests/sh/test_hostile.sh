@@ -539,16 +539,30 @@ python3 - <<'PY'
 import json, struct
 data = open('draco.glb', 'rb').read()
 length = struct.unpack('<I', data[12:16])[0]
-doc = json.loads(data[20:20 + length])
-doc['accessors'][0]['sparse'] = {'count': 1, 'indices': {'bufferView': 0, 'componentType': 5125},
-                                 'values': {'bufferView': 0}}
-text = json.dumps(doc).encode()
-text += b' ' * ((4 - len(text) % 4) % 4)
 rest = data[20 + length:]
-open('draco_sparse.glb', 'wb').write(struct.pack('<3I', 0x46546C67, 2, 20 + len(text) + len(rest)) +
-                                     struct.pack('<2I', len(text), 0x4E4F534A) + text + rest)
+def write(name, change):
+    doc = json.loads(data[20:20 + length])
+    change(doc)
+    text = json.dumps(doc).encode()
+    text += b' ' * ((4 - len(text) % 4) % 4)
+    open(name, 'wb').write(struct.pack('<3I', 0x46546C67, 2, 20 + len(text) + len(rest)) +
+                           struct.pack('<2I', len(text), 0x4E4F534A) + text + rest)
+write('draco_sparse.glb', lambda doc: doc['accessors'][0].update(
+    sparse={'count': 1, 'indices': {'bufferView': 0, 'componentType': 5125}, 'values': {'bufferView': 0}}))
+# The indices accessor of a Draco primitive saying float or signed byte, as refused on plain data.
+def index_type(component):
+    def change(doc):
+        doc['accessors'][doc['meshes'][0]['primitives'][0]['indices']]['componentType'] = component
+    return change
+write('draco_float_index.glb', index_type(5126))
+write('draco_byte_index.glb', index_type(5120))
 PY
 refuse 1 "draco_sparse.glb: accessor 0 (POSITION): 'sparse' on an accessor of KHR_draco_mesh_compression data, which the extension forbids" draco_sparse.glb
+for name in float:5126 byte:5120; do
+  refuse 1 "draco_${name%%:*}_index.glb: accessor" "draco_${name%%:*}_index.glb"
+  grep -qF "(indices): componentType ${name#*:}; indices must be unsigned byte, short or int" err.txt ||
+    fail "draco_${name%%:*}_index.glb: $(cat err.txt)"
+done
 loads "draco_quantized.glb (Draco storing shorts that its accessor, componentType 5122, says how to read)" draco_quantized.glb
 rm -f ./*.gltf ./*.glb quad.stl
 
