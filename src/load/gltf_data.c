@@ -463,12 +463,28 @@ static bool check_component(const struct ao_gltf *g, uint64_t component, json_ob
 
 /* How elements must be aligned in their bufferView, as glTF requires (its validator reports each
  * as an error): to their component's size from the start of the buffer; vertex attributes to 4
- * bytes, byteOffset and byteStride alike. */
+ * bytes, byteOffset and byteStride alike. Indices and sparse entries off their alignment are
+ * refused; vertex attributes are read as they lie, with a note (ALIGN_VERTEX: the readers users
+ * have read them, as cesium-native reads its own cubeQuantized.glb's shorts 6 bytes apart), since
+ * every component is read byte by byte. */
 enum alignment { ALIGN_COMPONENT, ALIGN_VERTEX };
 
+/* Notes, once, that the vertex attribute `where` (at byte `start` of its buffer, step bytes apart)
+ * lies off glTF's alignment. */
+static void note_unaligned(struct ao_gltf *g, const char *where, uint64_t start, uint64_t step)
+{
+    char what[sizeof g->unaligned];
+    snprintf(what, sizeof what, "%s at byte %llu of its buffer, %llu bytes apart", where, (unsigned long long)start,
+             (unsigned long long)step);
+    if (!g->unaligned[0])
+        snprintf(g->unaligned, sizeof g->unaligned, "%s", what);
+    else if (strcmp(g->unaligned, what) != 0)
+        g->unaligned_more = true;
+}
+
 /* count elements of element bytes (components of component bytes) from byte offset of bufferView
- * index, stride bytes apart (0: packed), checked to lie inside the view and to be aligned as glTF
- * requires; where and what name them in messages. */
+ * index, stride bytes apart (0: packed), checked to lie inside the view and to be aligned as
+ * `alignment` says (vertex attributes off it noted); where and what name them in messages. */
 static bool view_elements(struct ao_gltf *g, size_t index, uint64_t offset, uint64_t count, size_t element,
                           size_t component, enum alignment alignment, bool strided, const char *where,
                           const unsigned char **first, size_t *stride)
@@ -480,20 +496,18 @@ static bool view_elements(struct ao_gltf *g, size_t index, uint64_t offset, uint
     if (step < element)
         return ao_gltf_error(g, "bufferView %zu: byteStride %llu is smaller than an element (%zu bytes)", index,
                              (unsigned long long)step, element);
-    if ((v->offset + offset) % component)
+    if (alignment == ALIGN_COMPONENT && (v->offset + offset) % component)
         return ao_gltf_error(g, "%s: byte %llu of its buffer (byteOffset %llu in bufferView %zu) is not a multiple of "
                              "its %zu-byte components, as glTF requires", where,
                              (unsigned long long)(v->offset + offset), (unsigned long long)offset, index, component);
-    if (alignment == ALIGN_VERTEX && (offset % 4 || (count > 1 && step % 4)))
-        return ao_gltf_error(g, "%s: a vertex attribute at byteOffset %llu, %llu bytes apart: glTF aligns them to 4 "
-                             "bytes (a byteStride that is a multiple of 4)", where, (unsigned long long)offset,
-                             (unsigned long long)step);
     /* The last element ends inside the view: offset + step * (count - 1) + element. */
     uint64_t end = offset + step * (count - 1) + element;
     if (end > v->length)
         return ao_gltf_error(g, "%s: %llu elements from byte %llu need %llu bytes of bufferView %zu, which has %zu",
                              where, (unsigned long long)count, (unsigned long long)offset, (unsigned long long)end,
                              index, v->length);
+    if (alignment == ALIGN_VERTEX && ((v->offset + offset) % component || offset % 4 || (count > 1 && step % 4)))
+        note_unaligned(g, where, v->offset + offset, step);
     *first = v->data + offset;
     *stride = (size_t)step;
     return true;

@@ -466,11 +466,12 @@ rm -f meshopt.glb meshopt-range.glb meshopt_billion.glb meshopt_count.glb draco-
   draco-count.glb grid.obj draco_grid.glb
 
 # ---- what validators say of glTF, EXR and STL files (N7 of the third round): what glTF-Validator
-# reports as an error is refused in one line (normalized floats, components or vertex attributes
-# off their alignment, sparse indices that do not increase, 'sparse' on Draco data); what the
-# specifications allow or name as harmless loads with one line (an accessor counting other than
-# its Draco data decode, a shading-only required extension, normals that are NaN or zero; an ASCII
-# STL's 4-vertex facet or missing 'endsolid'). (EXR values OpenEXR does not define: above.)
+# reports as an error is refused in one line (normalized floats, sparse indices that do not
+# increase, 'sparse' on Draco data); what the specifications allow or name as harmless, or the
+# readers users have read (vertex attributes off their alignment, the fourth round), loads with
+# one line (an accessor counting other than its Draco data decode, a shading-only required
+# extension, normals that are NaN or zero; an ASCII STL's 4-vertex facet or missing 'endsolid').
+# (EXR values OpenEXR does not define: above.)
 python3 - <<'PY'
 import base64, json, struct
 def gltf(name, accessors, views, data, primitive=None, extra=None):
@@ -484,14 +485,19 @@ tri = struct.pack('<9f', 0, 0, 0, 1, 0, 0, 0, 1, 0)
 shorts = struct.pack('<12h', 0, 0, 0, 0, 32767, 0, 0, 0, 0, 32767, 0, 0)
 gltf('normalized_float.gltf', [{'bufferView': 0, 'componentType': 5126, 'normalized': True, 'count': 3,
      'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 36}], tri)
-gltf('offset_float.gltf', [{'bufferView': 0, 'byteOffset': 2, 'componentType': 5126, 'count': 2, 'type': 'VEC3'}],
+# Vertex attributes off glTF's alignment (components at an odd byte, elements not 4 bytes apart)
+# whose data lie inside their view: read as they lie, with a line; past the view: refused.
+packed = struct.pack('<9h', 0, 0, 0, 32767, 0, 0, 0, 32767, 0)
+gltf('offset_float.gltf', [{'bufferView': 0, 'byteOffset': 2, 'componentType': 5126, 'count': 3, 'type': 'VEC3'}],
+     [{'buffer': 0, 'byteLength': 40}], b'\0\0' + tri + b'\0\0')
+gltf('offset_past.gltf', [{'bufferView': 0, 'byteOffset': 2, 'componentType': 5126, 'count': 3, 'type': 'VEC3'}],
      [{'buffer': 0, 'byteLength': 36}], tri)
 gltf('offset_quantized.gltf', [{'bufferView': 0, 'byteOffset': 2, 'componentType': 5122, 'normalized': True,
-     'count': 2, 'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 24, 'byteStride': 8}], shorts)
+     'count': 3, 'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 26, 'byteStride': 8}], b'\0\0' + shorts)
 gltf('stride_quantized.gltf', [{'bufferView': 0, 'componentType': 5122, 'normalized': True, 'count': 3,
-     'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 24, 'byteStride': 6}], shorts)
+     'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 18, 'byteStride': 6}], packed + b'\0\0')
 gltf('packed_quantized.gltf', [{'bufferView': 0, 'componentType': 5122, 'normalized': True, 'count': 3,
-     'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 18}], struct.pack('<9h', 0, 0, 0, 32767, 0, 0, 0, 32767, 0) + b'\0\0')
+     'type': 'VEC3'}], [{'buffer': 0, 'byteLength': 18}], packed + b'\0\0')
 for name, at in (('sparse_repeated.gltf', (1, 1)), ('sparse_decreasing.gltf', (2, 1))):
     gltf(name, [{'bufferView': 0, 'componentType': 5126, 'count': 3, 'type': 'VEC3',
                  'sparse': {'count': 2, 'indices': {'bufferView': 0, 'byteOffset': 36, 'componentType': 5121},
@@ -522,10 +528,11 @@ open('quad.stl', 'w').write('solid q\nfacet normal 0 0 1\nouter loop\nvertex 0 0
                             'vertex 0 1 0\nendloop\nendfacet\n')
 PY
 refuse 1 "normalized_float.gltf: accessor 0 (POSITION): 'normalized' on float components (glTF normalizes 8- and 16-bit integer attributes only)" normalized_float.gltf
-refuse 1 "offset_float.gltf: accessor 0 (POSITION): byte 2 of its buffer (byteOffset 2 in bufferView 0) is not a multiple of its 4-byte components, as glTF requires" offset_float.gltf
-refuse 1 "offset_quantized.gltf: accessor 0 (POSITION): a vertex attribute at byteOffset 2, 8 bytes apart: glTF aligns them to 4 bytes" offset_quantized.gltf
-refuse 1 "stride_quantized.gltf: accessor 0 (POSITION): a vertex attribute at byteOffset 0, 6 bytes apart: glTF aligns them to 4 bytes" stride_quantized.gltf
-refuse 1 "packed_quantized.gltf: accessor 0 (POSITION): a vertex attribute at byteOffset 0, 6 bytes apart" packed_quantized.gltf
+says "offset_float.gltf: accessor 0 (POSITION) at byte 2 of its buffer, 12 bytes apart, off glTF's alignment: read as it lies" offset_float.gltf
+refuse 1 "offset_past.gltf: accessor 0 (POSITION): 3 elements from byte 2 need 38 bytes of bufferView 0, which has 36" offset_past.gltf
+says "offset_quantized.gltf: accessor 0 (POSITION) at byte 2 of its buffer, 8 bytes apart, off glTF's alignment: read as it lies" offset_quantized.gltf
+says "stride_quantized.gltf: accessor 0 (POSITION) at byte 0 of its buffer, 6 bytes apart, off glTF's alignment: read as it lies" stride_quantized.gltf
+says "packed_quantized.gltf: accessor 0 (POSITION) at byte 0 of its buffer, 6 bytes apart, off glTF's alignment: read as it lies" packed_quantized.gltf
 refuse 1 "sparse_repeated.gltf: accessor 0 (POSITION) sparse: index 1 at 1 does not follow 1: glTF's sparse indices strictly increase" sparse_repeated.gltf
 refuse 1 "sparse_decreasing.gltf: accessor 0 (POSITION) sparse: index 1 at 1 does not follow 2" sparse_decreasing.gltf
 refuse 1 "unplaced.gltf: no triangles: no node of scene 0 (the one shown) places a mesh" unplaced.gltf
