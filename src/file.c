@@ -275,7 +275,8 @@ bool ao_file_check_roles(const struct ao_file_role *files, size_t count)
                 (a.name || b.name ? !a.name || !b.name || strcmp(a.name, b.name) != 0 : false))
                 continue;
             ao_text_report("%s: %s is also %s (%s): %s", files[i].role, files[i].path, files[j].role, files[j].path,
-                           files[j].written ? "each output needs a file of its own" : "aoview does not overwrite its inputs");
+                           files[j].written ? "each output needs a file of its own"
+                                            : "aoview does not overwrite its inputs");
             return false;
         }
     }
