@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "file.h"
 #include "load/load.h"
@@ -200,6 +201,20 @@ bool ao_scene_from_arrays(struct ao_scene *scene, const struct ao_scene_arrays *
     return load_bare_mesh(scene, arrays->name, arrays, &budget, options);
 }
 
+/* True when path names a scene file: its extension is .scene (any case). Else (not a mesh either)
+ * reports the extension and what aoview reads, so that a README is not parsed as a scene. */
+static bool is_scene_file(const char *path)
+{
+    const char *slash = strrchr(path, '/'), *dot = strrchr(slash ? slash : path, '.');
+    if (dot && strcasecmp(dot, ".scene") == 0)
+        return true;
+    char extensions[64];
+    ao_load_extensions(extensions, sizeof extensions);
+    ao_text_report("%s: %s%s%s: aoview reads scenes (.scene) and meshes (%s)", path, dot ? "extension '" : "no extension",
+                   dot ? dot : "", dot ? "'" : "", extensions);
+    return false;
+}
+
 bool ao_scene_load(struct ao_scene *scene, const char *path, const struct ao_scene_options *options)
 {
     static const struct ao_scene_options defaults;
@@ -208,6 +223,8 @@ bool ao_scene_load(struct ao_scene *scene, const char *path, const struct ao_sce
     memset(scene, 0, sizeof *scene);
     if (ao_load_is_mesh(path))
         return load_bare_mesh(scene, path, NULL, &budget, options);
+    if (!is_scene_file(path))
+        return false;
     char *text;
     size_t got;
     if (!ao_file_read_budget(path, &budget, &text, &got))

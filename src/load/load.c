@@ -49,6 +49,15 @@ bool ao_load_is_mesh(const char *path)
     return format_of(path) >= 0;
 }
 
+void ao_load_extensions(char *out, size_t size)
+{
+    size_t n = sizeof formats / sizeof formats[0], used = 0;
+    out[0] = '\0';
+    for (size_t i = 0; i < n && used < size; i++)
+        used += (size_t)snprintf(out + used, size - used, "%s%s", i == 0 ? "" : i + 1 < n ? ", " : " or ",
+                                 formats[i].extension);
+}
+
 bool ao_load_finish(struct ao_mesh *mesh, const char *path)
 {
     ao_mesh_drop_degenerate(mesh);
@@ -112,7 +121,9 @@ bool ao_load_model(struct ao_model *model, const char *path, struct ao_budget *b
     size_t size;
     bool mapped;
     if (format < 0) {
-        ao_load_report(path, 0, "unknown mesh format; expected .obj, .ply, .stl, .gltf or .glb");
+        char extensions[64];
+        ao_load_extensions(extensions, sizeof extensions);
+        ao_load_report(path, 0, "unknown mesh format; expected %s", extensions);
         return false;
     }
     if (!ao_file_map_budget(path, budget, &text, &size, &mapped))

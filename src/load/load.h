@@ -15,6 +15,10 @@
 /* True when path's extension names a mesh format ao_load_model reads. Pure. */
 bool ao_load_is_mesh(const char *path);
 
+/* Writes the mesh formats' extensions for a message, ".obj, .ply, .stl, .gltf or .glb", into out
+ * (size bytes, truncated). Pure. */
+void ao_load_extensions(char *out, size_t size);
+
 /* Loads a mesh file into model: its unique meshes and their placements (the unique triangles and
  * vertices and every placement charged against what budget has left before they are allocated;
  * nothing stays charged; NULL: a budget of ao_budget_default()). The normals the file lacks, or

@@ -612,6 +612,10 @@ mkdir dir.obj
 refuse 1 "dir.obj: is a directory" dir.obj
 ln -s /dev/zero zero.obj
 refuse 1 "zero.obj: not a regular file" zero.obj
+# A file that is neither a scene nor a mesh is named by its extension, unread (the README was parsed
+# as a scene: "README.md:3: unknown keyword 'Watch'").
+refuse 1 "README.md: extension '.md': aoview reads scenes (.scene) and meshes (.obj, .ply, .stl, .gltf or .glb)" \
+  "$root/README.md"
 mkfifo fifo.obj fifo.scene fifo.pfm             # nobody writes: opening must not wait forever
 refuse 1 "fifo.obj: not a regular file" fifo.obj
 refuse 1 "fifo.scene: not a regular file" fifo.scene

@@ -8,10 +8,13 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "mesh_fixture.h"
@@ -175,7 +178,7 @@ static void test_line_limits(void **state)
 static void test_file_errors(void **state)
 {
     (void)state;
-    char err[8192], want[4300];
+    char err[8192], want[4500];
     struct ao_scene scene;
     const char *path = temp_file("nul.scene", "sphere center 0 0 0 radius 1\n\0x\n", 32);
     assert_false(load_captured_scene(&scene, FROM_FILE, path, NULL, NULL, err, sizeof err));
@@ -186,6 +189,35 @@ static void test_file_errors(void **state)
     assert_false(load_captured_scene(&scene, FROM_FILE, path, NULL, NULL, err, sizeof err));
     snprintf(want, sizeof want, "%s: cannot open: No such file or directory\n", path);
     assert_string_equal(err, want);
+    /* Only a .scene file (any case) is read as a scene; any other file, a scene's text in it or not,
+     * is named by its extension, unread (README.md was parsed: "README.md:3: unknown keyword"). */
+    static const char text[] = "camera eye 0 1 4 target 0 0 0\nsphere center 0 0 0 radius 1\n";
+    static const char *const others[][2] = {{"notes.md", "extension '.md'"}, {"scene.txt", "extension '.txt'"},
+                                            {"scene", "no extension"}, {"dir.scene/scene", "no extension"}};
+    for (size_t i = 0; i < sizeof others / sizeof others[0]; i++) {
+        path = temp_file(strchr(others[i][0], '/') ? "scene" : others[i][0], text, sizeof text - 1);
+        if (strchr(others[i][0], '/')) {   /* a dot in a folder's name is no extension */
+            static char folder[4200], file[4300];
+            snprintf(folder, sizeof folder, "%.*s/dir.scene", (int)(strrchr(path, '/') - path), path);
+            snprintf(file, sizeof file, "%s/scene", folder);
+            assert_int_equal(mkdir(folder, 0700) == 0 || errno == EEXIST, 1);
+            assert_int_equal(rename(path, file), 0);
+            path = file;
+        }
+        assert_false(load_captured_scene(&scene, FROM_FILE, path, NULL, NULL, err, sizeof err));
+        snprintf(want, sizeof want, "%s: %s: aoview reads scenes (.scene) and meshes (.obj, .ply, .stl, .gltf or .glb)\n",
+                 path, others[i][1]);
+        assert_string_equal(err, want);
+        assert_scene_empty(&scene);
+        if (strchr(others[i][0], '/')) {
+            assert_int_equal(unlink(path), 0);
+            *strrchr((char *)path, '/') = '\0';
+            assert_int_equal(rmdir(path), 0);
+        }
+    }
+    path = temp_file("UPPER.SCENE", text, sizeof text - 1);
+    assert_true(load_captured_scene(&scene, FROM_FILE, path, NULL, NULL, err, sizeof err));
+    ao_scene_finish(&scene);
 }
 
 /* What a file leaves out: background 1, albedo 0.8, no AO distance, up 0 1 0, fov 40, and a camera
