@@ -11,25 +11,30 @@
 #include <string.h>
 #include <strings.h>
 
+#include <sys/stat.h>
+
 #include "file.h"
 #include "load/loader.h"
 
 /* ------------------------------------------------------------------ entry points */
 
 /* The formats by extension (any case): a loader of one mesh, or of a model (several meshes placed),
- * and whether the normals a file lacks are flat (glTF 2.0: "When normals are not specified, client
- * implementations MUST calculate flat normals") or smooth up to the crease angle. */
+ * whether the normals a file lacks are flat (glTF 2.0: "When normals are not specified, client
+ * implementations MUST calculate flat normals") or smooth up to the crease angle, and the largest
+ * file it can read (0: no limit; a .gltf is JSON, which json-c parses up to 2^31 - 1 bytes),
+ * refused before it is read. */
 static const struct {
     const char *extension;
     ao_load_format *load;
     ao_load_model_format *load_model;
     bool flat;
+    uint64_t largest;
 } formats[] = {
-    {".obj", ao_load_obj, NULL, false},
-    {".ply", ao_load_ply, NULL, false},
-    {".stl", ao_load_stl, NULL, false},
-    {".gltf", NULL, ao_load_gltf, true},
-    {".glb", NULL, ao_load_gltf, true},
+    {".obj", ao_load_obj, NULL, false, 0},
+    {".ply", ao_load_ply, NULL, false, 0},
+    {".stl", ao_load_stl, NULL, false, 0},
+    {".gltf", NULL, ao_load_gltf, true, INT32_MAX},
+    {".glb", NULL, ao_load_gltf, true, 0},
 };
 
 /* The format of path's extension, or -1. */
@@ -124,6 +129,12 @@ bool ao_load_model(struct ao_model *model, const char *path, struct ao_budget *b
         char extensions[64];
         ao_load_extensions(extensions, sizeof extensions);
         ao_load_report(path, 0, "unknown mesh format; expected %s", extensions);
+        return false;
+    }
+    struct stat st;
+    if (formats[format].largest && stat(path, &st) == 0 && (uint64_t)st.st_size > formats[format].largest) {
+        ao_load_report(path, 0, "%llu bytes of JSON, more than the %llu its parser reads", (unsigned long long)st.st_size,
+                       (unsigned long long)formats[format].largest);
         return false;
     }
     if (!ao_file_map_budget(path, budget, &text, &size, &mapped))
