@@ -602,6 +602,7 @@ static bool list_corners(struct mesh_pass *pass)
     cr->slot = malloc(mesh->vertex_count * sizeof *cr->slot);
     if (!cr->ids || !cr->slot)
         return false;
+    ao_mesh_advise_huge(cr->ids, cr->count * sizeof *cr->ids);
     ao_mesh_advise_huge(cr->slot, mesh->vertex_count * sizeof *cr->slot);
     size_t blocks = mesh->triangle_count / BLOCK + 1;
     int32_t *open = calloc(blocks + 1, sizeof *open);   /* marked vertices whose triangles begin, less end */
@@ -632,8 +633,10 @@ static bool list_corners(struct mesh_pass *pass)
     cr->extra = malloc((cr->count + 1) * sizeof *cr->extra);
     if (cr->failed || !cr->start || !cr->corners || !cr->side || !cr->extra)
         return false;
+    ao_mesh_advise_huge(cr->start, cr->count * sizeof *cr->start);
     ao_mesh_advise_huge(cr->corners, listed * sizeof *cr->corners);
     ao_mesh_advise_huge(cr->side, listed * sizeof *cr->side);
+    ao_mesh_advise_huge(cr->extra, cr->count * sizeof *cr->extra);
     for (int k = 0; k < pass->threads; k++)
         for (size_t i = 0; i < cr->found[k].count; i++)
             cr->start[(cr->found[k].pairs[i] >> 32) + 1]++;
@@ -663,6 +666,9 @@ static void sides_part(void *user, int k)
     if (!parent || !keys || !normals) {
         cr->failed = true;
     } else {
+        ao_mesh_advise_huge(parent, most * sizeof *parent);
+        ao_mesh_advise_huge(keys, 2 * (size_t)most * sizeof *keys);
+        ao_mesh_advise_huge(normals, most * sizeof *normals);
         for (size_t m = slot_start(pass, k); m < slot_start(pass, k + 1); m++) {
             uint32_t begin = cr->start[m], count = cr->start[m + 1] - begin;
             cr->extra[m] = sides_of(pass->mesh, cr->corners + begin, count, cr->cos_crease, cr->side + begin, parent,
