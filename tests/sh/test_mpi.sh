@@ -218,6 +218,14 @@ differ)
   status=$?
   [ "$status" = 1 ] && [ "$(grep -c "image.scene:1: 'image' 8192x8192: its buffers need about 4.8 GiB" mismatch.err)" = 1 ] &&
     [ ! -e mismatch.pfm ] || fail "an image line past the budget was not refused once (status $status): $(cat mismatch.err)"
+  # The scene budget is rank 0's on every rank (by default its machine's): rank 1 given one that
+  # alone would refuse the bunny loads it as rank 0 does, and the image is one process's.
+  "${mpirun[@]}" -np 1 "$mpi_bin" --headless -q --size 96x64 --spp 16 --threads 1 -o budget.pfm : \
+    -np 1 "$mpi_bin" --size 96x64 --spp 16 --threads 1 --scene-budget 1M 2>budget.err ||
+    fail "rank 1 given a smaller --scene-budget: $(cat budget.err)"
+  "$bin" --headless -q --size 96x64 --spp 16 --threads 2 -o budget-1.pfm || fail "aoview failed"
+  d=$(max_diff budget-1.pfm budget.pfm 2>/dev/null)
+  [ "$d" = 0.0 ] || fail "the ranks under rank 0's budget differ from one process by ${d:-?}"
   cp "$spheres" copy.scene
   "${mpirun[@]}" -np 2 "$mpi_bin" --headless --size 96x64 --spp 16 --stats copy.scene -o mismatch.pfm copy.scene \
     2>mismatch.err
