@@ -219,11 +219,13 @@ differ)
   [ "$status" = 1 ] && [ "$(grep -c "image.scene:1: 'image' 8192x8192: its buffers need about 4.8 GiB" mismatch.err)" = 1 ] &&
     [ ! -e mismatch.pfm ] || fail "an image line past the budget was not refused once (status $status): $(cat mismatch.err)"
   # The scene budget is rank 0's on every rank (by default its machine's): rank 1 given one that
-  # alone would refuse the bunny loads it as rank 0 does, and the image is one process's.
-  "${mpirun[@]}" -np 1 "$mpi_bin" --headless -q --size 96x64 --spp 16 --threads 1 -o budget.pfm : \
-    -np 1 "$mpi_bin" --size 96x64 --spp 16 --threads 1 --scene-budget 1M 2>budget.err ||
+  # alone would refuse the mesh (28,800 triangles: about 2.5 MiB) loads it as rank 0 does, and the
+  # image is one process's.
+  python3 "$AO_SOURCE_ROOT/tests/tools/mesh_convert.py" --grid 120 grid.obj || fail "no grid"
+  "${mpirun[@]}" -np 1 "$mpi_bin" --headless -q --size 96x64 --spp 16 --threads 1 -o budget.pfm grid.obj : \
+    -np 1 "$mpi_bin" --size 96x64 --spp 16 --threads 1 --scene-budget 1M grid.obj 2>budget.err ||
     fail "rank 1 given a smaller --scene-budget: $(cat budget.err)"
-  "$bin" --headless -q --size 96x64 --spp 16 --threads 2 -o budget-1.pfm || fail "aoview failed"
+  "$bin" --headless -q --size 96x64 --spp 16 --threads 2 -o budget-1.pfm grid.obj || fail "aoview failed"
   d=$(max_diff budget-1.pfm budget.pfm 2>/dev/null)
   [ "$d" = 0.0 ] || fail "the ranks under rank 0's budget differ from one process by ${d:-?}"
   cp "$spheres" copy.scene
