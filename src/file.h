@@ -1,5 +1,6 @@
 /* Whole-file reading shared by the scene and mesh loaders (charged to the scene budget, the files
- * read remembered as inputs), and opening a stream output (--stats). */
+ * read remembered as inputs), opening a stream output (--stats), and the programs' check that no
+ * output is an input or another output. */
 #ifndef AO_FILE_H
 #define AO_FILE_H
 
