@@ -97,6 +97,8 @@ void ao_app_on_pass(const struct ao_frame_info *info, void *user)
         fprintf(st->file, ",%.3f,%.6g,%.4f\n", info->mean_spp, info->error, info->converged);
         if (fflush(st->file) != 0)
             stats_failed(st);
+        else
+            atomic_store(&st->wrote, true);
     }
     if (rep->progress)
         draw_bar(rep, info);
@@ -181,14 +183,14 @@ const char *ao_app_signal_name(int sig)
 enum ending { ENDING_SILENT, ENDING_LOADING, ENDING_NOTHING_WRITTEN, ENDING_SECOND };
 
 /* Ends the process at once with 128 + sig: removes the temporary files of writes in progress and
- * a --stats file this run created and wrote no row into; then says, in one line, what the ending
+ * a --stats file this run created and got no row into; then says, in one line, what the ending
  * left (write(2): the main thread may hold stderr's lock): for a second signal whether -o was
  * written, which the count of finished writes tells, now that none can begin or end. */
 static void end_at_once(const struct ao_interrupt *in, int sig, enum ending ending)
 {
     ao_image_discard_temporaries();
     const struct ao_stats *st = in->stats;
-    if (st && atomic_load(&st->created) && !atomic_load(&st->started))
+    if (st && atomic_load(&st->created) && !atomic_load(&st->wrote))
         unlink(st->path);
     char line[AO_TEXT_SIZE + 128], name[AO_TEXT_SIZE];
     const char *what = ao_app_signal_name(sig);
@@ -265,91 +267,28 @@ void ao_app_watch(struct ao_app *app, struct ao_render *render)
     atomic_store(&app->interrupt.rendering, true);
 }
 
-/* A file as the output checks compare it: an existing file by its identity (through links), one to
- * be made by its folder's identity and its name there. */
-struct file_key {
-    unsigned long long dev, ino;
-    const char *name;   /* NULL for an existing file */
-};
-
-/* The key of path; false when neither it nor its folder exists (a write refuses it anyway). */
-static bool key_of(const char *path, struct file_key *key)
-{
-    struct stat st;
-    const char *slash = strrchr(path, '/');
-    char folder[4096];
-    *key = (struct file_key){0};
-    if (stat(path, &st) != 0) {
-        snprintf(folder, sizeof folder, "%.*s", slash ? (int)(slash - path + (slash == path)) : 1,
-                 slash ? path : ".");
-        if (stat(folder, &st) != 0)
-            return false;
-        key->name = slash ? slash + 1 : path;
-    }
-    key->dev = (unsigned long long)st.st_dev;
-    key->ino = (unsigned long long)st.st_ino;
-    return true;
-}
-
 bool ao_app_check_files(const struct ao_options *opts, const char *const *outputs, size_t count)
 {
     /* The outputs first, then what is only read. */
-    struct named {
-        const char *role, *path;
-        bool written;
-        struct file_key key;
-        bool known;
-    } files[6];
+    struct ao_file_role files[6];
     size_t n = 0;
     for (size_t i = 0; i < count && n < 2; i++)
-        files[n++] = (struct named){.role = "-o", .path = outputs[i], .written = true};
+        files[n++] = (struct ao_file_role){"-o", outputs[i], true};
     if (opts->stats_path)
-        files[n++] = (struct named){.role = "--stats", .path = opts->stats_path, .written = true};
-    files[n++] = (struct named){.role = "the scene", .path = opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE};
+        files[n++] = (struct ao_file_role){"--stats", opts->stats_path, true};
+    files[n++] = (struct ao_file_role){"the scene", opts->scene_path ? opts->scene_path : AO_DEFAULT_SCENE, false};
     if (opts->reference_path)
-        files[n++] = (struct named){.role = "--reference", .path = opts->reference_path};
-    for (size_t i = 0; i < n; i++)
-        files[i].known = key_of(files[i].path, &files[i].key);
-    for (size_t i = 0; i < n; i++)
-        for (size_t j = i + 1; j < n && files[i].written; j++) {
-            const struct file_key *a = &files[i].key, *b = &files[j].key;
-            if (!files[i].known || !files[j].known || a->dev != b->dev || a->ino != b->ino ||
-                (a->name || b->name ? !a->name || !b->name || strcmp(a->name, b->name) != 0 : false))
-                continue;
-            char x[AO_TEXT_SIZE], y[AO_TEXT_SIZE];
-            fprintf(stderr, "%s: %s is also %s (%s): %s\n", files[i].role, ao_text_escape(files[i].path, x, sizeof x),
-                    files[j].role, ao_text_escape(files[j].path, y, sizeof y),
-                    files[j].written ? "each output needs a file of its own" : "aoview does not overwrite its inputs");
-            return false;
-        }
-    return true;
+        files[n++] = (struct ao_file_role){"--reference", opts->reference_path, false};
+    return ao_file_check_roles(files, n);
 }
 
 /* After loading: -o and --stats are none of the files the scene read (meshes, glTF buffers), which
  * ao_app_check_files could not know of; false after one line. */
 static bool check_written_not_read(const struct ao_app *app, const struct ao_options *opts)
 {
-    struct {
-        const char *role, *path;
-        struct stat st;
-        bool exists;
-    } outputs[2] = {{.role = "-o", .path = opts->output ? opts->output : opts->headless ? "aoview.png" : NULL},
-                    {.role = "--stats", .path = opts->stats_path}};
-    outputs[0].exists = outputs[0].path && stat(outputs[0].path, &outputs[0].st) == 0;
-    outputs[1].exists = app->stats.file && fstat(fileno(app->stats.file), &outputs[1].st) == 0;
-    for (int k = 0; k < 2; k++) {
-        char *input = outputs[k].exists ? ao_file_input_name((unsigned long long)outputs[k].st.st_dev,
-                                                             (unsigned long long)outputs[k].st.st_ino)
-                                        : NULL;
-        if (!input)
-            continue;
-        char x[AO_TEXT_SIZE], y[AO_TEXT_SIZE];
-        fprintf(stderr, "%s: %s is a file the scene reads (%s): aoview does not overwrite its inputs\n",
-                outputs[k].role, ao_text_escape(outputs[k].path, x, sizeof x), ao_text_escape(input, y, sizeof y));
-        free(input);
-        return false;
-    }
-    return true;
+    const char *output = opts->output ? opts->output : opts->headless ? "aoview.png" : NULL;
+    return (!output || ao_file_check_not_read("-o", output, -1)) &&
+           (!app->stats.file || ao_file_check_not_read("--stats", opts->stats_path, fileno(app->stats.file)));
 }
 
 int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_render_config *config,
@@ -462,7 +401,7 @@ int ao_app_finish(struct ao_app *app, int status)
     struct ao_stats *st = &app->stats;
     if (st->file && fclose(st->file) != 0)
         stats_failed(st);
-    if (st->file && atomic_load(&st->created) && !atomic_load(&st->started))
+    if (st->file && atomic_load(&st->created) && !atomic_load(&st->wrote))   /* none, or none whole: a full disk */
         unlink(st->path);
     st->file = NULL;
     if (st->failed && status == 0)

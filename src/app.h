@@ -27,6 +27,7 @@ struct ao_stats {
     const char *path;
     atomic_bool created;   /* this run created the file */
     atomic_bool started;   /* the first row came (truncated, header written) */
+    atomic_bool wrote;     /* a row reached the file (its flush succeeded) */
     bool failed;           /* a write failed, and was said */
     char header[128];
 };
@@ -50,7 +51,7 @@ struct ao_reporter {
  * (graceful), or exits at once (the window: silently, as by default; without a renderer to stop,
  * --compare's sides: with one line); a second exits at once with one line saying whether the
  * output was written. Exiting at once removes the temporary files of writes in progress and a
- * --stats file this run created and wrote no row into; the status is 128 + the signal. The
+ * --stats file this run created and got no row into; the status is 128 + the signal. The
  * signals are blocked in every thread and taken by a watcher thread with sigwait, so nothing runs
  * in a signal handler. */
 struct ao_interrupt {
@@ -151,7 +152,7 @@ int ao_app_write(struct ao_app *app, const struct ao_options *opts, const struct
                  bool last_row, int status);
 
 /* Destroys the renderer, closes --stats (a failed write turns a status of 0 into AO_EXIT_RUNTIME;
- * a file this run created and wrote no row into is removed), frees the rest; returns the
+ * a file this run created and got no row into is removed), frees the rest; returns the
  * status. */
 int ao_app_finish(struct ao_app *app, int status);
 

@@ -5,6 +5,24 @@
 #include <stdbool.h>
 #include <stdio.h>
 #include <string.h>
+#include <unistd.h>
+
+uint64_t ao_budget_machine_memory(void)
+{
+    long pages = sysconf(_SC_PHYS_PAGES), size = sysconf(_SC_PAGESIZE);
+    return pages > 0 && size > 0 && (uint64_t)pages <= UINT64_MAX / (uint64_t)size ? (uint64_t)pages * (uint64_t)size
+                                                                                  : 0;
+}
+
+uint64_t ao_budget_default_for(uint64_t memory)
+{
+    return memory / 4 > AO_BUDGET_LEAST ? memory / 4 : AO_BUDGET_LEAST;
+}
+
+uint64_t ao_budget_default(void)
+{
+    return ao_budget_default_for(ao_budget_machine_memory());
+}
 
 bool ao_budget_fits(const struct ao_budget *budget, uint64_t bytes)
 {
@@ -36,7 +54,7 @@ static uint64_t charge_at(uint64_t per_triangle, uint64_t triangles, uint64_t ve
 
 uint64_t ao_budget_charge(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements)
 {
-    bool compact = budget->bvh == AO_BVH_COMPACT || budget->bvh == AO_BVH_AUTO;
+    bool compact = budget->bvh != AO_BVH_MEDIUM;
     return charge_at(compact ? AO_BUDGET_TRIANGLE_COMPACT : AO_BUDGET_TRIANGLE, triangles, vertices, placements);
 }
 
@@ -45,7 +63,8 @@ bool ao_budget_take_mesh(struct ao_budget *budget, uint64_t triangles, uint64_t 
     *charge = ao_budget_charge(budget, triangles, vertices, 0);
     if (!ao_budget_take(budget, *charge))
         return false;
-    if (budget->bvh == AO_BVH_AUTO) {   /* saturating: past UINT64_MAX, MEDIUM fits no budget anyway */
+    if (budget->bvh == AO_BVH_AUTO || budget->bvh == AO_BVH_LOW) {   /* saturating: past UINT64_MAX, MEDIUM fits
+                                                                        no budget anyway */
         const uint64_t per_triangle = AO_BUDGET_TRIANGLE - AO_BUDGET_TRIANGLE_COMPACT;
         uint64_t more = triangles <= UINT64_MAX / per_triangle ? triangles * per_triangle : UINT64_MAX;
         budget->surplus = more <= UINT64_MAX - budget->surplus ? budget->surplus + more : UINT64_MAX;
@@ -55,9 +74,12 @@ bool ao_budget_take_mesh(struct ao_budget *budget, uint64_t triangles, uint64_t 
 
 enum ao_bvh ao_budget_bvh(const struct ao_budget *budget)
 {
-    if (budget->bvh != AO_BVH_AUTO)
-        return budget->bvh;
-    return ao_budget_fits(budget, budget->surplus) ? AO_BVH_MEDIUM : AO_BVH_COMPACT;
+    bool full = ao_budget_fits(budget, budget->surplus);
+    if (budget->bvh == AO_BVH_AUTO)
+        return full ? AO_BVH_MEDIUM : AO_BVH_COMPACT;
+    if (budget->bvh == AO_BVH_LOW)
+        return full ? AO_BVH_LOW : AO_BVH_LOW_COMPACT;
+    return budget->bvh;
 }
 
 /* bytes in binary units with one decimal, "512.0 MiB", "4.9 GiB"; below 1 KiB, exact. */

@@ -142,11 +142,13 @@ static const char usage[] =
     "                        beside the PNG (default pfm)\n"
     "  --scene-budget SIZE   memory a scene may take: bytes, or with K, M, G or T\n"
     "                        (powers of 1024); larger scenes are refused before\n"
-    "                        they are loaded (default 1G)\n"
+    "                        they are loaded (default: a quarter of the machine's\n"
+    "                        memory, at least 1G)\n"
     "  --ground on|off       the ground quad under a bare mesh (default on; a .scene\n"
     "                        file has the quads it lists)\n"
     "  --bvh B               medium (fastest rays) | compact (half the memory,\n"
-    "                        slower rays) | low (built 3x sooner, slower rays) |\n"
+    "                        slower rays) | low (built 3x sooner, slower rays;\n"
+    "                        compact too where only that fits the budget) |\n"
     "                        auto: medium, or compact if only that fits the scene\n"
     "                        budget; from 1M triangles low traces while medium is\n"
     "                        built beside it, where the budget holds both (default auto)\n"
@@ -218,12 +220,19 @@ static bool parse_size(const char *name, const char *value, struct ao_options *o
     return false;
 }
 
+/* True when strtod or strtof, reading value, ended at `end` having read all of it: a number, not an
+ * empty string or blanks before one (which strtod skips). Every real-valued option checks this. */
+static bool whole_number(const char *value, const char *end)
+{
+    return end != value && *end == '\0' && !isspace((unsigned char)*value);
+}
+
 static bool parse_distance(const char *name, const char *value, float *out, char *msg,
                            size_t msg_size)
 {
     char *end;
     float d = strtof(value, &end);
-    if (!isspace((unsigned char)*value) && *end == '\0' && isfinite(d) && d > 0.0f) {
+    if (whole_number(value, end) && isfinite(d) && d > 0.0f) {
         *out = d;
         return true;
     }
@@ -236,7 +245,7 @@ static bool parse_degrees(const char *name, const char *value, double *out, char
 {
     char *end;
     double d = strtod(value, &end);
-    if (!isspace((unsigned char)*value) && *end == '\0' && d >= 0.0 && d <= 180.0) {
+    if (whole_number(value, end) && d >= 0.0 && d <= 180.0) {
         *out = d;
         return true;
     }
@@ -249,7 +258,7 @@ static bool parse_fraction(const char *name, const char *value, double *out, cha
 {
     char *end;
     double e = strtod(value, &end);
-    if (!isspace((unsigned char)*value) && *end == '\0' && e > 0.0 && e <= 1.0) {
+    if (whole_number(value, end) && e > 0.0 && e <= 1.0) {
         *out = e;
         return true;
     }
@@ -262,7 +271,7 @@ static bool parse_seconds(const char *name, const char *value, double *out, char
 {
     char *end;
     double t = strtod(value, &end);
-    if (!isspace((unsigned char)*value) && *end == '\0' && t > 0.0 && t <= MAX_SECONDS) {
+    if (whole_number(value, end) && t > 0.0 && t <= MAX_SECONDS) {
         *out = t;
         return true;
     }
@@ -532,7 +541,7 @@ bool ao_cli_parse(int argc, char **argv, struct ao_options *opts, char *msg, siz
     *opts = (struct ao_options){
         .spp = 0, .spppp = 0, .adaptive = true, .sampling = AO_SAMPLING_COSINE, .aa = true, .seed = 1,
         .sequence = AO_SEQUENCE_SOBOL, .below = AO_BELOW_REFLECT,
-        .ao_distance = NAN, .scene_budget = AO_BUDGET_DEFAULT, .ground = true, .crease = AO_MESH_CREASE_DEFAULT,
+        .ao_distance = NAN, .scene_budget = ao_budget_default(), .ground = true, .crease = AO_MESH_CREASE_DEFAULT,
     };
     for (int i = 1; i < argc; i++) {
         const char *arg = argv[i];

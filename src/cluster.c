@@ -205,6 +205,14 @@ bool ao_cluster_agree(bool ok)
     return all;
 }
 
+uint64_t ao_cluster_first(uint64_t value)
+{
+    MPI_Request pending;
+    MPI_Ibcast(&value, 1, MPI_UINT64_T, 0, MPI_COMM_WORLD, &pending);
+    ao_cluster_await(NULL, 1, &pending, POLL_MOST_NS, false, 0.0);
+    return value;
+}
+
 int ao_cluster_differs(uint64_t value)
 {
     int rank, size;

@@ -27,6 +27,9 @@ bool ao_cluster_agree(bool ok);
 /* Rank 0: the first rank whose value differs from rank 0's, or -1 when all agree (a collective). */
 int ao_cluster_differs(uint64_t value);
 
+/* Rank 0's value, on every rank (a collective). */
+uint64_t ao_cluster_first(uint64_t value);
+
 /* Ends MPI after a run that every rank finished alike (a collective). */
 void ao_cluster_finalize(void);
 

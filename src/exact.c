@@ -9,6 +9,7 @@
 #include "cli.h"
 #include "config.h"
 #include "exact_image.h"
+#include "file.h"
 #include "image.h"
 #include "options.h"
 #include "program.h"
@@ -46,8 +47,14 @@ static int run(struct app *app, const struct ao_options *opts)
         fprintf(stderr, "aoview-exact: no SCENE given (try --help)\n");
         return EXIT_USAGE;
     }
+    /* -o is checked as aoview checks its outputs: writable, not the scene, then not a file the scene
+     * reads (a mesh). */
+    const struct ao_file_role files[] = {{"-o", output, true}, {"the scene", opts->scene_path, false}};
+    if (!ao_image_check_output(output) || !ao_file_check_roles(files, 2))
+        return EXIT_RUNTIME;
+    ao_file_remember_inputs();
     struct ao_scene_options load = ao_options_scene(opts);
-    if (!ao_scene_load(&app->scene, opts->scene_path, &load))
+    if (!ao_scene_load(&app->scene, opts->scene_path, &load) || !ao_file_check_not_read("-o", output, -1))
         return EXIT_RUNTIME;
     int width, height;
     ao_options_size(opts, &app->scene, &width, &height);

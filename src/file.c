@@ -260,15 +260,74 @@ void ao_file_note_input(int fd, const char *path)
     pthread_mutex_unlock(&inputs_lock);
 }
 
-char *ao_file_input_name(unsigned long long dev, unsigned long long ino)
+/* The name of the input read (ao_file_note_input) that is the file of identity (dev, ino), or NULL
+ * when none is: the caller frees it. */
+static char *input_name(dev_t dev, ino_t ino)
 {
     char *name = NULL;
     pthread_mutex_lock(&inputs_lock);
     for (size_t i = 0; !name && i < input_count; i++)
-        if ((unsigned long long)inputs[i].dev == dev && (unsigned long long)inputs[i].ino == ino)
+        if (inputs[i].dev == dev && inputs[i].ino == ino)
             name = strdup(inputs[i].name);
     pthread_mutex_unlock(&inputs_lock);
     return name;
+}
+
+bool ao_file_check_not_read(const char *role, const char *path, int fd)
+{
+    struct stat st;
+    char *input = (fd >= 0 ? fstat(fd, &st) : stat(path, &st)) == 0 ? input_name(st.st_dev, st.st_ino) : NULL;
+    if (!input)
+        return true;
+    ao_text_report("%s: %s is a file the scene reads (%s): aoview does not overwrite its inputs", role, path, input);
+    free(input);
+    return false;
+}
+
+/* A file as the output checks compare it: an existing file by its identity (through links), one to
+ * be made by its folder's identity and its name there. */
+struct file_key {
+    dev_t dev;
+    ino_t ino;
+    const char *name;   /* NULL for an existing file */
+};
+
+/* The key of path; false when neither it nor its folder exists (a write refuses it anyway). */
+static bool key_of(const char *path, struct file_key *key)
+{
+    struct stat st;
+    const char *slash = strrchr(path, '/');
+    char folder[4096];
+    *key = (struct file_key){0};
+    if (stat(path, &st) != 0) {
+        snprintf(folder, sizeof folder, "%.*s", slash ? (int)(slash - path + (slash == path)) : 1,
+                 slash ? path : ".");
+        if (stat(folder, &st) != 0)
+            return false;
+        key->name = slash ? slash + 1 : path;
+    }
+    key->dev = st.st_dev;
+    key->ino = st.st_ino;
+    return true;
+}
+
+bool ao_file_check_roles(const struct ao_file_role *files, size_t count)
+{
+    for (size_t i = 0; i < count; i++) {
+        struct file_key a, b;
+        if (!files[i].written || !key_of(files[i].path, &a))
+            continue;
+        for (size_t j = i + 1; j < count; j++) {
+            if (!key_of(files[j].path, &b) || a.dev != b.dev || a.ino != b.ino ||
+                (a.name || b.name ? !a.name || !b.name || strcmp(a.name, b.name) != 0 : false))
+                continue;
+            ao_text_report("%s: %s is also %s (%s): %s", files[i].role, files[i].path, files[j].role, files[j].path,
+                           files[j].written ? "each output needs a file of its own"
+                                            : "aoview does not overwrite its inputs");
+            return false;
+        }
+    }
+    return true;
 }
 
 /* One attempt at opening path for writing without blocking: created exclusively (*created), else

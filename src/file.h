@@ -1,6 +1,7 @@
 /* Whole-file reading shared by the scene and mesh loaders (charged to the scene budget, the files
- * read remembered as inputs, big ones mapped), and opening a stream output (--stats). Failures are
- * reported as one line each (ao_text_report). */
+ * read remembered as inputs, big ones mapped), opening a stream output (--stats), and the programs'
+ * check that no output is an input or another output. Failures are reported as one line each
+ * (ao_text_report). */
 #ifndef AO_FILE_H
 #define AO_FILE_H
 
@@ -67,8 +68,25 @@ void ao_file_remember_inputs(void);
  * inputs are remembered. Any thread. */
 void ao_file_note_input(int fd, const char *path);
 
-/* The name of the input read (ao_file_note_input) that is the file of identity (dev, ino), or NULL
- * when none is: the caller frees it. Any thread. */
-char *ao_file_input_name(unsigned long long dev, unsigned long long ino);
+/* A file that a program's command line names, for ao_file_check_roles: its role in messages ("-o",
+ * "--stats", "the scene", "--reference"), its path, and whether the run writes it. */
+struct ao_file_role {
+    const char *role, *path;
+    bool written;
+};
+
+/* Before loading: true when no file of files[0, count) that the run writes is also a later one,
+ * compared as files (an existing one by its identity, through links; one to be made by its
+ * folder's identity and its name there); else false after one line naming both ("-o: x.pfm is also
+ * --stats (x.pfm): each output needs a file of its own", or "... aoview does not overwrite its
+ * inputs" where the later one is read). The outputs come first. What every program checks. Main
+ * thread. */
+bool ao_file_check_roles(const struct ao_file_role *files, size_t count);
+
+/* After loading: true when the output of this role at path (fd >= 0: the open file fd, as it is
+ * now) does not exist or is none of the inputs read since ao_file_remember_inputs (meshes, glTF
+ * buffers); else false after one line "role: path is a file the scene reads (input): aoview does
+ * not overwrite its inputs". Main thread. */
+bool ao_file_check_not_read(const char *role, const char *path, int fd);
 
 #endif

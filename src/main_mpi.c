@@ -75,7 +75,9 @@ static bool take_own_options(int *argc, char **argv, double *seconds, char *mess
 }
 
 /* Parses argv on every rank (aoview's options and --safety-copy into *copy); 0, or the exit status
- * after one message (from rank 0, or from a rank whose options alone fail). */
+ * after one message (from rank 0, or from a rank whose options alone fail). Every rank takes rank
+ * 0's scene budget, by default its machine's (budget.h), so that ranks on machines of other sizes
+ * load the same scene (the budget decides what is instanced and which BVH is built). */
 static int parse(int argc, char **argv, int rank, struct ao_options *opts, double *copy)
 {
     char message[512];
@@ -87,8 +89,10 @@ static int parse(int argc, char **argv, int rank, struct ao_options *opts, doubl
             parsed = false;
         }
     bool first_parsed = ao_cluster_agree(rank == 0 ? parsed : true);
-    if (ao_cluster_agree(parsed))
+    if (ao_cluster_agree(parsed)) {
+        opts->scene_budget = ao_cluster_first(opts->scene_budget);
         return 0;
+    }
     if (!parsed && (rank == 0 || first_parsed))
         fprintf(stderr, "aoview-mpi: %s (try --help)\n", message);
     return AO_EXIT_USAGE;

@@ -157,7 +157,8 @@ struct mesh_pass {
     const struct ao_mesh *mesh;
     struct ao_vec3 *out;                /* normals: every vertex's */
     int threads;
-    size_t degenerate[MAX_THREADS];     /* degenerate triangles found by each part */
+    size_t counts[MAX_THREADS];         /* what each part counted: degenerate triangles, marked vertices */
+    struct cone *cone;                  /* the crease's check, made by the normals pass when asked */
     struct crease *crease;              /* the crease passes' arrays */
 };
 
@@ -193,10 +194,10 @@ static void count_degenerate(void *user, int k)
 {
     struct mesh_pass *pass = user;
     size_t end = part_start(pass->mesh->triangle_count, k + 1, pass->threads);
-    pass->degenerate[k] = 0;
+    pass->counts[k] = 0;
     for (size_t t = part_start(pass->mesh->triangle_count, k, pass->threads); t < end; t++) {
         struct ao_dvec3 n = area_vector(pass->mesh, t);
-        pass->degenerate[k] += ao_dvec3_dot(n, n) == 0.0;
+        pass->counts[k] += ao_dvec3_dot(n, n) == 0.0;
     }
 }
 
@@ -207,7 +208,7 @@ void ao_mesh_drop_degenerate(struct ao_mesh *mesh)
     size_t found = 0, kept = 0;
     run_parts(count_degenerate, &pass);
     for (int k = 0; k < pass.threads; k++)
-        found += pass.degenerate[k];
+        found += pass.counts[k];
     for (size_t t = 0; found && t < mesh->triangle_count; t++) {
         struct ao_dvec3 n = area_vector(mesh, t);
         if (ao_dvec3_dot(n, n) == 0.0)
@@ -227,7 +228,7 @@ void ao_mesh_drop_degenerate(struct ao_mesh *mesh)
  * (atan t = pi/2 - atan(1/t); atan(-t) = pi - ...), then to |t| <= tan(pi/12) by
  * atan t = pi/6 + atan((sqrt(3) t - 1) / (t + sqrt(3))), where atan's series to t^13 leaves
  * at most tan(pi/12)^15 / 15 < 3e-10. */
-static double corner_angle(double y, double x)
+static inline double corner_angle(double y, double x)
 {
     const double pi = 3.14159265358979323846, sqrt3 = 1.73205080756887729353;
     double ax = fabs(x);
@@ -244,55 +245,170 @@ static double corner_angle(double y, double x)
     return x < 0.0 ? pi - a : a;
 }
 
+/* What the normals take from a triangle of corners v: its area vector n (area_vector's, as it
+ * computes it), twice its area, and at each corner c the dot product of the corner's two edges. */
+struct triangle_terms {
+    struct ao_dvec3 n;
+    double twice_area, scale, dots[3];   /* scale: 1 / twice_area */
+};
+
+/* The terms of the triangle of corners v; false when it is degenerate (no normal to add). */
+static inline bool triangle_terms(const struct ao_mesh *mesh, const uint32_t *v, struct triangle_terms *out)
+{
+    struct ao_dvec3 p[3] = {position(mesh, v[0]), position(mesh, v[1]), position(mesh, v[2])};
+    struct ao_dvec3 edge[3] = {ao_dvec3_sub(p[1], p[0]), ao_dvec3_sub(p[2], p[1]), ao_dvec3_sub(p[0], p[2])};
+    struct ao_dvec3 b = ao_dvec3_sub(p[2], p[0]);
+    out->n = ao_dvec3_cross(edge[0], b);
+    out->twice_area = sqrt(ao_dvec3_dot(out->n, out->n));
+    if (out->twice_area == 0.0)
+        return false;
+    out->scale = 1.0 / out->twice_area;
+    /* Corner c's edges are edge[c] and -edge[c + 2]; |a x b| = twice the area at every corner, so
+     * the angle comes stably from it and a . b. */
+    out->dots[0] = ao_dvec3_dot(edge[0], b);
+    out->dots[1] = -ao_dvec3_dot(edge[1], edge[0]);
+    out->dots[2] = -ao_dvec3_dot(edge[2], edge[1]);
+    return true;
+}
+
+/* What corner c of a triangle of these terms adds to its vertex's normal: the unit normal times
+ * the corner's angle (*angle), in float, as every normals sum adds it. */
+static inline struct ao_vec3 corner_share(const struct triangle_terms *t, int c, double *angle)
+{
+    *angle = corner_angle(t->twice_area, t->dots[c]);
+    double weight = *angle * t->scale;
+    return ao_vec3_make((float)(t->n.x * weight), (float)(t->n.y * weight), (float)(t->n.z * weight));
+}
+
+/* What a normals pass gathers at a vertex for the crease angle: the first of its triangles' unit
+ * normals (f), the least dot product of the others with it, the sum of its corners' angles, the
+ * sum of a hash of each corner's next neighbour less one of its previous neighbour, and its first
+ * and last triangles (32 bits: a mesh with a crease has fewer than 2^32 corners). */
+struct cone_vertex {
+    float first[3], nearest;
+    double angle_sum;
+    uint64_t link;
+    uint32_t from, to;
+};
+
+/* The check a normals pass makes for the crease angle, when asked: per vertex what it gathers, and
+ * whether the vertex's sides must be found edge by edge (marked). */
+struct cone {
+    const struct ao_vec3 *given;    /* NULL, or the mesh's normals: a vertex given one is not marked */
+    double cos_half;                /* cos(crease / 2) */
+    struct cone_vertex *at;         /* vertex_count, filled by the pass */
+    unsigned char *marked;          /* vertex_count: 1 where the vertex's sides must be found */
+};
+
+/* A 64-bit hash of a vertex number (a multiply, shift and multiply, as splitmix64's finalizer
+ * mixes). */
+static inline uint64_t vertex_hash(uint32_t v)
+{
+    uint64_t z = ((uint64_t)v + 1) * 0x9E3779B97F4A7C15u;
+    return (z ^ (z >> 29)) * 0xBF58476D1CE4E5B9u;
+}
+
+/* Adds a corner of triangle t, of unit normal u (in float) and angle `angle` at the vertex, whose
+ * next neighbour's hash less its previous neighbour's is link, to what the cone gathers there. */
+static inline void gather_corner(struct cone_vertex *at, size_t t, struct ao_vec3 u, double angle, uint64_t link)
+{
+    if (at->angle_sum == 0.0) {
+        at->first[0] = u.x, at->first[1] = u.y, at->first[2] = u.z;
+        at->from = (uint32_t)t;
+    } else {
+        float d = u.x * at->first[0] + u.y * at->first[1] + u.z * at->first[2];
+        at->nearest = d < at->nearest ? d : at->nearest;
+    }
+    at->angle_sum += angle;
+    at->link += link;
+    at->to = (uint32_t)t;
+}
+
+/* Whether vertex i (gathered at `at`) must have its sides found edge by edge, or is one side for
+ * certain, as sides_of would find it: where (1) every triangle's unit normal u_j lies within half
+ * the crease angle (alpha) of the first's, f (dot products in float above cos alpha, with 1e-6
+ * for their rounding), every two lie closer than the crease, and sides_of joins
+ * every two corners that share an edge; (2) the corners' next and previous neighbours are the same
+ * vertices as often (hash sums equal: a 2^-64 chance of being wrong otherwise), so that the corners
+ * chain into closed fans, each corner's wedge ending on the edge where another's begins; and (3)
+ * the angles sum to less than 4 pi cos alpha, the fans are one: seen along f, each wedge of angle a_j
+ * and normal within alpha of f spans at most a_j / cos alpha (its unit sector's shadow, of area
+ * cos beta a_j / 2, holds the sector of radius cos beta of the shadow's angle), and each closed fan
+ * at least 2 pi. A vertex without triangles is one side; one given a normal is never split. */
+static bool needs_sides(const struct cone *cone, size_t i)
+{
+    const struct cone_vertex *at = &cone->at[i];
+    if (at->angle_sum == 0.0 || (cone->given && !ao_mesh_normal_is_missing(cone->given[i])))
+        return false;
+    const double four_pi = 4.0 * 3.14159265358979323846;
+    return !(at->nearest > cone->cos_half + 1e-6 && at->link == 0 && at->angle_sum < four_pi * cone->cos_half);
+}
+
 /* Angle-weighted vertex normals (Thürmer and Wüthrich 1998) of part k of the vertices: each
  * triangle adds its unit normal times its interior angle at the vertex, so the result does not
  * depend on how a surface is split into triangles; the sum is then normalized. Every part reads
  * every triangle and adds only at its own vertices, in triangle order: each vertex's sum is the
  * same, bit for bit, whatever the number of parts. Vertices without a nondegenerate triangle get
- * the zero vector. */
-static void normals_part(void *user, int k)
+ * the zero vector. With a cone, also what it gathers and its marks, the marked counted in
+ * pass->counts[k]. */
+static inline void normals_of(struct mesh_pass *pass, int k, struct cone *cone)
 {
-    const struct mesh_pass *pass = user;
     const struct ao_mesh *mesh = pass->mesh;
     struct ao_vec3 *out = pass->out;
     uint32_t first = (uint32_t)part_start(mesh->vertex_count, k, pass->threads);
     uint32_t count = (uint32_t)part_start(mesh->vertex_count, k + 1, pass->threads) - first;
     memset(out + first, 0, count * sizeof *out);
+    for (uint32_t i = first; cone && i < first + count; i++)
+        cone->at[i] = (struct cone_vertex){.nearest = 1.0f};
     for (size_t t = 0; t < mesh->triangle_count; t++) {
         const uint32_t *v = mesh->indices + 3 * t;
         bool mine[3] = {v[0] - first < count, v[1] - first < count, v[2] - first < count};
-        if (!(mine[0] | mine[1] | mine[2]))
+        struct triangle_terms terms;
+        if (!(mine[0] | mine[1] | mine[2]) || !triangle_terms(mesh, v, &terms))
             continue;
-        struct ao_dvec3 p[3] = {position(mesh, v[0]), position(mesh, v[1]), position(mesh, v[2])};
-        struct ao_dvec3 edge[3] = {ao_dvec3_sub(p[1], p[0]), ao_dvec3_sub(p[2], p[1]), ao_dvec3_sub(p[0], p[2])};
-        struct ao_dvec3 b = ao_dvec3_sub(p[2], p[0]);
-        struct ao_dvec3 n = ao_dvec3_cross(edge[0], b);   /* area_vector's, as it computes it */
-        double twice_area = sqrt(ao_dvec3_dot(n, n));
-        if (twice_area == 0.0)
+        double angles[3];
+        for (int c = 0; c < 3; c++)
+            if (mine[c])
+                out[v[c]] = ao_vec3_add(out[v[c]], corner_share(&terms, c, &angles[c]));
+        if (!cone)
             continue;
-        /* Corner c's edges are edge[c] and -edge[c + 2]; |a x b| = twice the area at every corner,
-         * so the angle comes stably from it and a . b. */
-        double dots[3] = {ao_dvec3_dot(edge[0], b), -ao_dvec3_dot(edge[1], edge[0]), -ao_dvec3_dot(edge[2], edge[1])};
-        double scale = 1.0 / twice_area;
-        for (int c = 0; c < 3; c++) {
-            if (!mine[c])
-                continue;
-            double weight = corner_angle(twice_area, dots[c]) * scale;
-            struct ao_vec3 add = ao_vec3_make((float)(n.x * weight), (float)(n.y * weight),
-                                              (float)(n.z * weight));
-            out[v[c]] = ao_vec3_add(out[v[c]], add);
-        }
+        struct ao_vec3 u = ao_dvec3_narrow(ao_dvec3_scale(terms.n, terms.scale));
+        uint64_t h0 = vertex_hash(v[0]), h1 = vertex_hash(v[1]), h2 = vertex_hash(v[2]);
+        uint64_t links[3] = {h1 - h2, h2 - h0, h0 - h1};   /* next less previous, at each corner */
+        for (int c = 0; c < 3; c++)
+            if (mine[c])
+                gather_corner(&cone->at[v[c]], t, u, angles[c], links[c]);
     }
-    for (uint32_t i = first; i < first + count; i++)
+    size_t marked = 0;
+    for (uint32_t i = first; i < first + count; i++) {
+        if (cone)
+            marked += cone->marked[i] = needs_sides(cone, i);
         out[i] = ao_mesh_unit(out[i].x, out[i].y, out[i].z);
+    }
+    pass->counts[k] = marked;
+}
+
+/* normals_of, compiled apart without the cone and with it (pass->cone). */
+static void normals_part(void *user, int k)
+{
+    struct mesh_pass *pass = user;
+    if (pass->cone)
+        normals_of(pass, k, pass->cone);
+    else
+        normals_of(pass, k, NULL);
 }
 
 /* Writes the angle-weighted normals of all mesh->vertex_count vertices into out, on so many
- * threads (0: run_parts's choice). */
-static void angle_weighted_normals(const struct ao_mesh *mesh, struct ao_vec3 *out, int threads)
+ * threads (0: run_parts's choice), with cone's check when it is not NULL; returns how many
+ * vertices that marks. */
+static size_t angle_weighted_normals(const struct ao_mesh *mesh, struct ao_vec3 *out, int threads, struct cone *cone)
 {
-    struct mesh_pass pass = {.mesh = mesh, .out = out, .threads = threads};
+    struct mesh_pass pass = {.mesh = mesh, .out = out, .threads = threads, .cone = cone};
     run_parts(normals_part, &pass);
+    size_t marked = 0;
+    for (int k = 0; k < pass.threads; k++)
+        marked += pass.counts[k];
+    return marked;
 }
 
 /* Angle-weighted normals of every vertex into mesh->normals (allocated when NULL), on so many
@@ -306,38 +422,38 @@ static bool compute_normals(struct ao_mesh *mesh, int threads)
             return false;
         ao_mesh_advise_huge(mesh->normals, mesh->vertex_count * sizeof *mesh->normals);
     }
-    angle_weighted_normals(mesh, mesh->normals, threads);
-    return true;
-}
-
-/* Gives the vertices whose normal is missing the angle-weighted normals of their triangles. */
-static bool fill_missing_normals(struct ao_mesh *mesh, const char *path)
-{
-    struct ao_vec3 *computed = malloc(mesh->vertex_count * sizeof *computed);
-    if (!computed)
-        return out_of_memory(path);
-    ao_mesh_advise_huge(computed, mesh->vertex_count * sizeof *computed);
-    angle_weighted_normals(mesh, computed, 0);
-    for (size_t i = 0; i < mesh->vertex_count; i++)
-        if (ao_mesh_normal_is_missing(mesh->normals[i]))
-            mesh->normals[i] = computed[i];
-    free(computed);
+    angle_weighted_normals(mesh, mesh->normals, threads, NULL);
     return true;
 }
 
 /* ------------------------------------------------------------------ creases */
 
-/* The arrays of the crease passes: each vertex's corners (a corner c is triangle c / 3's
- * (c % 3)th), listed vertex by vertex; and for each listed corner, its side of the vertex (0 for
- * the side of the vertex's first corner; 1, 2, ... for the others, in the order of their first
- * corners); each vertex's extra sides, then the first new vertex of each. */
+/* What a part of the listing pass found: the marked vertices' corners in its triangles, as
+ * (slot << 32 | corner) pairs in corner order (a corner c is triangle c / 3's (c % 3)th). */
+struct found {
+    uint64_t *pairs;
+    size_t count, capacity;
+};
+
+/* The crease passes' data: the vertices the normals pass marked (struct cone), numbered 0, 1, ...
+ * in vertex order (their slots); their corners, listed slot by slot in corner order; for each
+ * listed corner its side of the vertex (0 for the side of the vertex's first corner; 1, 2, ... for
+ * the others, in the order of their first corners); each marked vertex's extra sides, then the
+ * first new vertex of each. */
 struct crease {
-    const uint32_t *start;    /* vertex_count + 1: where each vertex's corners begin in corners */
-    const uint32_t *corners;  /* 3 * triangle_count */
-    uint32_t *side;           /* 3 * triangle_count, by listing */
-    uint32_t *extra;          /* vertex_count: sides - 1, then the first new vertex of the sides */
-    double cos_crease;        /* two triangles of normals n, m are smoothed together when n.m > this */
-    bool failed;              /* a part ran out of memory */
+    const unsigned char *marked;    /* vertex_count: 1 where the vertex's sides must be found */
+    const struct cone_vertex *at;   /* vertex_count: what the normals pass gathered */
+    size_t count;                   /* marked vertices */
+    unsigned char *blocks;          /* per BLOCK triangles: 1 where a marked vertex has a triangle */
+    uint32_t *ids;                  /* count: the marked vertices, ascending */
+    uint32_t *slot;                 /* vertex_count: each marked vertex's slot (others: not set) */
+    struct found found[MAX_THREADS];
+    uint32_t *start;                /* count + 1: where each slot's corners begin in corners */
+    uint32_t *corners;              /* the marked vertices' corners */
+    uint32_t *side;                 /* the side of each listed corner */
+    uint32_t *extra;                /* count + 1: sides - 1, then the first new vertex of the sides */
+    double cos_crease;              /* two triangles of normals n, m are smoothed together when n.m > this */
+    bool failed;                    /* a part ran out of memory */
 };
 
 /* The unit normal of triangle t. */
@@ -424,34 +540,139 @@ static uint32_t sides_of(const struct ao_mesh *mesh, const uint32_t *list, uint3
     return sides;
 }
 
-/* The first crease pass over part k of the vertices: the sides of each vertex whose normal is
- * missing (others keep one side). */
+/* The first slot of part k of the marked vertices. */
+static size_t slot_start(const struct mesh_pass *pass, int k)
+{
+    return part_start(pass->crease->count, k, pass->threads);
+}
+
+/* The most corners a marked vertex of part k has. */
+static uint32_t most_corners(const struct mesh_pass *pass, int k)
+{
+    const struct crease *cr = pass->crease;
+    uint32_t most = 0;
+    for (size_t m = slot_start(pass, k); m < slot_start(pass, k + 1); m++)
+        most = cr->start[m + 1] - cr->start[m] > most ? cr->start[m + 1] - cr->start[m] : most;
+    return most;
+}
+
+/* The listing pass reads the triangles in blocks of so many, only those where a marked vertex has
+ * triangles (between its first and its last). */
+enum { BLOCK = 4096 };
+
+/* The listing pass over part k of the triangles: the marked vertices' corners found there. */
+static void find_part(void *user, int k)
+{
+    struct mesh_pass *pass = user;
+    struct crease *cr = pass->crease;
+    struct found *f = &cr->found[k];
+    const uint32_t *indices = pass->mesh->indices;
+    size_t first = part_start(pass->mesh->triangle_count, k, pass->threads);
+    size_t end = part_start(pass->mesh->triangle_count, k + 1, pass->threads);
+    for (size_t t = first; t < end; t = (t / BLOCK + 1) * BLOCK) {
+        if (!cr->blocks[t / BLOCK])
+            continue;
+        size_t stop = (t / BLOCK + 1) * BLOCK < end ? (t / BLOCK + 1) * BLOCK : end;
+        for (size_t c = 3 * t; c < 3 * stop; c++) {
+            if (!cr->marked[indices[c]])
+                continue;
+            if (f->count == f->capacity) {
+                size_t capacity = f->capacity ? 2 * f->capacity : 1024;
+                uint64_t *pairs = realloc(f->pairs, capacity * sizeof *pairs);
+                if (!pairs) {
+                    cr->failed = true;
+                    return;
+                }
+                f->pairs = pairs, f->capacity = capacity;
+                ao_mesh_advise_huge(pairs, capacity * sizeof *pairs);
+            }
+            f->pairs[f->count++] = (uint64_t)cr->slot[indices[c]] << 32 | c;
+        }
+    }
+}
+
+/* Lists the marked vertices' corners (cr->start, cr->corners: counting sort by slot of what the
+ * listing pass found, in corner order) and allocates the arrays of the passes after it; false when
+ * memory runs out. */
+static bool list_corners(struct mesh_pass *pass)
+{
+    struct crease *cr = pass->crease;
+    const struct ao_mesh *mesh = pass->mesh;
+    cr->ids = malloc((cr->count + 1) * sizeof *cr->ids);
+    cr->slot = malloc(mesh->vertex_count * sizeof *cr->slot);
+    if (!cr->ids || !cr->slot)
+        return false;
+    ao_mesh_advise_huge(cr->ids, cr->count * sizeof *cr->ids);
+    ao_mesh_advise_huge(cr->slot, mesh->vertex_count * sizeof *cr->slot);
+    size_t blocks = mesh->triangle_count / BLOCK + 1;
+    int32_t *open = calloc(blocks + 1, sizeof *open);   /* marked vertices whose triangles begin, less end */
+    cr->blocks = malloc(blocks);
+    if (!open || !cr->blocks) {
+        free(open);
+        return false;
+    }
+    for (size_t v = 0, m = 0; v < mesh->vertex_count; v++)
+        if (cr->marked[v]) {
+            cr->slot[v] = (uint32_t)m;
+            cr->ids[m++] = (uint32_t)v;
+            open[cr->at[v].from / BLOCK]++;
+            open[cr->at[v].to / BLOCK + 1]--;
+        }
+    for (size_t b = 0, inside = 0; b < blocks; b++) {
+        inside += (size_t)open[b];
+        cr->blocks[b] = inside > 0;
+    }
+    free(open);
+    run_parts(find_part, pass);
+    size_t listed = 0;
+    for (int k = 0; k < pass->threads; k++)
+        listed += cr->found[k].count;
+    cr->start = calloc(cr->count + 1, sizeof *cr->start);
+    cr->corners = malloc((listed + 1) * sizeof *cr->corners);
+    cr->side = malloc((listed + 1) * sizeof *cr->side);
+    cr->extra = malloc((cr->count + 1) * sizeof *cr->extra);
+    if (cr->failed || !cr->start || !cr->corners || !cr->side || !cr->extra)
+        return false;
+    ao_mesh_advise_huge(cr->start, cr->count * sizeof *cr->start);
+    ao_mesh_advise_huge(cr->corners, listed * sizeof *cr->corners);
+    ao_mesh_advise_huge(cr->side, listed * sizeof *cr->side);
+    ao_mesh_advise_huge(cr->extra, cr->count * sizeof *cr->extra);
+    for (int k = 0; k < pass->threads; k++)
+        for (size_t i = 0; i < cr->found[k].count; i++)
+            cr->start[(cr->found[k].pairs[i] >> 32) + 1]++;
+    for (size_t m = 0; m < cr->count; m++)
+        cr->start[m + 1] += cr->start[m];
+    for (int k = 0; k < pass->threads; k++) {   /* start[m] walks through m's slots; shifted back below */
+        for (size_t i = 0; i < cr->found[k].count; i++)
+            cr->corners[cr->start[cr->found[k].pairs[i] >> 32]++] = (uint32_t)cr->found[k].pairs[i];
+        free(cr->found[k].pairs);
+        cr->found[k] = (struct found){0};
+    }
+    for (size_t m = cr->count; m > 0; m--)
+        cr->start[m] = cr->start[m - 1];
+    cr->start[0] = 0;
+    return true;
+}
+
+/* The sides pass over part k of the marked vertices: the sides of each. */
 static void sides_part(void *user, int k)
 {
     struct mesh_pass *pass = user;
     struct crease *cr = pass->crease;
-    const struct ao_mesh *mesh = pass->mesh;
-    size_t first = part_start(mesh->vertex_count, k, pass->threads);
-    size_t end = part_start(mesh->vertex_count, k + 1, pass->threads);
-    uint32_t most = 0;
-    for (size_t v = first; v < end; v++)
-        most = cr->start[v + 1] - cr->start[v] > most ? cr->start[v + 1] - cr->start[v] : most;
+    uint32_t most = most_corners(pass, k);
     uint32_t *parent = malloc((most ? most : 1) * sizeof *parent);
     uint64_t *keys = malloc((most ? 2 * (size_t)most : 1) * sizeof *keys);
     struct ao_dvec3 *normals = malloc((most ? most : 1) * sizeof *normals);
     if (!parent || !keys || !normals) {
         cr->failed = true;
     } else {
-        for (size_t v = first; v < end; v++) {
-            uint32_t begin = cr->start[v], count = cr->start[v + 1] - begin;
-            bool missing = !mesh->normals || ao_mesh_normal_is_missing(mesh->normals[v]);
-            if (!missing || count == 0) {
-                memset(cr->side + begin, 0, count * sizeof *cr->side);
-                cr->extra[v] = 0;
-                continue;
-            }
-            cr->extra[v] = sides_of(mesh, cr->corners + begin, count, cr->cos_crease, cr->side + begin,
-                                    parent, keys, normals) - 1;
+        ao_mesh_advise_huge(parent, most * sizeof *parent);
+        ao_mesh_advise_huge(keys, 2 * (size_t)most * sizeof *keys);
+        ao_mesh_advise_huge(normals, most * sizeof *normals);
+        for (size_t m = slot_start(pass, k); m < slot_start(pass, k + 1); m++) {
+            uint32_t begin = cr->start[m], count = cr->start[m + 1] - begin;
+            cr->extra[m] = sides_of(pass->mesh, cr->corners + begin, count, cr->cos_crease, cr->side + begin, parent,
+                                    keys, normals) - 1;
         }
     }
     free(parent);
@@ -459,96 +680,91 @@ static void sides_part(void *user, int k)
     free(normals);
 }
 
-/* The second crease pass over part k of the vertices: each corner on a side but the first is moved
- * to that side's new vertex. */
+/* The normals pass over the split vertices of part k of the marked ones: each side's normal (its
+ * corners' shares, in triangle order, as normals_part adds them) into the vertex (side 0) and its
+ * new vertices. Reads the triangles as they were before the split (move_part comes after). */
+static void side_normals_part(void *user, int k)
+{
+    struct mesh_pass *pass = user;
+    struct crease *cr = pass->crease;
+    uint32_t most = most_corners(pass, k);
+    struct ao_vec3 *sums = malloc((most ? most : 1) * sizeof *sums);
+    if (!sums) {
+        cr->failed = true;
+        return;
+    }
+    for (size_t m = slot_start(pass, k); m < slot_start(pass, k + 1); m++) {
+        uint32_t more = cr->extra[m + 1] - cr->extra[m];
+        if (more == 0)
+            continue;
+        memset(sums, 0, (more + 1) * sizeof *sums);
+        for (uint32_t i = cr->start[m]; i < cr->start[m + 1]; i++) {
+            struct triangle_terms terms;
+            uint32_t c = cr->corners[i];
+            double angle;
+            if (triangle_terms(pass->mesh, pass->mesh->indices + 3 * (size_t)(c / 3), &terms))
+                sums[cr->side[i]] = ao_vec3_add(sums[cr->side[i]], corner_share(&terms, (int)(c % 3), &angle));
+        }
+        for (uint32_t s = 0; s <= more; s++)
+            pass->out[s ? cr->extra[m] + s - 1 : cr->ids[m]] = ao_mesh_unit(sums[s].x, sums[s].y, sums[s].z);
+    }
+    free(sums);
+}
+
+/* The last crease pass over part k of the marked vertices: each corner on a side but the first is
+ * moved to that side's new vertex. */
 static void move_part(void *user, int k)
 {
     struct mesh_pass *pass = user;
     struct crease *cr = pass->crease;
-    const struct ao_mesh *mesh = pass->mesh;
-    size_t end = part_start(mesh->vertex_count, k + 1, pass->threads);
-    for (size_t v = part_start(mesh->vertex_count, k, pass->threads); v < end; v++)
-        for (uint32_t i = cr->start[v]; i < cr->start[v + 1]; i++)
+    for (size_t m = slot_start(pass, k); m < slot_start(pass, k + 1); m++)
+        for (uint32_t i = cr->start[m]; cr->extra[m + 1] > cr->extra[m] && i < cr->start[m + 1]; i++)
             if (cr->side[i])
-                mesh->indices[cr->corners[i]] = cr->extra[v] + cr->side[i] - 1;
+                pass->mesh->indices[cr->corners[i]] = cr->extra[m] + cr->side[i] - 1;
 }
 
-/* Lists each vertex's corners (counting sort of the corners by vertex, in corner order) into
- * *start and *corners (malloc'd); false when memory runs out. */
-static bool list_corners(const struct ao_mesh *mesh, uint32_t **start, uint32_t **corners)
-{
-    size_t n = 3 * mesh->triangle_count;
-    *start = calloc(mesh->vertex_count + 1, sizeof **start);
-    *corners = malloc((n ? n : 1) * sizeof **corners);
-    if (!*start || !*corners)
-        return false;
-    ao_mesh_advise_huge(*corners, n * sizeof **corners);
-    for (size_t c = 0; c < n; c++)
-        (*start)[mesh->indices[c] + 1]++;
-    for (size_t v = 0; v < mesh->vertex_count; v++)
-        (*start)[v + 1] += (*start)[v];
-    for (size_t c = 0; c < n; c++)   /* start[v] walks through v's slots; shifted back below */
-        (*corners)[(*start)[mesh->indices[c]]++] = (uint32_t)c;
-    for (size_t v = mesh->vertex_count; v > 0; v--)
-        (*start)[v] = (*start)[v - 1];
-    (*start)[0] = 0;
-    return true;
-}
-
-/* Grows the vertex arrays to count vertices and fills the new ones (from mesh->vertex_count on,
- * numbered in cr->extra): each a copy of the vertex it splits from, its normal missing. */
+/* Grows the vertex arrays to count vertices and fills the new ones' positions (from
+ * mesh->vertex_count on, numbered in cr->extra): each a copy of the vertex it splits from. */
 static bool add_split_vertices(struct ao_mesh *mesh, const struct crease *cr, size_t count)
 {
     struct ao_vec3 *positions = realloc(mesh->positions, count * sizeof *positions);
     if (!positions)
         return false;
     mesh->positions = positions;
-    if (mesh->normals) {
-        struct ao_vec3 *normals = realloc(mesh->normals, count * sizeof *normals);
-        if (!normals)
-            return false;
-        mesh->normals = normals;
-    }
-    for (size_t v = 0; v < mesh->vertex_count; v++)
-        for (uint32_t n = cr->extra[v]; n < cr->extra[v + 1]; n++) {
-            positions[n] = positions[v];
-            if (mesh->normals)
-                mesh->normals[n] = ao_mesh_missing_normal();
-        }
+    struct ao_vec3 *normals = realloc(mesh->normals, count * sizeof *normals);
+    if (!normals)
+        return false;
+    mesh->normals = normals;
+    for (size_t m = 0; m < cr->count; m++)
+        for (uint32_t n = cr->extra[m]; n < cr->extra[m + 1]; n++)
+            positions[n] = positions[cr->ids[m]];
     return true;
 }
 
-/* Splits the vertices whose normal is missing along the edges sharper than the crease (their
- * triangles' normals cos_crease or farther apart): each side of such a vertex but the first gets a
- * new vertex, a copy at the end of the arrays, its normal missing. The mesh's other vertices keep
- * their numbers, so that a mesh without such an edge is left as it was. False (reported) when
- * memory, 32-bit corner numbers or the budget run out. */
-static bool split_creases(struct ao_mesh *mesh, const char *path, double cos_crease, const struct ao_budget *budget)
+/* Splits the vertices that cr marks along the edges sharper than the crease (their triangles'
+ * normals cos_crease or farther apart): each side of such a vertex but the first gets a new
+ * vertex, a copy at the end of the arrays, and each side its own normal (as the normals pass would
+ * make it over the split mesh). The mesh's other vertices keep their numbers and normals, so that a
+ * mesh without such an edge is left as it was. False (reported) when memory, 32-bit corner numbers
+ * or the budget run out. */
+static bool split_creases(struct ao_mesh *mesh, const char *path, struct crease *cr, const struct ao_budget *budget)
 {
     if (3 * (uint64_t)mesh->triangle_count > UINT32_MAX) {
         ao_text_report("%s: %zu triangles are too many for a crease angle (at most %u); --crease-angle 0 "
                        "or 180 takes any number", path, mesh->triangle_count, UINT32_MAX / 3);
         return false;
     }
-    uint32_t *start = NULL, *corners = NULL;
-    struct crease cr = {.cos_crease = cos_crease};
-    bool ok = list_corners(mesh, &start, &corners);
-    cr.start = start;
-    cr.corners = corners;
-    cr.side = ok ? malloc((3 * mesh->triangle_count + 1) * sizeof *cr.side) : NULL;
-    cr.extra = ok ? malloc((mesh->vertex_count + 1) * sizeof *cr.extra) : NULL;
-    ok = ok && cr.side && cr.extra;
-    struct mesh_pass pass = {.mesh = mesh, .crease = &cr};
+    struct mesh_pass pass = {.mesh = mesh, .crease = cr};
+    bool ok = list_corners(&pass);
     if (ok) {
-        ao_mesh_advise_huge(cr.side, 3 * mesh->triangle_count * sizeof *cr.side);
         run_parts(sides_part, &pass);
-        ok = !cr.failed;
+        ok = !cr->failed;
     }
     bool reported = false;
     uint64_t count = mesh->vertex_count;
-    for (size_t v = 0; ok && v <= mesh->vertex_count; v++) {   /* the new vertices' numbers */
-        uint32_t more = v < mesh->vertex_count ? cr.extra[v] : 0;
-        cr.extra[v] = (uint32_t)count;
+    for (size_t m = 0; ok && m <= cr->count; m++) {   /* the new vertices' numbers */
+        uint32_t more = m < cr->count ? cr->extra[m] : 0;
+        cr->extra[m] = (uint32_t)count;
         if ((count += more) >= AO_MESH_INDEX_LIMIT) {
             ao_text_report("%s: more than %u vertices once split along its creases", path, AO_MESH_INDEX_LIMIT - 1);
             ok = false;
@@ -557,17 +773,41 @@ static bool split_creases(struct ao_mesh *mesh, const char *path, double cos_cre
     }
     if (ok && count > mesh->vertex_count) {
         reported = !ao_mesh_fits(budget, mesh->triangle_count, count, path, 0);
-        ok = !reported && add_split_vertices(mesh, &cr, (size_t)count);
+        ok = !reported && add_split_vertices(mesh, cr, (size_t)count);
+        /* Each side's normal: by the marked vertices' corners where they are fewer than the
+         * triangles, else by the normals pass over the split mesh (the same bits either way). */
+        size_t listed = ok ? cr->start[cr->count] : 0;
+        bool by_corners = listed < mesh->triangle_count;
+        if (ok && by_corners) {
+            pass.out = mesh->normals;
+            run_parts(side_normals_part, &pass);
+            ok = !cr->failed;
+        }
+        struct ao_vec3 *all = ok && !by_corners ? malloc((size_t)count * sizeof *all) : NULL;
+        ok = ok && (by_corners || all);
+        if (all)
+            ao_mesh_advise_huge(all, (size_t)count * sizeof *all);
         if (ok) {
-            pass.threads = 0;
             run_parts(move_part, &pass);
             mesh->vertex_count = (size_t)count;
+            if (all) {   /* the split vertices' normals; the others keep theirs, given or smooth */
+                angle_weighted_normals(mesh, all, 0, NULL);
+                for (size_t m = 0; m < cr->count; m++)
+                    for (uint32_t n = cr->extra[m]; n < cr->extra[m + 1]; n++)
+                        mesh->normals[cr->ids[m]] = all[cr->ids[m]], mesh->normals[n] = all[n];
+            }
         }
+        free(all);
     }
-    free(start);
-    free(corners);
-    free(cr.side);
-    free(cr.extra);
+    for (int k = 0; k < MAX_THREADS; k++)
+        free(cr->found[k].pairs);
+    free(cr->ids);
+    free(cr->slot);
+    free(cr->blocks);
+    free(cr->start);
+    free(cr->corners);
+    free(cr->side);
+    free(cr->extra);
     return ok || reported || out_of_memory(path);
 }
 
@@ -586,11 +826,40 @@ bool ao_mesh_complete_normals(struct ao_mesh *mesh, const char *path, double cre
                 mesh->normals[v] = ao_vec3_make(0.0f, 0.0f, 0.0f);
         return true;
     }
-    if (crease < 180.0 && !split_creases(mesh, path, cos(crease * (3.14159265358979323846 / 180.0)), budget))
-        return false;
-    if (!mesh->normals)
-        return compute_normals(mesh, 0) || out_of_memory(path);
-    return fill_missing_normals(mesh, path);
+    /* Every vertex's smooth normal first, what a vertex keeps unless it splits, and below 180
+     * degrees the vertices marked whose sides must be found. */
+    const double degree = 3.14159265358979323846 / 180.0;
+    size_t n = mesh->vertex_count;
+    struct ao_vec3 *smooth = malloc(n * sizeof *smooth);
+    struct cone cone = {.given = mesh->normals, .cos_half = cos(crease * degree / 2.0)};
+    bool creased = crease < 180.0;
+    if (creased) {
+        cone.at = malloc(n * sizeof *cone.at);
+        cone.marked = malloc(n);
+        if (cone.at)
+            ao_mesh_advise_huge(cone.at, n * sizeof *cone.at);
+    }
+    bool ok = smooth && (!creased || (cone.at && cone.marked));
+    size_t marked = 0;
+    if (ok) {
+        ao_mesh_advise_huge(smooth, n * sizeof *smooth);
+        marked = angle_weighted_normals(mesh, smooth, 0, creased ? &cone : NULL);
+        if (mesh->normals) {
+            for (size_t v = 0; v < n; v++)
+                if (ao_mesh_normal_is_missing(mesh->normals[v]))
+                    mesh->normals[v] = smooth[v];
+            free(smooth);
+        } else {
+            mesh->normals = smooth;
+        }
+        smooth = NULL;
+    }
+    free(smooth);
+    struct crease cr = {.marked = cone.marked, .at = cone.at, .count = marked, .cos_crease = cos(crease * degree)};
+    bool split = ok && (marked == 0 || split_creases(mesh, path, &cr, budget));   /* reports its failures */
+    free(cone.at);
+    free(cone.marked);
+    return split || (!ok && out_of_memory(path));
 }
 
 bool ao_mesh_compute_normals_on(struct ao_mesh *mesh, int threads)

@@ -45,8 +45,9 @@ enum ao_shading {
  * traces fastest; COMPACT, the same build with leaves that index the shared vertices, takes half
  * the memory and reaches 1 % RMSE 18-35 % later; LOW, Embree's Morton build, builds 3x sooner and
  * reaches 1 % up to 14 % later. AUTO is MEDIUM where the whole scene fits the scene budget so,
- * else COMPACT (budget.h). */
-enum ao_bvh { AO_BVH_AUTO, AO_BVH_MEDIUM, AO_BVH_COMPACT, AO_BVH_LOW };
+ * else COMPACT (budget.h); LOW_COMPACT, the Morton build with compact leaves, is what LOW becomes
+ * where only COMPACT's charges fit (not a choice of --bvh). */
+enum ao_bvh { AO_BVH_AUTO, AO_BVH_MEDIUM, AO_BVH_COMPACT, AO_BVH_LOW, AO_BVH_LOW_COMPACT };
 
 /* What --view shows: the AO image, the shading normals (both estimates the renderer accumulates),
  * or |AO - reference| as a heat map (a display of the AO image; needs --reference). */

@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "file.h"
 #include "load/load.h"
@@ -23,12 +24,12 @@ static const float DEFAULT_BACKGROUND = 1.0f;
 enum { PROGRESSIVE_TRIANGLES = 1 << 20, LOW_TRIANGLE = 96 };
 
 /* Records in a placed scene the BVH its budget gives it (ao_budget_bvh: every charge is made by
- * now), with a note when AUTO gave COMPACT, and whether a LOW BVH traces first (with a note when
+ * now), with a note when AUTO or LOW gave a compact one, and whether a LOW BVH traces first (with a note when
  * the budget has no room for it). */
 static void settle_bvh(struct ao_scene *s, const struct ao_budget *budget)
 {
     s->bvh = ao_budget_bvh(budget);
-    if (budget->bvh == AO_BVH_AUTO && s->bvh == AO_BVH_COMPACT)
+    if ((budget->bvh == AO_BVH_AUTO && s->bvh == AO_BVH_COMPACT) || s->bvh == AO_BVH_LOW_COMPACT)
         ao_scene_add_note(s, s->name, "BVH built compact to fit the scene budget (slower rays; a larger "
                                       "--scene-budget gets the faster BVH)");
     if (budget->bvh != AO_BVH_AUTO || s->bvh != AO_BVH_MEDIUM || s->triangle_count < PROGRESSIVE_TRIANGLES)
@@ -59,7 +60,7 @@ static double crease_of(const struct ao_scene_options *options)
 /* The budget options ask for, at their BVH's rates. */
 static struct ao_budget budget_of(const struct ao_scene_options *options)
 {
-    struct ao_budget budget = {.limit = options->budget ? options->budget : AO_BUDGET_DEFAULT, .bvh = options->bvh};
+    struct ao_budget budget = {.limit = options->budget ? options->budget : ao_budget_default(), .bvh = options->bvh};
     return budget;
 }
 
@@ -200,6 +201,20 @@ bool ao_scene_from_arrays(struct ao_scene *scene, const struct ao_scene_arrays *
     return load_bare_mesh(scene, arrays->name, arrays, &budget, options);
 }
 
+/* True when path names a scene file: its extension is .scene (any case). Else (not a mesh either)
+ * reports the extension and what aoview reads, so that a README is not parsed as a scene. */
+static bool is_scene_file(const char *path)
+{
+    const char *slash = strrchr(path, '/'), *dot = strrchr(slash ? slash : path, '.');
+    if (dot && strcasecmp(dot, ".scene") == 0)
+        return true;
+    char extensions[64];
+    ao_load_extensions(extensions, sizeof extensions);
+    ao_text_report("%s: %s%s%s: aoview reads scenes (.scene) and meshes (%s)", path, dot ? "extension '" : "no extension",
+                   dot ? dot : "", dot ? "'" : "", extensions);
+    return false;
+}
+
 bool ao_scene_load(struct ao_scene *scene, const char *path, const struct ao_scene_options *options)
 {
     static const struct ao_scene_options defaults;
@@ -208,6 +223,8 @@ bool ao_scene_load(struct ao_scene *scene, const char *path, const struct ao_sce
     memset(scene, 0, sizeof *scene);
     if (ao_load_is_mesh(path))
         return load_bare_mesh(scene, path, NULL, &budget, options);
+    if (!is_scene_file(path))
+        return false;
     char *text;
     size_t got;
     if (!ao_file_read_budget(path, &budget, &text, &got))

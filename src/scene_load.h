@@ -23,11 +23,12 @@
 /* How a scene is loaded; every field's zero is its default, so that a zeroed struct (or NULL) is
  * the defaults and callers name only what they change:
  * - budget: the scene budget in bytes (budget.h), which the files read, what the loaders hold,
- *   every element added and an `image` line's buffers are charged to; 0: AO_BUDGET_DEFAULT;
+ *   every element added and an `image` line's buffers are charged to; 0: ao_budget_default();
  * - no_ground: a bare mesh gets no ground quad under it (a .scene file has only the quads it
  *   lists, whatever this says);
  * - instancing: which meshes are instanced (AUTO by default);
- * - bvh: the BVH to build (AUTO: MEDIUM, or COMPACT where only that fits the budget);
+ * - bvh: the BVH to build (AUTO: MEDIUM, or COMPACT where only that fits the budget; LOW: LOW, or
+ *   LOW_COMPACT where only that fits);
  * - crease, crease_set: the crease angle in degrees for the normals mesh files lack (mesh.h), when
  *   crease_set; else AO_MESH_CREASE_DEFAULT;
  * - sized: the image's size comes from elsewhere (--size), so an `image` line's buffers are not

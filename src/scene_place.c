@@ -297,6 +297,14 @@ static void largest_translation(const float a[12], const struct ao_world_mesh *i
         t[r] = (float)((AO_SCENE_MAX_EXTENT + (fabs(a[r]) + fabs(a[3 + r]) + fabs(a[6 + r])) * most) * (1.0 + 0x1p-10));
 }
 
+/* What a flattened copy of mesh is charged (build_instance): its triangles and vertices and
+ * AO_BUDGET_COPY; UINT64_MAX where that overflows. */
+static uint64_t copy_charge(const struct ao_world *w, const struct ao_mesh *mesh)
+{
+    uint64_t charge = ao_budget_charge(w->budget, mesh->triangle_count, mesh->vertex_count, 0);
+    return charge <= UINT64_MAX - AO_BUDGET_COPY ? charge + AO_BUDGET_COPY : UINT64_MAX;
+}
+
 /* Never instanced where round_trip finds a placement's map too ill-conditioned for the largest
  * translation it can have in the local frame. */
 bool ao_world_survey(struct ao_scene *s, struct ao_world *w)
@@ -313,7 +321,7 @@ bool ao_world_survey(struct ao_scene *s, struct ao_world *w)
         box_of(mesh, &info->lo, &info->hi);
         info->left = info->placements;
         size_t placed = info->placements * mesh->triangle_count;
-        uint64_t copy = ao_budget_charge(w->budget, mesh->triangle_count, mesh->vertex_count, 0), copies = UINT64_MAX;
+        uint64_t copy = copy_charge(w, mesh), copies = UINT64_MAX;
         if (info->placements > 1 && copy <= (UINT64_MAX - reserved) / (info->placements - 1))
             copies = copy * (info->placements - 1);
         bool flat = info->placements < 2 || (placed / info->placements == mesh->triangle_count &&
@@ -495,7 +503,8 @@ static bool build_instance(struct ao_scene *s, struct ao_world *w, struct ao_cur
     size_t dst = p->mesh;
     if (--info->left > 0) {   /* a copy: the mesh itself is still needed in its own frame */
         const struct ao_mesh *m = &s->meshes[p->mesh];
-        if (!ao_world_charge(c, w, m->triangle_count, m->vertex_count, "a flattened copy"))
+        if (!ao_world_charge(c, w, m->triangle_count, m->vertex_count, "a flattened copy") ||
+            !ao_world_take(c, w, AO_BUDGET_COPY, "a flattened copy's structures"))
             return false;
         if (s->mesh_count >= UINT32_MAX ||
             !ao_scene_grow(&s->meshes, s->mesh_count, s->mesh_count + 1, sizeof *s->meshes))

@@ -138,8 +138,9 @@ static bool going_on(void *cancel, double done)
  * where asked; a build that `cancel` (unless NULL) stops. */
 static void set_build(RTCScene scene, enum ao_bvh bvh, atomic_bool *cancel)
 {
-    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST | (bvh == AO_BVH_COMPACT ? RTC_SCENE_FLAG_COMPACT : 0));
-    if (bvh == AO_BVH_LOW)
+    bool compact = bvh == AO_BVH_COMPACT || bvh == AO_BVH_LOW_COMPACT;
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST | (compact ? RTC_SCENE_FLAG_COMPACT : 0));
+    if (bvh == AO_BVH_LOW || bvh == AO_BVH_LOW_COMPACT)
         rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
     if (cancel)
         rtcSetSceneProgressMonitorFunction(scene, going_on, cancel);
@@ -156,7 +157,7 @@ static RTCGeometry triangles_of(struct ao_tracer *t, const struct ao_mesh *m, en
                                sizeof *m->positions, m->vertex_count);
     rtcSetSharedGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, m->indices, 0, 3 * sizeof *m->indices,
                                m->triangle_count);
-    if (bvh == AO_BVH_LOW)
+    if (bvh == AO_BVH_LOW || bvh == AO_BVH_LOW_COMPACT)
         rtcSetGeometryBuildQuality(g, RTC_BUILD_QUALITY_LOW);
     rtcCommitGeometry(g);
     return g;

@@ -512,6 +512,9 @@ static bool read_scene(struct ao_gltf *g, struct ao_model *model)
     if (ok && g->recounted)
         ao_gltf_note(g, "%s: read as decoded%s", g->recount,
                      g->recounted > 1 ? ", as are more such primitives" : "");
+    if (ok && g->unaligned[0])
+        ao_gltf_note(g, "%s, off glTF's alignment: read as it lies%s", g->unaligned,
+                     g->unaligned_more ? ", as are more" : "");
     return ok;
 }
 

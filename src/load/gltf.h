@@ -103,6 +103,8 @@ struct ao_gltf {
     size_t degenerate_count;      /* zero-area triangles dropped, all meshes */
     size_t recounted;             /* Draco primitives decoding to other counts than their accessors say */
     char recount[160];            /* the first of them, for the note */
+    bool unaligned_more;          /* vertex attributes read off glTF's alignment: more than the first */
+    char unaligned[160];          /* the first of them, for the note ("" when none) */
     unsigned modes_found;         /* bit m: a primitive of mode m was found */
     size_t point_primitives, line_primitives;   /* skipped, each time a node placed them */
     char note[AO_MESH_NOTE_SIZE]; /* what was ignored that the user should hear of (mesh.h) */

@@ -438,14 +438,53 @@ static bool view(struct ao_gltf *g, size_t index, const struct ao_gltf_view **ou
 
 /* ------------------------------------------------------------------ accessors */
 
+/* Whether an accessor's componentType may be an attribute's (positions and normals: float, or
+ * (KHR_mesh_quantization) 8- or 16-bit integers, normalized or not) or indices' (unsigned integers,
+ * never normalized), and its 'normalized' (NULL: absent) true or false; false after reporting at
+ * where. Plain and Draco-compressed accessors alike. */
+static bool check_component(const struct ao_gltf *g, uint64_t component, json_object *normalized, bool attribute,
+                            const char *where)
+{
+    bool is_index = component == AO_QUANTIZE_UNSIGNED_BYTE || component == AO_QUANTIZE_UNSIGNED_SHORT ||
+                    component == AO_QUANTIZE_UNSIGNED_INT;
+    bool is_attribute = component != AO_QUANTIZE_UNSIGNED_INT && ao_quantize_size((int)component) > 0;
+    if (attribute ? !is_attribute : !is_index)
+        return ao_gltf_error(g, "%s: componentType %llu; %s", where, (unsigned long long)component,
+                             attribute ? "positions and normals must be float (5126), or byte, unsigned byte, short "
+                                         "or unsigned short (5120 to 5123, KHR_mesh_quantization)"
+                                       : "indices must be unsigned byte, short or int");
+    if (normalized && !json_object_is_type(normalized, json_type_boolean))
+        return ao_gltf_error(g, "%s: 'normalized' is not true or false", where);
+    if (normalized && json_object_get_boolean(normalized) && (component == AO_QUANTIZE_FLOAT || !attribute))
+        return ao_gltf_error(g, "%s: 'normalized' on %s (glTF normalizes 8- and 16-bit integer attributes only)",
+                             where, attribute ? "float components" : "indices");
+    return true;
+}
+
 /* How elements must be aligned in their bufferView, as glTF requires (its validator reports each
  * as an error): to their component's size from the start of the buffer; vertex attributes to 4
- * bytes, byteOffset and byteStride alike. */
+ * bytes, byteOffset and byteStride alike. Indices and sparse entries off their alignment are
+ * refused; vertex attributes are read as they lie, with a note (ALIGN_VERTEX: the readers users
+ * have read them, as cesium-native reads its own cubeQuantized.glb's shorts 6 bytes apart), since
+ * every component is read byte by byte. */
 enum alignment { ALIGN_COMPONENT, ALIGN_VERTEX };
 
+/* Notes, once, that the vertex attribute `where` (at byte `start` of its buffer, step bytes apart)
+ * lies off glTF's alignment. */
+static void note_unaligned(struct ao_gltf *g, const char *where, uint64_t start, uint64_t step)
+{
+    char what[sizeof g->unaligned];
+    snprintf(what, sizeof what, "%s at byte %llu of its buffer, %llu bytes apart", where, (unsigned long long)start,
+             (unsigned long long)step);
+    if (!g->unaligned[0])
+        snprintf(g->unaligned, sizeof g->unaligned, "%s", what);
+    else if (strcmp(g->unaligned, what) != 0)
+        g->unaligned_more = true;
+}
+
 /* count elements of element bytes (components of component bytes) from byte offset of bufferView
- * index, stride bytes apart (0: packed), checked to lie inside the view and to be aligned as glTF
- * requires; where and what name them in messages. */
+ * index, stride bytes apart (0: packed), checked to lie inside the view and to be aligned as
+ * `alignment` says (vertex attributes off it noted); where and what name them in messages. */
 static bool view_elements(struct ao_gltf *g, size_t index, uint64_t offset, uint64_t count, size_t element,
                           size_t component, enum alignment alignment, bool strided, const char *where,
                           const unsigned char **first, size_t *stride)
@@ -457,20 +496,18 @@ static bool view_elements(struct ao_gltf *g, size_t index, uint64_t offset, uint
     if (step < element)
         return ao_gltf_error(g, "bufferView %zu: byteStride %llu is smaller than an element (%zu bytes)", index,
                              (unsigned long long)step, element);
-    if ((v->offset + offset) % component)
+    if (alignment == ALIGN_COMPONENT && (v->offset + offset) % component)
         return ao_gltf_error(g, "%s: byte %llu of its buffer (byteOffset %llu in bufferView %zu) is not a multiple of "
                              "its %zu-byte components, as glTF requires", where,
                              (unsigned long long)(v->offset + offset), (unsigned long long)offset, index, component);
-    if (alignment == ALIGN_VERTEX && (offset % 4 || (count > 1 && step % 4)))
-        return ao_gltf_error(g, "%s: a vertex attribute at byteOffset %llu, %llu bytes apart: glTF aligns them to 4 "
-                             "bytes (a byteStride that is a multiple of 4)", where, (unsigned long long)offset,
-                             (unsigned long long)step);
     /* The last element ends inside the view: offset + step * (count - 1) + element. */
     uint64_t end = offset + step * (count - 1) + element;
     if (end > v->length)
         return ao_gltf_error(g, "%s: %llu elements from byte %llu need %llu bytes of bufferView %zu, which has %zu",
                              where, (unsigned long long)count, (unsigned long long)offset, (unsigned long long)end,
                              index, v->length);
+    if (alignment == ALIGN_VERTEX && ((v->offset + offset) % component || offset % 4 || (count > 1 && step % 4)))
+        note_unaligned(g, where, v->offset + offset, step);
     *first = v->data + offset;
     *stride = (size_t)step;
     return true;
@@ -562,21 +599,8 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *u
         !ao_gltf_integer(g, a, "byteOffset", false, 0, AO_GLTF_MAX_INTEGER, where, &offset) ||
         (has_view && !ao_gltf_index(g, a, "bufferView", ao_gltf_length(g->views), where, &view_index)))
         return false;
-    /* Positions and normals: float, or (KHR_mesh_quantization) 8- or 16-bit integers, normalized
-     * or not; indices: unsigned integers. */
-    bool is_index = component == AO_QUANTIZE_UNSIGNED_BYTE || component == AO_QUANTIZE_UNSIGNED_SHORT ||
-                    component == AO_QUANTIZE_UNSIGNED_INT;
-    bool is_attribute = component != AO_QUANTIZE_UNSIGNED_INT && ao_quantize_size((int)component) > 0;
-    if (attribute ? !is_attribute : !is_index)
-        return ao_gltf_error(g, "%s: componentType %llu; %s", where, (unsigned long long)component,
-                          attribute ? "positions and normals must be float (5126), or byte, unsigned byte, short "
-                                      "or unsigned short (5120 to 5123, KHR_mesh_quantization)"
-                                    : "indices must be unsigned byte, short or int");
-    if (normalized && !json_object_is_type(normalized, json_type_boolean))
-        return ao_gltf_error(g, "%s: 'normalized' is not true or false", where);
-    if (normalized && json_object_get_boolean(normalized) && (component == AO_QUANTIZE_FLOAT || !attribute))
-        return ao_gltf_error(g, "%s: 'normalized' on %s (glTF normalizes 8- and 16-bit integer attributes only)",
-                             where, attribute ? "float components" : "indices");
+    if (!check_component(g, component, normalized, attribute, where))
+        return false;
     if (count == 0)
         return ao_gltf_error(g, "%s: count is 0", where);
     size_t size = ao_quantize_size((int)component), element = (attribute ? 3 : 1) * size;
@@ -598,12 +622,13 @@ bool ao_gltf_accessor(struct ao_gltf *g, size_t i, bool attribute, const char *u
 
 /* The attribute or indices accessor of a Draco-compressed primitive (name in attributes, or
  * "indices" of the primitive): its index, count and, for an attribute, how it reads its values
- * (VEC3 of float, or of 8- and 16-bit integers, KHR_mesh_quantization; normalized only those). The
- * extension forbids 'sparse' on these accessors, which read decoded data only. */
+ * (VEC3 of float, or of 8- and 16-bit integers, KHR_mesh_quantization; normalized only those); its
+ * componentType checked as a plain accessor's. The extension forbids 'sparse' on these accessors,
+ * which read decoded data only. */
 static bool draco_accessor(struct ao_gltf *g, json_object *holder, const char *name, bool attribute, const char *where,
                            size_t *index, uint64_t *count, struct ao_gltf_reading *reading)
 {
-    uint64_t component = AO_QUANTIZE_FLOAT;
+    uint64_t component;
     char what[128];
     if (!ao_gltf_index(g, holder, name, ao_gltf_length(g->accessors), where, index))
         return false;
@@ -613,24 +638,14 @@ static bool draco_accessor(struct ao_gltf *g, json_object *holder, const char *n
     if (!json_object_is_type(type, json_type_string) || strcmp(json_object_get_string(type), attribute ? "VEC3" : "SCALAR"))
         return ao_gltf_error(g, "%s: type must be %s", what, attribute ? "VEC3" : "SCALAR");
     if (!ao_gltf_integer(g, a, "count", true, 0, AO_GLTF_MAX_INTEGER, what, count) ||
-        (attribute && !ao_gltf_integer(g, a, "componentType", true, 0, AO_GLTF_MAX_INTEGER, what, &component)))
+        !ao_gltf_integer(g, a, "componentType", true, 0, AO_GLTF_MAX_INTEGER, what, &component) ||
+        !check_component(g, component, normalized, attribute, what))
         return false;
     if (ao_gltf_member(a, "sparse"))
         return ao_gltf_error(g, "%s: 'sparse' on an accessor of KHR_draco_mesh_compression data, which the extension "
                              "forbids", what);
-    if (normalized && !json_object_is_type(normalized, json_type_boolean))
-        return ao_gltf_error(g, "%s: 'normalized' is not true or false", what);
-    if (!attribute)
-        return true;
-    if (component == AO_QUANTIZE_UNSIGNED_INT || ao_quantize_size((int)component) == 0)
-        return ao_gltf_error(g, "%s: componentType %llu; positions and normals must be float (5126), or byte, unsigned "
-                             "byte, short or unsigned short (5120 to 5123, KHR_mesh_quantization)", what,
-                             (unsigned long long)component);
-    reading->component_type = (int)component;
-    reading->normalized = normalized && json_object_get_boolean(normalized);
-    if (reading->normalized && component == AO_QUANTIZE_FLOAT)
-        return ao_gltf_error(g, "%s: 'normalized' on float components (only 8- and 16-bit integers are normalized)",
-                             what);
+    if (attribute)
+        *reading = (struct ao_gltf_reading){(int)component, normalized && json_object_get_boolean(normalized)};
     return true;
 }
 

@@ -11,25 +11,30 @@
 #include <string.h>
 #include <strings.h>
 
+#include <sys/stat.h>
+
 #include "file.h"
 #include "load/loader.h"
 
 /* ------------------------------------------------------------------ entry points */
 
 /* The formats by extension (any case): a loader of one mesh, or of a model (several meshes placed),
- * and whether the normals a file lacks are flat (glTF 2.0: "When normals are not specified, client
- * implementations MUST calculate flat normals") or smooth up to the crease angle. */
+ * whether the normals a file lacks are flat (glTF 2.0: "When normals are not specified, client
+ * implementations MUST calculate flat normals") or smooth up to the crease angle, and the largest
+ * file it can read (0: no limit; a .gltf is JSON, which json-c parses up to 2^31 - 1 bytes),
+ * refused before it is read. */
 static const struct {
     const char *extension;
     ao_load_format *load;
     ao_load_model_format *load_model;
     bool flat;
+    uint64_t largest;
 } formats[] = {
-    {".obj", ao_load_obj, NULL, false},
-    {".ply", ao_load_ply, NULL, false},
-    {".stl", ao_load_stl, NULL, false},
-    {".gltf", NULL, ao_load_gltf, true},
-    {".glb", NULL, ao_load_gltf, true},
+    {".obj", ao_load_obj, NULL, false, 0},
+    {".ply", ao_load_ply, NULL, false, 0},
+    {".stl", ao_load_stl, NULL, false, 0},
+    {".gltf", NULL, ao_load_gltf, true, INT32_MAX},
+    {".glb", NULL, ao_load_gltf, true, 0},
 };
 
 /* The format of path's extension, or -1. */
@@ -47,6 +52,15 @@ static int format_of(const char *path)
 bool ao_load_is_mesh(const char *path)
 {
     return format_of(path) >= 0;
+}
+
+void ao_load_extensions(char *out, size_t size)
+{
+    size_t n = sizeof formats / sizeof formats[0], used = 0;
+    out[0] = '\0';
+    for (size_t i = 0; i < n && used < size; i++)
+        used += (size_t)snprintf(out + used, size - used, "%s%s", i == 0 ? "" : i + 1 < n ? ", " : " or ",
+                                 formats[i].extension);
 }
 
 bool ao_load_finish(struct ao_mesh *mesh, const char *path)
@@ -105,14 +119,22 @@ static bool load_single(ao_load_format *load, struct ao_model *model, const char
 bool ao_load_model(struct ao_model *model, const char *path, struct ao_budget *budget, double crease)
 {
     memset(model, 0, sizeof *model);
-    struct ao_budget defaults = {.limit = AO_BUDGET_DEFAULT};
+    struct ao_budget defaults = {.limit = ao_budget_default()};
     budget = budget ? budget : &defaults;
     int format = format_of(path);
     const char *text;
     size_t size;
     bool mapped;
     if (format < 0) {
-        ao_load_report(path, 0, "unknown mesh format; expected .obj, .ply, .stl, .gltf or .glb");
+        char extensions[64];
+        ao_load_extensions(extensions, sizeof extensions);
+        ao_load_report(path, 0, "unknown mesh format; expected %s", extensions);
+        return false;
+    }
+    struct stat st;
+    if (formats[format].largest && stat(path, &st) == 0 && (uint64_t)st.st_size > formats[format].largest) {
+        ao_load_report(path, 0, "%llu bytes of JSON, more than the %llu its parser reads", (unsigned long long)st.st_size,
+                       (unsigned long long)formats[format].largest);
         return false;
     }
     if (!ao_file_map_budget(path, budget, &text, &size, &mapped))
@@ -166,7 +188,7 @@ static bool flatten(const struct ao_model *model, struct ao_mesh *out, const cha
 bool ao_load_mesh(struct ao_mesh *mesh, const char *path, struct ao_budget *budget)
 {
     memset(mesh, 0, sizeof *mesh);
-    struct ao_budget defaults = {.limit = AO_BUDGET_DEFAULT};
+    struct ao_budget defaults = {.limit = ao_budget_default()};
     budget = budget ? budget : &defaults;
     struct ao_model model;
     if (!ao_load_model(&model, path, budget, AO_MESH_CREASE_DEFAULT))
@@ -223,7 +245,7 @@ bool ao_load_model_arrays(struct ao_model *model, const char *name, const float 
                           struct ao_budget *budget, double crease)
 {
     memset(model, 0, sizeof *model);
-    struct ao_budget defaults = {.limit = AO_BUDGET_DEFAULT};
+    struct ao_budget defaults = {.limit = ao_budget_default()};
     budget = budget ? budget : &defaults;
     if (vertex_count >= AO_MESH_INDEX_LIMIT || triangle_count > SIZE_MAX / 12) {
         ao_load_report(name, 0, "too many vertices for 32-bit indices");

@@ -8,13 +8,15 @@
  * pixel (2 threads, cosine, AA), their sum (time to first image), AO Mrays/s over 4 more passes of
  * 4 samples, peak RSS (getrusage) and peak RSS per triangle. Asserts nothing; docs/formats.md has
  * the figures.
- * With --builds, the binary PLY alone under each build, interleaved per round: `progressive` (what
- * aoview does with a big scene: LOW first, MEDIUM built beside it and switched to between passes),
- * then medium, compact and low alone; it prints the medians of first image, Mrays/s and peak RSS as
+ * With --builds, the binary PLY alone under each build, interleaved per round: `default` (what
+ * aoview does with its defaults: under the machine's default budget, a big scene LOW first, MEDIUM
+ * built beside it and switched to between passes, where the budget holds both), then medium,
+ * compact and low alone; it prints the medians of first image, Mrays/s and peak RSS as
  * above, and of the time to 1 % estimated error at GOAL_WIDTH x GOAL_HEIGHT with aoview's defaults
  * (auto passes, adaptive sampling), from the start of loading, in a process of its own.
  * Run: build/tests/bench_scale [--rounds N] [--reuse] [--bvh B] [--builds] DIR   (writes about 1 GB
- *      into DIR; --reuse keeps files written by an earlier run; --bvh as aoview's or progressive,
+ *      into DIR; --reuse keeps files written by an earlier run; --bvh as aoview's, low-compact,
+ *      progressive (auto under a budget that holds everything) or default (aoview's defaults);
  *      default medium)
  *      build/tests/bench_scale [--bvh B] [--goal] --one FILE   (one measurement, one line: what each
  *      round runs; --goal: the seconds to 1 % alone) */
@@ -29,6 +31,7 @@
 #include <unistd.h>
 
 #include "bench_meshes.h"
+#include "budget.h"
 #include "bench_util.h"
 #include "program.h"
 #include "render.h"
@@ -43,11 +46,13 @@ enum { GOAL_WIDTH = 1280, GOAL_HEIGHT = 960, GOAL_SPP = 100000 };
 static const double GOAL_ERROR = 0.01;
 
 static const char *const names[FILES] = {"sphere.ply", "sphere_ascii.ply", "sphere.obj", "sphere.glb"};
-/* --bvh's names, in budget.h's order and then PROGRESSIVE, and the one asked for. */
-enum { PROGRESSIVE = AO_BVH_LOW + 1, BUILDS = 4 };
-static const char *const bvh_names[] = {"auto", "medium", "compact", "low", "progressive"};
+/* --bvh's names, in modes.h's order, then PROGRESSIVE (AUTO under a budget that holds everything:
+ * LOW first where the scene is big) and DEFAULT (aoview's defaults: AUTO under the machine's default
+ * budget), and the one asked for. */
+enum { PROGRESSIVE = AO_BVH_LOW_COMPACT + 1, DEFAULT, BUILDS = 4 };
+static const char *const bvh_names[] = {"auto", "medium", "compact", "low", "low-compact", "progressive", "default"};
 static int bvh = AO_BVH_MEDIUM;
-static const int builds[BUILDS] = {PROGRESSIVE, AO_BVH_MEDIUM, AO_BVH_COMPACT, AO_BVH_LOW};
+static const int builds[BUILDS] = {DEFAULT, AO_BVH_MEDIUM, AO_BVH_COMPACT, AO_BVH_LOW};
 
 static const char *const phase_names[PHASES] = {"load s", "normals s", "build s", "first s", "total s",
                                                 "Mrays/s", "peak MB", "B/tri"};
@@ -114,13 +119,14 @@ static void write_files(const char *dir, const struct bench_mesh *m)
 static int measure(const char *path, bool goal)
 {
     struct ao_scene scene;
-    struct ao_scene_options options = {.budget = (uint64_t)1 << 40,
-                                       .bvh = bvh == PROGRESSIVE ? AO_BVH_AUTO : (enum ao_bvh)bvh};
+    bool automatic = bvh == PROGRESSIVE || bvh == DEFAULT;
+    struct ao_scene_options options = {.budget = bvh == DEFAULT ? 0 : (uint64_t)1 << 40,
+                                       .bvh = automatic ? AO_BVH_AUTO : (enum ao_bvh)bvh};
     double start = bench_now();
     if (!ao_scene_load(&scene, path, &options))
         return 1;
     double loaded = bench_now();
-    bool progressive = bvh == PROGRESSIVE && scene.progressive;
+    bool progressive = automatic && scene.progressive;
     struct ao_tracer *tracer = progressive ? ao_tracer_create_progressive(&scene) : ao_tracer_create(&scene);
     if (!tracer)
         return 1;
@@ -212,7 +218,8 @@ static int compare_builds(const char *dir, int rounds)
                 figures[b][k][r] = one[k];
         }
     printf("%s, medians of %d rounds, one process per build and figure per round; to 1 %%: %dx%d from the "
-           "start of loading\n%-12s %10s %10s %10s %10s %10s\n", names[0], rounds, GOAL_WIDTH, GOAL_HEIGHT, "build",
+           "start of loading; the default budget %.1f GiB\n%-12s %10s %10s %10s %10s %10s\n", names[0], rounds,
+           GOAL_WIDTH, GOAL_HEIGHT, (double)ao_budget_default() / (1 << 30), "build",
            "build s", "first s", "Mrays/s", "peak MB", "to 1 % s");
     static const int shown[] = {2, 4, 5, 6, PHASES};
     for (int b = 0; b < BUILDS; b++) {
@@ -246,8 +253,8 @@ int main(int argc, char **argv)
             break;
     }
     if (first != argc - 1 || rounds < 1 || rounds > MAX_ROUNDS || bvh < 0) {
-        fprintf(stderr, "usage: bench_scale [--rounds 1..%d] [--reuse] [--bvh auto|medium|compact|low|progressive] "
-                        "[--builds] DIR | bench_scale [--bvh B] [--goal] --one FILE\n", MAX_ROUNDS);
+        fprintf(stderr, "usage: bench_scale [--rounds 1..%d] [--reuse] [--bvh auto|medium|compact|low|low-compact|"
+                        "progressive|default] [--builds] DIR | bench_scale [--bvh B] [--goal] --one FILE\n", MAX_ROUNDS);
         return 2;
     }
     if (one)

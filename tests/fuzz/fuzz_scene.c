@@ -143,7 +143,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
     text[size] = '\0';
     for (int pass = 0; pass < 2; pass++) {
         struct ao_scene scene;
-        struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT,
+        struct ao_scene_options options = {.budget = AO_BUDGET_LEAST,
                                            .instancing = pass ? AO_INSTANCING_ALWAYS : AO_INSTANCING_AUTO};
         if (ao_scene_parse(&scene, text, path, &options))
             check(&scene);

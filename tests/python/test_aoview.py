@@ -302,6 +302,8 @@ def test_bad_settings_have_the_cli_messages(tmp_path):
         aoview.render(scene, size=(32, 24), reference=str(tmp_path / 'no-such.pfm'))
     with pytest.raises(ValueError, match='crease'):
         aoview.Scene.load(BUNNY, crease_angle=500)
+    with pytest.raises(ValueError, match="--crease-angle: expected degrees from 0 to 180, got ''"):
+        aoview.Scene.load(BUNNY, crease_angle='')   # the command line's parser: '' is no number
     with pytest.raises(ValueError, match='--scene-budget'):
         aoview.Scene.load(BUNNY, scene_budget='1K')
     with pytest.raises(ValueError, match='nothing.scene:1: '):   # the loader's file:line message

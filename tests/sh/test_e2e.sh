@@ -61,6 +61,16 @@ PY
 status=$?
 [ "$status" = 1 ] || fail "--stats /dev/full exited $status, expected 1"
 [ "$(cat err.txt)" = "/dev/full: write failed" ] || fail "--stats /dev/full: $(cat err.txt)"
+# A file this run creates on a full disk (a file size limit of 0: every write to a regular file
+# fails, as on a full disk, with EFBIG where SIGXFSZ is ignored): the same line, and no empty
+# CSV left behind (the -o file, the same way, is not written either).
+rm -f full.csv full.pfm
+(trap '' XFSZ; ulimit -f 0; exec "$bin" --headless -q --size 16x12 --spp 2 --stats full.csv -o full.pfm \
+  "$root/assets/scenes/spheres.scene") 2>&1 | cat > err.txt
+status=${PIPESTATUS[0]}
+[ "$status" = 1 ] || fail "--stats onto a full disk exited $status, expected 1"
+grep -qx "full.csv: write failed" err.txt || fail "--stats onto a full disk: $(cat err.txt)"
+[ ! -e full.csv ] || fail "--stats onto a full disk left the file it created ($(wc -c < full.csv) bytes)"
 # The reader leaves after the header; a row per pass follows, 5000 of them, so that later ones
 # find the pipe closed however the two processes are scheduled.
 mkfifo stats.fifo

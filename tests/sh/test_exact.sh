@@ -124,5 +124,25 @@ done
 "$exact" -q -o x.png "$scenes/open-plane.scene" 2>/dev/null
 [ $? -eq 2 ] || fail "a .png output is not a usage error"
 
+# -o is checked as aoview checks it (the same functions): not the scene, through a link or by name,
+# nor a file the scene reads (a mesh, through a link), each refused in one line before writing,
+# the input left as it was.
+cp "$scenes/open-plane.scene" own.scene
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n' > tri.obj
+printf 'camera eye 0 1 4 target 0 0 0\nmesh tri.obj translate 0 1 0\nquad corner -5 0 -5 edge1 0 0 10 edge2 10 0 0\n' \
+  > meshed.scene
+ln -s own.scene scene-link.pfm
+ln -s tri.obj mesh-link.pfm
+for case in "scene-link.pfm own.scene:-o: scene-link.pfm is also the scene (own.scene): aoview does not overwrite its inputs" \
+            "mesh-link.pfm meshed.scene:-o: mesh-link.pfm is a file the scene reads (tri.obj): aoview does not overwrite its inputs"; do
+  args=${case%%:*} want=${case#*:}
+  cp own.scene own.before && cp tri.obj tri.before
+  # shellcheck disable=SC2086 # two words
+  "$exact" -q --size 8x6 -o $args 2>err.txt
+  status=$?
+  [ $status -eq 1 ] && [ "$(cat err.txt)" = "$want" ] || fail "aoview-exact -o $args: status $status: $(cat err.txt)"
+  cmp -s own.scene own.before && cmp -s tri.obj tri.before || fail "aoview-exact -o $args overwrote its input"
+done
+
 [ $failures -eq 0 ] && echo "all passed"
 finish

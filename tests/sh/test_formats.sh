@@ -72,9 +72,17 @@ if [ -z "$encode" ] || [ ! -x "$encode" ]; then
   fail "AO_GLTF_ENCODE (tests/gltf_encode) is not set: run through meson test"
   encode=false
 fi
-for form in strip fan sparse quantized; do
+for form in strip fan sparse quantized quantized-packed; do
   python3 "$convert" "$obj" "$form.gltf" "--$form" || fail "mesh_convert.py --$form failed"
 done
+# The quantized shorts packed 6 bytes apart, off glTF's alignment and without KHR_mesh_quantization
+# declared (cesium-native's cubeQuantized.glb's layout, which its reader loads): read as they lie,
+# with one line saying so, into the image of the same shorts 8 bytes apart, bit for bit.
+"$bin" --headless --size 96x72 --spp 4 quantized-packed.gltf -o packed.pfm 2>packed.err &&
+  "$bin" --headless -q --size 96x72 --spp 4 quantized.gltf -o aligned.pfm || fail "the quantized forms did not render"
+grep -qx "aoview: quantized-packed.gltf: accessor 0 (POSITION) at byte 0 of its buffer, 6 bytes apart, off glTF's alignment: read as it lies" packed.err ||
+  fail "quantized-packed.gltf: no line saying it was read off its alignment: $(cat packed.err)"
+cmp -s aligned.pfm packed.pfm || fail "the packed shorts render otherwise than the aligned ones: $(compare aligned.pfm packed.pfm)"
 for form in meshopt meshopt-quantized draco draco-sequential draco-quantized draco-fewer; do
   "$encode" "$form" "$obj" "$form.glb" || fail "gltf_encode $form failed"
 done

@@ -219,6 +219,16 @@ differ)
   status=$?
   [ "$status" = 1 ] && [ "$(grep -c "image.scene:1: 'image' 8192x8192: its buffers need about 4.8 GiB" mismatch.err)" = 1 ] &&
     [ ! -e mismatch.pfm ] || fail "an image line past the budget was not refused once (status $status): $(cat mismatch.err)"
+  # The scene budget is rank 0's on every rank (by default its machine's): rank 1 given one that
+  # alone would refuse the mesh (28,800 triangles: about 2.5 MiB) loads it as rank 0 does, and the
+  # image is one process's.
+  python3 "$AO_SOURCE_ROOT/tests/tools/mesh_convert.py" --grid 120 grid.obj || fail "no grid"
+  "${mpirun[@]}" -np 1 "$mpi_bin" --headless -q --size 96x64 --spp 16 --threads 1 -o budget.pfm grid.obj : \
+    -np 1 "$mpi_bin" --size 96x64 --spp 16 --threads 1 --scene-budget 1M grid.obj 2>budget.err ||
+    fail "rank 1 given a smaller --scene-budget: $(cat budget.err)"
+  "$bin" --headless -q --size 96x64 --spp 16 --threads 2 -o budget-1.pfm grid.obj || fail "aoview failed"
+  d=$(max_diff budget-1.pfm budget.pfm 2>/dev/null)
+  [ "$d" = 0.0 ] || fail "the ranks under rank 0's budget differ from one process by ${d:-?}"
   cp "$spheres" copy.scene
   "${mpirun[@]}" -np 2 "$mpi_bin" --headless --size 96x64 --spp 16 --stats copy.scene -o mismatch.pfm copy.scene \
     2>mismatch.err
@@ -252,7 +262,8 @@ killed)
   kill -KILL "$victim"
   wait "$long_pid"
   status=$?
-  [ "$status" != 0 ] || fail "a killed rank ended the run with status 0"
+  # mpirun's status is the first failed rank's (docs/mpi.md): 128 + SIGKILL; rank 0 exits 1.
+  [ "$status" = 137 ] || fail "a killed rank ended mpirun with status $status, expected 137"
   line=$(grep "^aoview: rank 2 lost (killed or crashed); the last copy, gathered [0-9.]* s ago, stopped at [0-9]* spp" long.err)
   [ -n "$line" ] || fail "no line naming rank 2 and the copy's age: $(cat long.err)"
   age=$(sed -n 's/.* gathered \([0-9.]*\) s ago.*/\1/p' <<<"$line")
@@ -297,6 +308,9 @@ sigint)
   # process group as well, and mpirun takes a second SIGINT for "abort now".
   kill -INT "$(pgrep -P "$long_pid")"
   wait "$long_pid"
+  status=$?
+  # Open MPI ends an interrupted mpirun as an aborted job, status 1, whatever its ranks' (rank 0: 143).
+  [ "$status" = 1 ] || fail "SIGINT to mpirun ended it with status $status, expected 1 (docs/mpi.md)"
   grep -q "^aoview: interrupted by SIGTERM at [0-9]* spp" long.err || fail "no interruption line: $(cat long.err)"
   grep -q "lost" long.err && fail "a rank named lost after SIGINT: $(cat long.err)"
   complete_pfm long.pfm 96 64 || fail "no complete image after SIGINT: $(ls -A)"

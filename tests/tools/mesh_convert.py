@@ -13,12 +13,15 @@ mesh format, for tests and load-time measurements:
       --sparse     positions as a sparse accessor without a bufferView (every vertex an entry)
       --quantized  positions as normalized shorts under a node that scales them back
                    (KHR_mesh_quantization)
+      --quantized-packed  the same shorts packed 6 bytes apart (no byteStride: off glTF's
+                   4-byte alignment), without declaring KHR_mesh_quantization, as cesium-native's
+                   test file cubeQuantized.glb has them
   mesh_convert.py --grid N OUT.obj          an N x N height field of 2 N^2 triangles as OBJ
 
 glTF and GLB files place the mesh under two nested nodes whose transforms (a matrix, then
 translation/rotation/scale) cancel out, so the loaded mesh equals the OBJ's up to rounding. The
 strip, fan and sparse forms decode to exactly the OBJ's positions and triangles, corners in the
-same order; the quantized form to positions within 1/65534 of the mesh's size.
+same order; the quantized forms to positions within 1/65534 of the mesh's size.
 """
 import base64
 import json
@@ -158,14 +161,15 @@ def write_form(path, positions, triangles, form):
         accessors.append(dict(accessor, bufferView=len(views) - 1))
         return len(accessors) - 1
 
-    if form == 'quantized':
+    if form in ('quantized', 'quantized-packed'):
         lo = [min(p[k] for p in positions) for k in range(3)]
         size = max(max(p[k] for p in positions) - lo[k] for k in range(3))
         q = []
         for p in positions:
-            q += [round((p[k] - lo[k]) / size * 32767) for k in range(3)] + [0]
+            q += [round((p[k] - lo[k]) / size * 32767) for k in range(3)] + ([0] if form == 'quantized' else [])
         position = add(struct.pack('<%dh' % len(q), *q), componentType=5122, normalized=True, count=n, type='VEC3')
-        views[-1]['byteStride'] = 8
+        if form == 'quantized':
+            views[-1]['byteStride'] = 8
         node = {'mesh': 0, 'translation': lo, 'scale': [size] * 3}
     elif form == 'sparse':
         at = struct.pack('<%dI' % n, *range(n))
@@ -226,7 +230,8 @@ def main(argv):
     out = argv[2]
     if out.endswith('.stl'):
         write_stl(out, positions, triangles, '--ascii' in argv)
-    elif out.endswith('.gltf') and len(argv) > 3 and argv[3] in ('--strip', '--fan', '--sparse', '--quantized'):
+    elif out.endswith('.gltf') and len(argv) > 3 and argv[3] in ('--strip', '--fan', '--sparse', '--quantized',
+                                                                 '--quantized-packed'):
         write_form(out, positions, triangles, argv[3][2:])
     elif out.endswith('.gltf'):
         write_gltf(out, positions, triangles, '--embed' in argv)

@@ -292,7 +292,7 @@ struct bytes binary_square(void)
 
 void load_at_crease(struct ao_mesh *mesh, const char *path, double crease)
 {
-    struct ao_budget budget = {.limit = AO_BUDGET_DEFAULT};
+    struct ao_budget budget = {.limit = AO_BUDGET_LEAST};
     struct ao_model model;
     assert_true(ao_load_model(&model, path, &budget, crease));
     assert_int_equal(model.mesh_count, 1);

@@ -60,7 +60,7 @@ static void test_defaults(void **state)
     assert_null(o.stats_path);
     assert_null(o.reference_path);
     assert_false(o.quiet || o.help || o.version);
-    assert_true(o.scene_budget == AO_BUDGET_DEFAULT);
+    assert_true(o.scene_budget == ao_budget_default());
     assert_true(o.ground);
     assert_int_equal(o.bvh, AO_BVH_AUTO);
 }
@@ -387,6 +387,19 @@ static void test_crease_angle(void **state)
     REJECT("--crease-angle", "missing value", "--crease-angle");
 }
 
+/* Every option that takes a real number refuses an empty value and blanks before one, as it
+ * refuses any other value that is not a number (strtod reads '' as 0 and skips blanks). */
+static void test_real_options_refuse_empty_values(void **state)
+{
+    (void)state;
+    static char *const names[] = {"--crease-angle", "--ao-distance", "--target-error", "--time"};
+    for (size_t i = 0; i < sizeof names / sizeof names[0]; i++) {
+        REJECT(names[i], "got ''", names[i], "");
+        REJECT(names[i], "got ' 1'", names[i], " 1");
+        REJECT(names[i], "got ' '", names[i], " ");
+    }
+}
+
 static void test_usage_lists_every_option(void **state)
 {
     (void)state;
@@ -394,7 +407,7 @@ static void test_usage_lists_every_option(void **state)
     const char *names[] = {"--headless", "-o, --output", "--spp", "--spppp", "--sampling",
                            "--aa", "--no-aa", "--size", "--threads", "--seed", "--ao-distance",
                            "--stats", "--reference", "-q, --quiet", "-h, --help", "--version",
-                           "--time", "--view", "--shading", "--compare A,B", "--scene-budget SIZE", "default 1G", "--ground on|off", "--crease-angle DEG", "N normals", "F flat/Phong", "D difference",
+                           "--time", "--view", "--shading", "--compare A,B", "--scene-budget SIZE", "a quarter of the machine's\n", "memory, at least 1G", "--ground on|off", "--crease-angle DEG", "N normals", "F flat/Phong", "D difference",
                            "default 256", "default cosine", "640x480", "Esc",
                            /* every window key and the mouse buttons */
                            "U/H/C", "A anti-aliasing", "Space pause", "R restart", "+/- samples per pass",
@@ -425,6 +438,7 @@ int main(void)
         cmocka_unit_test(test_ground),
         cmocka_unit_test(test_bvh),
         cmocka_unit_test(test_crease_angle),
+        cmocka_unit_test(test_real_options_refuse_empty_values),
         cmocka_unit_test(test_usage_lists_every_option),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);

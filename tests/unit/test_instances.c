@@ -211,7 +211,7 @@ struct fixture {
 static void setup_bvh(struct fixture *f, const char *name, enum ao_instancing instancing, bool ground, enum ao_bvh bvh)
 {
     char path[128];
-    struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT, .no_ground = !ground, .instancing = instancing,
+    struct ao_scene_options options = {.budget = AO_BUDGET_LEAST, .no_ground = !ground, .instancing = instancing,
                                        .bvh = bvh};
     assert_true(ao_scene_load(&f->scene, in_dir(name, path, sizeof path), &options));
     f->tracer = ao_tracer_create_with(&f->scene, AO_BACKEND_EMBREE);
@@ -494,8 +494,8 @@ static void test_instanced_image_matches_flattened(void **state)
     teardown(&flat);
 }
 
-/* The three BVHs (budget.h) trace the same rays to the same hits, so the bunnies, instanced and
- * flattened, render the same image bit for bit with each: Embree's robust triangle test is the
+/* The BVHs (modes.h: MEDIUM, COMPACT, LOW and LOW_COMPACT) trace the same rays to the same hits, so
+ * the bunnies, instanced and flattened, render the same image bit for bit with each: Embree's robust triangle test is the
  * same arithmetic on the same vertices whatever the tree and its leaves (measured on four scenes
  * in docs/formats.md). */
 static void test_every_bvh_renders_the_same_image(void **state)
@@ -508,7 +508,7 @@ static void test_every_bvh_renders_the_same_image(void **state)
         struct fixture medium;
         setup_bvh(&medium, "bunnies.scene", how, false, AO_BVH_MEDIUM);
         float *want = render(&medium, W, H, N, AO_OUTPUT_AO, true);
-        for (enum ao_bvh bvh = AO_BVH_COMPACT; bvh <= AO_BVH_LOW; bvh++) {
+        for (enum ao_bvh bvh = AO_BVH_COMPACT; bvh <= AO_BVH_LOW_COMPACT; bvh++) {
             struct fixture other;
             setup_bvh(&other, "bunnies.scene", how, false, bvh);
             assert_int_equal(other.scene.bvh, bvh);
@@ -692,7 +692,7 @@ static void test_a_mesh_lines_crease_angle(void **state)
     write_text("crease_bad.scene", text);
     char path[128];
     struct ao_scene scene;
-    struct ao_scene_options options = {.budget = AO_BUDGET_DEFAULT};
+    struct ao_scene_options options = {.budget = AO_BUDGET_LEAST};
     assert_false(ao_scene_load(&scene, in_dir("crease_bad.scene", path, sizeof path), &options));
 }
 

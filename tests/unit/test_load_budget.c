@@ -1,6 +1,6 @@
-/* The scene budget through the loaders: each format refuses a mesh that would not fit before
- * allocating it, a scene charges every mesh line, and AUTO builds the compact BVH only where
- * nothing else fits. */
+/* The scene budget: its default from the machine's memory; through the loaders, each format
+ * refuses a mesh that would not fit before allocating it, a scene charges every mesh line, and
+ * AUTO builds the compact BVH only where nothing else fits. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -15,6 +15,29 @@
 #include "scene_load.h"
 
 #include "mesh_fixture.h"
+
+/* The default budget is a quarter of the machine's memory, at least 1 GiB, and the machine's memory
+ * is what the kernel counts (/proc/meminfo's MemTotal, where there is one: the same pages). */
+static void test_budget_default_follows_memory(void **state)
+{
+    (void)state;
+    const uint64_t gib = (uint64_t)1 << 30;
+    assert_true(ao_budget_default_for(0) == gib);
+    assert_true(ao_budget_default_for(2 * gib) == gib);
+    assert_true(ao_budget_default_for(4 * gib) == gib);
+    assert_true(ao_budget_default_for(4 * gib + 4) == gib + 1);
+    assert_true(ao_budget_default_for(24 * gib) == 6 * gib);
+    uint64_t memory = ao_budget_machine_memory();
+    assert_true(memory > 0);
+    assert_true(ao_budget_default() == (memory / 4 > gib ? memory / 4 : gib));
+    FILE *info = fopen("/proc/meminfo", "r");
+    unsigned long long kib = 0;
+    if (info) {
+        assert_int_equal(fscanf(info, "MemTotal: %llu kB", &kib), 1);
+        fclose(info);
+        assert_true(memory == kib * 1024);
+    }
+}
 
 /* The loaders refuse, at the right place, a mesh whose charge (ao_budget_mesh) does not fit beside
  * the file (charged while it is read): OBJ and ASCII formats as the counts grow, binary PLY and STL
@@ -69,6 +92,7 @@ int main(void)
     if (!mesh_fixture_begin("test_load_budget"))
         return 77;
     const struct CMUnitTest tests[] = {
+        cmocka_unit_test(test_budget_default_follows_memory),
         cmocka_unit_test(test_loaders_keep_to_the_budget),
     };
     return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);

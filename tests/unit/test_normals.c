@@ -253,6 +253,49 @@ static void test_crease_many_triangles_at_a_vertex(void **state)
     }
 }
 
+/* Triangles that meet at a vertex without sharing an edge there are sides of their own below
+ * 180 degrees, however close their normals: two coplanar triangles touching at a corner (a bowtie
+ * of two open fans), and two closed fans around one vertex, nearly flat and facing the same way
+ * (each seven triangles at 0.01 below the vertex). The crease pass may skip a vertex only where its
+ * triangles close into one fan (normals_part's certificate: without its test of the corners'
+ * neighbours the first would not split, without its test of the angles' sum the second). */
+static void test_crease_fans_without_a_shared_edge(void **state)
+{
+    (void)state;
+    static const char open_fans[] = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv -1 0 0\nv -1 -1 0\nf 1 2 3\nf 1 4 5\n";
+    struct ao_mesh mesh;
+    const char *path = temp_file("bowtie.obj", open_fans, sizeof open_fans - 1);
+    load_at_crease(&mesh, path, 180.0);
+    assert_int_equal(mesh.vertex_count, 5);
+    ao_mesh_finish(&mesh);
+    load_at_crease(&mesh, path, AO_MESH_CREASE_DEFAULT);
+    assert_int_equal(mesh.vertex_count, 6);
+    assert_int_not_equal(mesh.indices[0], mesh.indices[3]);
+    assert_vec3_near(mesh.normals[mesh.indices[0]], 0, 0, 1);
+    assert_vec3_near(mesh.normals[mesh.indices[3]], 0, 0, 1);
+    ao_mesh_finish(&mesh);
+
+    enum { RIM = 7 };
+    char text[2048];
+    int n = sprintf(text, "v 0 0 0\n");
+    for (int fan = 0; fan < 2; fan++)
+        for (int k = 0; k < RIM; k++) {
+            double angle = 6.283185307179586 * (k + 0.5 * fan) / RIM;
+            n += sprintf(text + n, "v %.9f %.9f %s\n", cos(angle), sin(angle), fan ? "-0.02" : "-0.01");
+        }
+    for (int fan = 0; fan < 2; fan++)
+        for (int k = 0; k < RIM; k++)
+            n += sprintf(text + n, "f 1 %d %d\n", 2 + fan * RIM + k, 2 + fan * RIM + (k + 1) % RIM);
+    path = temp_file("two_fans.obj", text, (size_t)n);
+    load_at_crease(&mesh, path, 180.0);
+    assert_int_equal(mesh.vertex_count, 1 + 2 * RIM);
+    ao_mesh_finish(&mesh);
+    load_at_crease(&mesh, path, AO_MESH_CREASE_DEFAULT);
+    assert_int_equal(mesh.vertex_count, 2 + 2 * RIM);
+    assert_int_not_equal(mesh.indices[0], mesh.indices[3 * RIM]);
+    ao_mesh_finish(&mesh);
+}
+
 /* Normals given as NaN, infinite or zero are made as if not given (counted, and noted with the
  * count by the model): an OBJ's from its triangle (smooth up to the crease angle), a glTF's flat. */
 static void test_invalid_normals(void **state)
@@ -260,7 +303,7 @@ static void test_invalid_normals(void **state)
     (void)state;
     static const char obj[] = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvn nan 0 1\nvn inf 0 0\nvn 0 0 0\nvn 0 0 2\n"
                               "f 1//1 2//2 3//4\nf 1//3 3//4 2//2\n";
-    struct ao_budget budget = {.limit = AO_BUDGET_DEFAULT};
+    struct ao_budget budget = {.limit = AO_BUDGET_LEAST};
     struct ao_model model;
     assert_true(ao_load_model(&model, temp_file("nan.obj", obj, sizeof obj - 1), &budget, 40.0));
     assert_int_equal(model.invalid_normals, 3);
@@ -344,6 +387,7 @@ int main(void)
         cmocka_unit_test(test_crease_cube),
         cmocka_unit_test(test_crease_keeps_a_smooth_mesh),
         cmocka_unit_test(test_crease_many_triangles_at_a_vertex),
+        cmocka_unit_test(test_crease_fans_without_a_shared_edge),
         cmocka_unit_test(test_invalid_normals),
         cmocka_unit_test(test_bunny),
     };

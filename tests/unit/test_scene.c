@@ -8,10 +8,13 @@
 #include <stdint.h>
 #include <cmocka.h>
 
+#include <errno.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include "mesh_fixture.h"
@@ -176,7 +179,7 @@ static void test_line_limits(void **state)
 static void test_file_errors(void **state)
 {
     (void)state;
-    char err[8192], want[4300];
+    char err[8192], want[4500];
     struct ao_scene scene;
     const char *path = temp_file("nul.scene", "sphere center 0 0 0 radius 1\n\0x\n", 32);
     assert_false(load_captured_scene(&scene, FROM_FILE, path, NULL, NULL, err, sizeof err));
@@ -187,6 +190,35 @@ static void test_file_errors(void **state)
     assert_false(load_captured_scene(&scene, FROM_FILE, path, NULL, NULL, err, sizeof err));
     snprintf(want, sizeof want, "%s: cannot open: No such file or directory\n", path);
     assert_string_equal(err, want);
+    /* Only a .scene file (any case) is read as a scene; any other file, a scene's text in it or not,
+     * is named by its extension, unread (README.md was parsed: "README.md:3: unknown keyword"). */
+    static const char text[] = "camera eye 0 1 4 target 0 0 0\nsphere center 0 0 0 radius 1\n";
+    static const char *const others[][2] = {{"notes.md", "extension '.md'"}, {"scene.txt", "extension '.txt'"},
+                                            {"scene", "no extension"}, {"dir.scene/scene", "no extension"}};
+    for (size_t i = 0; i < sizeof others / sizeof others[0]; i++) {
+        path = temp_file(strchr(others[i][0], '/') ? "scene" : others[i][0], text, sizeof text - 1);
+        if (strchr(others[i][0], '/')) {   /* a dot in a folder's name is no extension */
+            static char folder[4200], file[4300];
+            snprintf(folder, sizeof folder, "%.*s/dir.scene", (int)(strrchr(path, '/') - path), path);
+            snprintf(file, sizeof file, "%s/scene", folder);
+            assert_int_equal(mkdir(folder, 0700) == 0 || errno == EEXIST, 1);
+            assert_int_equal(rename(path, file), 0);
+            path = file;
+        }
+        assert_false(load_captured_scene(&scene, FROM_FILE, path, NULL, NULL, err, sizeof err));
+        snprintf(want, sizeof want, "%s: %s: aoview reads scenes (.scene) and meshes (.obj, .ply, .stl, .gltf or .glb)\n",
+                 path, others[i][1]);
+        assert_string_equal(err, want);
+        assert_scene_empty(&scene);
+        if (strchr(others[i][0], '/')) {
+            assert_int_equal(unlink(path), 0);
+            *strrchr((char *)path, '/') = '\0';
+            assert_int_equal(rmdir(path), 0);
+        }
+    }
+    path = temp_file("UPPER.SCENE", text, sizeof text - 1);
+    assert_true(load_captured_scene(&scene, FROM_FILE, path, NULL, NULL, err, sizeof err));
+    ao_scene_finish(&scene);
 }
 
 /* What a file leaves out: background 1, albedo 0.8, no AO distance, up 0 1 0, fov 40, and a camera
@@ -258,8 +290,8 @@ static uint64_t least_budget(const struct path *p, struct ao_scene_options optio
 
 /* The BVH through every entry path: AUTO (NULL options) builds MEDIUM; a budget where MEDIUM's
  * charges do not fit but COMPACT's do builds COMPACT, with the note that says so; one where
- * neither fits is refused; asked for, each BVH is built as asked, charged at its own rates, with no
- * note. The same rule on every path (the fault this guards against: the BVH settled in two of four
+ * neither fits is refused; LOW loads where AUTO does, with compact leaves and the note where AUTO
+ * builds COMPACT; asked for, each BVH is built as asked, charged at its own rates, with no note. The same rule on every path (the fault this guards against: the BVH settled in two of four
  * entry points). */
 static void test_bvh_through_every_entry(void **state)
 {
@@ -286,7 +318,7 @@ static void test_bvh_through_every_entry(void **state)
         uint64_t compact = least_budget(p, (struct ao_scene_options){.bvh = AO_BVH_COMPACT});
         uint64_t low = least_budget(p, (struct ao_scene_options){.bvh = AO_BVH_LOW});
         uint64_t automatic = least_budget(p, (struct ao_scene_options){0});
-        if (!(compact < medium && low == medium && automatic == compact))
+        if (!(compact < medium && low == compact && automatic == compact))
             fail_msg("%s: least budgets MEDIUM %llu, COMPACT %llu, LOW %llu, AUTO %llu", p->name,
                      (unsigned long long)medium, (unsigned long long)compact, (unsigned long long)low,
                      (unsigned long long)automatic);
@@ -301,6 +333,12 @@ static void test_bvh_through_every_entry(void **state)
         assert_int_equal(scene.bvh, AO_BVH_COMPACT);
         if (!strstr(scene.notes, "BVH built compact to fit the scene budget"))
             fail_msg("%s: notes \"%s\"", p->name, scene.notes);
+        ao_scene_finish(&scene);
+        options.bvh = AO_BVH_LOW;
+        assert_true(load_captured_scene(&scene, p->entry, p->path, p->text, &options, err, sizeof err));
+        assert_int_equal(scene.bvh, AO_BVH_LOW_COMPACT);
+        if (!strstr(scene.notes, "BVH built compact to fit the scene budget"))
+            fail_msg("%s: LOW's notes \"%s\"", p->name, scene.notes);
         ao_scene_finish(&scene);
         /* Asked for: as asked, no note. */
         for (enum ao_bvh bvh = AO_BVH_MEDIUM; bvh <= AO_BVH_LOW; bvh++) {
@@ -361,7 +399,7 @@ static void test_budget_through_every_entry(void **state)
 }
 
 /* One budget covers the whole scene: a mesh file that three lines name is read and charged once,
- * each of its placements once, and each copy of it that flattening makes (a one-triangle mesh
+ * each of its placements once, and each copy of it that flattening makes, its structures too (a one-triangle mesh
  * placed three times is flattened: the mesh moved for the last placement, copied for the others);
  * with one byte less it is instanced, and below the mesh and its placements refused. */
 static void test_scene_budget_covers_every_mesh_line(void **state)
@@ -372,9 +410,10 @@ static void test_scene_budget_covers_every_mesh_line(void **state)
     static const char text[] = "camera eye 0 1 4 target 0 0 0\nmesh tri.obj\nmesh tri.obj translate 1 0 0\n"
                                "mesh tri.obj translate 2 0 0\n";
     const char *path = temp_file("three.scene", text, sizeof text - 1);
-    /* The scene's text, the mesh (and its structures), three placements and two copies, at the MEDIUM
-     * BVH's rates. */
-    uint64_t need = sizeof text + 3 * medium_charge(1, 3) + AO_BUDGET_MESH + 3 * AO_BUDGET_INSTANCE;
+    /* The scene's text, the mesh (and its structures), three placements and two copies (and theirs),
+     * at the MEDIUM BVH's rates. */
+    uint64_t need = sizeof text + 3 * medium_charge(1, 3) + AO_BUDGET_MESH + 3 * AO_BUDGET_INSTANCE +
+                    2 * AO_BUDGET_COPY;
     struct ao_scene_options medium = {.budget = need, .bvh = AO_BVH_MEDIUM};
     struct ao_scene scene;
     assert_true(ao_scene_load(&scene, path, &medium));
@@ -424,17 +463,25 @@ static void test_budget_builds_compact_where_only_that_fits(void **state)
     assert_int_equal(scene.bvh, AO_BVH_COMPACT);
     ao_scene_finish(&scene);
     assert_false(ao_scene_load(&scene, path, &(struct ao_scene_options){.budget = compact - 1}));
-    /* Asked for, each is charged at its own rates, without a note. */
+    /* Asked for, each is charged at its own rates, without a note; LOW at AUTO's, so that it loads
+     * whatever AUTO loads: with compact leaves where only COMPACT's charges fit. */
     struct ao_scene_options asked = {.budget = compact, .bvh = AO_BVH_COMPACT};
     assert_true(ao_scene_load(&scene, path, &asked));
     assert_int_equal(scene.bvh, AO_BVH_COMPACT);
     assert_string_equal(scene.notes, "");
     ao_scene_finish(&scene);
     asked.bvh = AO_BVH_LOW;
+    assert_true(ao_scene_load(&scene, path, &asked));
+    assert_int_equal(scene.bvh, AO_BVH_LOW_COMPACT);
+    assert_string_equal(scene.notes, "one.scene: BVH built compact to fit the scene budget (slower rays; "
+                                     "a larger --scene-budget gets the faster BVH)");
+    ao_scene_finish(&scene);
+    asked.budget = compact - 1;
     assert_false(ao_scene_load(&scene, path, &asked));
     asked.budget = medium;
     assert_true(ao_scene_load(&scene, path, &asked));
     assert_int_equal(scene.bvh, AO_BVH_LOW);
+    assert_string_equal(scene.notes, "");
     ao_scene_finish(&scene);
 }
 
