@@ -544,10 +544,15 @@ EOF
              xdotool mouseup 3 ;;
         zoom) xdotool mousemove --window "$wid" $((3 * WIDTH / 4)) $((HEIGHT / 2)) click 4 ;;
         esac
-        sleep 0.3
-        # Restarted, each side is back below the spp it had 1.5 s into its run (the move and the
-        # reading take well under that); else its spp only grows.
-        read -r new_a _ new_b _ < <(sides)
+        # Restarted, each side is back below the spp it had 1.5 s into its run; else its spp only
+        # grows. So any reading below proves the restart, and the title is read every 0.1 s for
+        # 1 s (a restarted side takes about 1.5 s to climb back, so no restart is missed; a GL
+        # thread that a sanitizer and a busy machine hold up for a few tenths is waited for).
+        for _ in 1 2 3 4 5 6 7 8 9 10; do
+            sleep 0.1
+            read -r new_a _ new_b _ < <(sides)
+            [ "$new_a" -lt "$spp_a" ] && [ "$new_b" -lt "$spp_b" ] && break
+        done
         echo "$move: A $spp_a -> $new_a spp, B $spp_b -> $new_b spp"
         [ "$new_a" -lt "$spp_a" ] && [ "$new_b" -lt "$spp_b" ] || fail "a $move did not restart both sides"
     done
