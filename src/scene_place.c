@@ -558,7 +558,8 @@ static bool build_quads(struct ao_scene *s, struct ao_world *w, size_t *next, st
 
 /* Moves the scene from world space into its local frame and narrows it to float: every mesh
  * placement (moved into the frame, or instanced with its map into it), quad, sphere centre and the
- * camera become world - origin, with the origin at the bounding box's centre, so that float
+ * camera become world - origin, with the origin at the bounding box's centre (a scene without
+ * geometry: the box of its camera's eye and target), so that float
  * precision follows the scene's size rather than its distance from (0, 0, 0). Where the box holds
  * (0, 0, 0) its coordinates are at most its size already (one bit worse than from the centre) and
  * the origin stays there, leaving such scenes exactly as written. A scene without a camera line
@@ -572,7 +573,11 @@ bool ao_world_place(struct ao_scene *s, struct ao_world *w, struct ao_cursor *c)
     bool any = ao_world_bounds(s, w, &lo, &hi);
     if (!check_range(w, c, any, lo, hi))
         return false;
-    if (any && !(lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0 && lo.z <= 0.0 && hi.z >= 0.0))
+    if (!any && w->has_camera) { /* nothing to frame: the frame is the camera's, as far as it stands */
+        lo = hi = w->eye;
+        grow(&lo, &hi, w->target);
+    }
+    if ((any || w->has_camera) && !(lo.x <= 0.0 && hi.x >= 0.0 && lo.y <= 0.0 && hi.y >= 0.0 && lo.z <= 0.0 && hi.z >= 0.0))
         origin = ao_dvec3_scale(ao_dvec3_add(lo, hi), 0.5);
     s->origin[0] = origin.x, s->origin[1] = origin.y, s->origin[2] = origin.z;
     c->line = 0;
