@@ -215,7 +215,7 @@ static void *watch_signals(void *arg)
 {
     struct ao_interrupt *in = arg;
     int sig;
-    if (sigwait(&in->signals, &sig) != 0)
+    if (sigwait(&in->signals, &sig) != 0 || atomic_load(&in->closing))
         return NULL;
     struct ao_render *render = atomic_load(&in->render);
     if (!atomic_load(&in->rendering))
@@ -226,7 +226,7 @@ static void *watch_signals(void *arg)
         end_at_once(in, sig, ENDING_SILENT);
     atomic_store(&in->caught, sig);
     ao_render_stop(render);
-    if (sigwait(&in->signals, &sig) == 0)
+    if (sigwait(&in->signals, &sig) == 0 && !atomic_load(&in->closing))
         end_at_once(in, sig, ENDING_SECOND);
     return NULL;
 }
@@ -250,14 +250,13 @@ void ao_app_block_signals(struct ao_app *app)
 
 bool ao_app_start_watcher(struct ao_app *app, bool silent)
 {
-    pthread_t thread;
     app->interrupt.silent = silent;
     app->interrupt.stats = &app->stats;
-    if (pthread_create(&thread, NULL, watch_signals, &app->interrupt) != 0) {
+    if (pthread_create(&app->interrupt.watcher, NULL, watch_signals, &app->interrupt) != 0) {
         fprintf(stderr, "aoview: could not start the signal watcher thread\n");
         return false;
     }
-    pthread_detach(thread);
+    app->interrupt.watching = true;
     return true;
 }
 
@@ -394,8 +393,21 @@ int ao_app_write(struct ao_app *app, const struct ao_options *opts, const struct
     return status;
 }
 
+/* Wakes the watcher with a signal of its set sent to it alone, which it reads as the end; it is
+ * joined before the renderer it may stop is destroyed. */
+static void stop_watcher(struct ao_interrupt *in)
+{
+    if (!in->watching)
+        return;
+    atomic_store(&in->closing, true);
+    pthread_kill(in->watcher, SIGTERM);
+    pthread_join(in->watcher, NULL);
+    in->watching = false;
+}
+
 int ao_app_finish(struct ao_app *app, int status)
 {
+    stop_watcher(&app->interrupt);
     ao_render_destroy(app->render);
     app->render = NULL;
     struct ao_stats *st = &app->stats;

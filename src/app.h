@@ -4,6 +4,7 @@
 #ifndef AO_APP_H
 #define AO_APP_H
 
+#include <pthread.h>
 #include <signal.h>
 #include <stdatomic.h>
 #include <stdbool.h>
@@ -65,6 +66,9 @@ struct ao_interrupt {
     const char *output;      /* -o as the lines name it (ao_app_load sets it) */
     atomic_bool writing;     /* ao_app_write began writing the output... */
     atomic_uint written_before;   /* ...when ao_image_written said this */
+    pthread_t watcher;       /* the thread that takes the signals... */
+    bool watching;           /* ...started by ao_app_start_watcher, not yet ended */
+    atomic_bool closing;     /* ao_app_finish is ending the watcher */
 };
 
 /* Everything a front end owns around its renderer; zero-initialise, release with ao_app_finish. */
@@ -151,7 +155,8 @@ bool ao_app_wait(struct ao_app *app, int *sig);
 int ao_app_write(struct ao_app *app, const struct ao_options *opts, const struct ao_frame *frame, const char *why,
                  bool last_row, int status);
 
-/* Destroys the renderer, closes --stats (a failed write turns a status of 0 into AO_EXIT_RUNTIME;
+/* Ends the signal watcher first (a signal from then on is ignored: the process is ending), then
+ * destroys the renderer, closes --stats (a failed write turns a status of 0 into AO_EXIT_RUNTIME;
  * a file this run created and got no row into is removed), frees the rest; returns the
  * status. */
 int ao_app_finish(struct ao_app *app, int status);
