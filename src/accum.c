@@ -17,7 +17,7 @@ bool ao_accum_init(struct ao_accum *a, int width, int height)
     size_t pixels = (size_t)width * (size_t)height;
     a->width = width;
     a->height = height;
-    a->sum = ao_pages_map(accum_bytes(width, height));
+    a->sum = ao_pages_alloc(accum_bytes(width, height));
     if (!a->sum) {
         ao_text_report("aoview: out of memory for a %dx%d accumulation buffer", width, height);
         ao_accum_finish(a);
@@ -30,7 +30,7 @@ bool ao_accum_init(struct ao_accum *a, int width, int height)
 
 void ao_accum_finish(struct ao_accum *a)
 {
-    ao_pages_unmap(a->sum, accum_bytes(a->width, a->height));
+    ao_pages_free(a->sum, accum_bytes(a->width, a->height));
     memset(a, 0, sizeof *a);
 }
 

@@ -21,7 +21,7 @@ void ao_frames_init(struct ao_frames *fs)
 void ao_frames_finish(struct ao_frames *fs)
 {
     for (int k = 0; k < 3; k++) {
-        ao_pages_unmap(fs->frames[k].rgb, fs->room[k][0] * sizeof *fs->frames[k].rgb);
+        ao_pages_free(fs->frames[k].rgb, fs->room[k][0] * sizeof *fs->frames[k].rgb);
         free(fs->frames[k].tile_error);
     }
 }
@@ -32,17 +32,17 @@ struct ao_frame *ao_frames_back(struct ao_frames *fs, int width, int height, int
     return ao_frames_back_stamped(fs, width, height, tiles, &kept);
 }
 
-/* Makes *rgb hold at least `count` floats, *room counting what it holds, in pages of their own
- * (pages.h: a frame is written whole as soon as it grows); what it held is lost when it grows,
- * which only a new size makes it do. False (the buffer untouched) when memory is short. */
+/* Makes *rgb hold at least `count` floats, *room counting what it holds, as pages.h gives big
+ * buffers (a frame is written whole as soon as it grows); what it held is lost when it grows, which
+ * only a new size makes it do. False (the buffer untouched) when memory is short. */
 static bool grow_pixels(float **rgb, size_t *room, size_t count)
 {
     if (count <= *room)
         return true;
-    float *more = ao_pages_map(count * sizeof *more);
+    float *more = ao_pages_alloc(count * sizeof *more);
     if (!more)
         return false;
-    ao_pages_unmap(*rgb, *room * sizeof *more);
+    ao_pages_free(*rgb, *room * sizeof *more);
     *rgb = more;
     *room = count;
     return true;

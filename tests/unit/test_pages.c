@@ -1,6 +1,6 @@
-/* Big buffers mapped from the system (pages.c): zero and writable to their last byte, aligned to
- * 2 MiB and advised into huge pages from AO_PAGES_HUGE_FROM (the mapping's VmFlags in
- * /proc/self/smaps say "hg"), in the system's pages below it; given back whole. */
+/* Big buffers (pages.c): zero and writable to their last byte; from AO_PAGES_HUGE_FROM mapped
+ * 2 MiB-aligned and advised into huge pages (the mapping's VmFlags in /proc/self/smaps say "hg")
+ * and given back whole, below it the heap's. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -49,24 +49,24 @@ static void check_zero_and_write(unsigned char *p, size_t size)
 static void test_small_buffers(void **state)
 {
     (void)state;
-    static const size_t sizes[] = {1, 4095, 4096, 4097, AO_PAGES_HUGE_FROM - 1};
+    static const size_t sizes[] = {1, 4095, 4097, 200000, AO_PAGES_HUGE_FROM - 1};
     for (size_t k = 0; k < sizeof sizes / sizeof *sizes; k++) {
-        unsigned char *p = ao_pages_map(sizes[k]);
+        unsigned char *p = ao_pages_alloc(sizes[k]);
         assert_non_null(p);
-        assert_int_equal((uintptr_t)p % 64, 0);
+        assert_int_equal((uintptr_t)p % _Alignof(double), 0);
         check_zero_and_write(p, sizes[k]);
         assert_false(advised_huge(p));
-        ao_pages_unmap(p, sizes[k]);
+        ao_pages_free(p, sizes[k]);
     }
-    ao_pages_unmap(NULL, 100);
+    ao_pages_free(NULL, 100);
 }
 
 static void test_big_buffers(void **state)
 {
     (void)state;
-    static const size_t sizes[] = {AO_PAGES_HUGE_FROM, HUGE_PAGE, HUGE_PAGE + 1, 5 * (size_t)HUGE_PAGE - 12345};
+    static const size_t sizes[] = {AO_PAGES_HUGE_FROM, AO_PAGES_HUGE_FROM + 1, 5 * (size_t)HUGE_PAGE - 12345};
     for (size_t k = 0; k < sizeof sizes / sizeof *sizes; k++) {
-        unsigned char *p = ao_pages_map(sizes[k]);
+        unsigned char *p = ao_pages_alloc(sizes[k]);
         assert_non_null(p);
         assert_int_equal((uintptr_t)p % HUGE_PAGE, 0);
         check_zero_and_write(p, sizes[k]);
@@ -75,7 +75,7 @@ static void test_big_buffers(void **state)
             fclose(smaps);
             assert_true(advised_huge(p));
         }
-        ao_pages_unmap(p, sizes[k]);
+        ao_pages_free(p, sizes[k]);
     }
 }
 
@@ -106,11 +106,11 @@ static void test_given_back(void **state)
         skip();
     static const size_t sizes[] = {AO_PAGES_HUGE_FROM, 3 * (size_t)HUGE_PAGE + 1};
     for (size_t k = 0; k < sizeof sizes / sizeof *sizes; k++) {
-        void *p = ao_pages_map(sizes[k]);
+        void *p = ao_pages_alloc(sizes[k]);
         assert_non_null(p);
         long whole = (long)((sizes[k] + HUGE_PAGE - 1) / HUGE_PAGE * HUGE_PAGE / 1024);
         assert_int_equal(mapped_kib() - before, whole);
-        ao_pages_unmap(p, sizes[k]);
+        ao_pages_free(p, sizes[k]);
         assert_int_equal(mapped_kib(), before);
     }
 }
