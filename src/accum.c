@@ -1,32 +1,36 @@
 /* Accumulation buffer; see accum.h. */
 #include "accum.h"
 
-#include <stdlib.h>
 #include <string.h>
 
+#include "pages.h"
 #include "text.h"
+
+/* The bytes of a width x height accumulation: its sums, odd sums and counts in one mapping. */
+static size_t accum_bytes(int width, int height)
+{
+    return (size_t)width * (size_t)height * (4 * sizeof(double) + sizeof(uint32_t));
+}
 
 bool ao_accum_init(struct ao_accum *a, int width, int height)
 {
     size_t pixels = (size_t)width * (size_t)height;
     a->width = width;
     a->height = height;
-    a->sum = calloc(3 * pixels, sizeof *a->sum);
-    a->count = calloc(pixels, sizeof *a->count);
-    a->odd_sum = calloc(pixels, sizeof *a->odd_sum);
-    if (!a->sum || !a->count || !a->odd_sum) {
+    a->sum = ao_pages_alloc(accum_bytes(width, height));
+    if (!a->sum) {
         ao_text_report("aoview: out of memory for a %dx%d accumulation buffer", width, height);
         ao_accum_finish(a);
         return false;
     }
+    a->odd_sum = a->sum + 3 * pixels;
+    a->count = (uint32_t *)(a->odd_sum + pixels);
     return true;
 }
 
 void ao_accum_finish(struct ao_accum *a)
 {
-    free(a->sum);
-    free(a->count);
-    free(a->odd_sum);
+    ao_pages_free(a->sum, accum_bytes(a->width, a->height));
     memset(a, 0, sizeof *a);
 }
 

@@ -4,6 +4,7 @@
 #include <stdlib.h>
 
 #include "buffer.h"
+#include "pages.h"
 #include "text.h"
 
 /* In `middle`: the frame there is newer than what the consumer has. */
@@ -20,7 +21,7 @@ void ao_frames_init(struct ao_frames *fs)
 void ao_frames_finish(struct ao_frames *fs)
 {
     for (int k = 0; k < 3; k++) {
-        free(fs->frames[k].rgb);
+        ao_pages_free(fs->frames[k].rgb, fs->room[k][0] * sizeof *fs->frames[k].rgb);
         free(fs->frames[k].tile_error);
     }
 }
@@ -31,13 +32,29 @@ struct ao_frame *ao_frames_back(struct ao_frames *fs, int width, int height, int
     return ao_frames_back_stamped(fs, width, height, tiles, &kept);
 }
 
+/* Makes *rgb hold at least `count` floats, *room counting what it holds, as pages.h gives big
+ * buffers (a frame is written whole as soon as it grows); what it held is lost when it grows, which
+ * only a new size makes it do. False (the buffer untouched) when memory is short. */
+static bool grow_pixels(float **rgb, size_t *room, size_t count)
+{
+    if (count <= *room)
+        return true;
+    float *more = ao_pages_alloc(count * sizeof *more);
+    if (!more)
+        return false;
+    ao_pages_free(*rgb, *room * sizeof *more);
+    *rgb = more;
+    *room = count;
+    return true;
+}
+
 struct ao_frame *ao_frames_back_stamped(struct ao_frames *fs, int width, int height, int tiles, uint64_t *kept)
 {
     struct ao_frame *f = &fs->frames[fs->back];
     *kept = f->width == width && f->height == height ? fs->stamp[fs->back] : 0;
     fs->stamp[fs->back] = 0;
     size_t *room = fs->room[fs->back];
-    if (!ao_buffer_grow(&f->rgb, &room[0], 3 * (size_t)width * (size_t)height) ||
+    if (!grow_pixels(&f->rgb, &room[0], 3 * (size_t)width * (size_t)height) ||
         !ao_buffer_grow(&f->tile_error, &room[1], (size_t)tiles)) {
         ao_text_report("aoview: out of memory for %dx%d frames", width, height);
         return NULL;

@@ -1,6 +1,7 @@
 /* The triple buffer that hands frames from the render thread to their one consumer (the GL thread,
  * or main when headless) without either waiting: the producer fills the back frame and publishes
- * it with one atomic exchange; the consumer takes the newest. Frames grow to the size asked. */
+ * it with one atomic exchange; the consumer takes the newest. Frames grow to the size asked (their
+ * pixels as pages.h gives big buffers). */
 #ifndef AO_FRAMES_H
 #define AO_FRAMES_H
 

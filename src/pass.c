@@ -6,6 +6,7 @@
 #include <string.h>
 
 #include "clock.h"
+#include "phases.h"
 #include "sum.h"
 #include "text.h"
 
@@ -143,8 +144,13 @@ void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shado
     uint32_t next;
     struct ao_tile_work work = ao_pass_tile_work(r, t, &next);
     struct ao_vec3 sums[AO_TILE_PIXELS];
-    if (ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow)) /* else cut: the pass is aborted */
+    double start = ao_phases_clock();
+    if (ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow)) { /* else cut: the pass is aborted */
+        double traced = ao_phases_clock();
+        ao_phases_add(AO_PHASE_TRACE, traced - start);
         ao_pass_add_tile(r, t, &work, next, sums);
+        ao_phases_add(AO_PHASE_ADD, ao_phases_clock() - traced);
+    }
 }
 
 /* The team's job for a pass without a share: thread `self`'s lane, then what is left of the
@@ -154,6 +160,7 @@ static void render_tiles(void *user, int self)
     struct ao_run *r = user;
     int threads = r->config.threads;
     uint64_t eye = 0, shadow = 0;
+    ao_phases_enter(self);
     for (int v = 0; v < threads && !ao_pass_aborted(r); v++) {
         struct ao_lane *lane = &r->lanes[(self + v) % threads];
         for (;;) {
@@ -165,6 +172,7 @@ static void render_tiles(void *user, int self)
     }
     atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
     atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
+    ao_phases_leave(self);
 }
 
 int ao_pass_begin(struct ao_run *r)
@@ -188,10 +196,12 @@ static void begin_frame(struct ao_run *r)
 
 bool ao_pass_run(struct ao_run *r)
 {
+    ao_phases_job(ao_phases_clock());
     if (!r->frame)
         begin_frame(r);
     ao_pass_begin(r);
     ao_pool_run(r->pool, render_tiles, r);
+    ao_phases_job_end(r->config.threads, ao_phases_clock());
     return !ao_pass_aborted(r);
 }
 

@@ -2,19 +2,27 @@
 #include "pool.h"
 
 #include <pthread.h>
+#include <sched.h>
 #include <stdatomic.h>
 #include <stdint.h>
 #include <stdlib.h>
 
+#include "clock.h"
 #include "text.h"
+
+/* Between jobs a thread spins this long, yielding, before it sleeps: a sleeping thread takes some
+ * 0.05-0.1 ms to wake in a virtual machine, a fifth of a small pass, and the next job comes sooner
+ * (the render thread's work between two passes of 640x480, or a worker's last tile at the end of
+ * a pass, take less); a team left without jobs is asleep that much later (docs/performance.md). */
+static const double SPIN_SECONDS = 0.5e-3;
 
 struct ao_pool {
     pthread_mutex_t lock;
     pthread_cond_t start, end;
-    uint64_t serial;                 /* bumped to start a job */
-    int busy;                        /* workers still in the job */
-    bool quit;                       /* workers exit */
-    ao_pool_job *job;
+    atomic_uint_fast64_t serial;     /* bumped under `lock` to start a job */
+    atomic_int busy;                 /* workers still in the job */
+    atomic_bool quit;                /* workers exit; set under `lock` */
+    ao_pool_job *job;                /* the job's, under `lock` */
     void *user;
     const struct ao_text_sink *sink; /* ao_pool_run's caller's: the workers' route for its job */
     void (*thread_init)(void);
@@ -23,6 +31,27 @@ struct ao_pool {
     pthread_t *ids;
 };
 
+/* One step of a bounded spin begun with *until = 0: yields the core (to any thread with work, when
+ * the cores have more threads than they run), and false once the spin has lasted SPIN_SECONDS (the
+ * clock read every 8 steps). */
+static bool spinning(double *until, unsigned *steps)
+{
+    sched_yield();
+    if (++*steps % 8)
+        return true;
+    double now = ao_clock_seconds();
+    if (*until == 0.0)
+        *until = now + SPIN_SECONDS;
+    return now < *until;
+}
+
+/* Whether worker's next job (after job `seen`) is posted, or the team quits. */
+static bool posted(const struct ao_pool *p, uint64_t seen)
+{
+    return atomic_load_explicit(&p->serial, memory_order_acquire) != seen ||
+           atomic_load_explicit(&p->quit, memory_order_acquire);
+}
+
 static void *worker_main(void *arg)
 {
     struct ao_pool *p = arg;
@@ -30,23 +59,30 @@ static void *worker_main(void *arg)
     int self = 1 + atomic_fetch_add(&p->started, 1);
     if (p->thread_init)
         p->thread_init();
-    pthread_mutex_lock(&p->lock);
     for (;;) {
-        while (p->serial == seen && !p->quit)
+        double until = 0.0;
+        unsigned steps = 0;
+        while (!posted(p, seen) && spinning(&until, &steps))
+            continue;
+        pthread_mutex_lock(&p->lock);
+        while (!posted(p, seen))
             pthread_cond_wait(&p->start, &p->lock);
-        if (p->quit)
+        if (atomic_load(&p->quit)) {
+            pthread_mutex_unlock(&p->lock);
             break;
-        seen = p->serial;
+        }
+        seen = atomic_load(&p->serial);
         ao_pool_job *job = p->job;
         void *user = p->user;
         ao_text_route(p->sink);
         pthread_mutex_unlock(&p->lock);
         job(user, self);
-        pthread_mutex_lock(&p->lock);
-        if (--p->busy == 0)
+        if (atomic_fetch_sub(&p->busy, 1) == 1) { /* the last: wakes ao_pool_run if it sleeps */
+            pthread_mutex_lock(&p->lock);
             pthread_cond_signal(&p->end);
+            pthread_mutex_unlock(&p->lock);
+        }
     }
-    pthread_mutex_unlock(&p->lock);
     return NULL;
 }
 
@@ -59,6 +95,9 @@ struct ao_pool *ao_pool_create(int threads, void (*thread_init)(void))
         return NULL;
     }
     p->thread_init = thread_init;
+    atomic_init(&p->serial, 0);
+    atomic_init(&p->busy, 0);
+    atomic_init(&p->quit, false);
     atomic_init(&p->started, 0);
     pthread_mutex_init(&p->lock, NULL);
     pthread_cond_init(&p->start, NULL);
@@ -78,7 +117,7 @@ void ao_pool_destroy(struct ao_pool *p)
     if (!p)
         return;
     pthread_mutex_lock(&p->lock);
-    p->quit = true;
+    atomic_store(&p->quit, true);
     pthread_cond_broadcast(&p->start);
     pthread_mutex_unlock(&p->lock);
     for (int k = 0; k < p->workers; k++)
@@ -96,13 +135,19 @@ void ao_pool_run(struct ao_pool *p, ao_pool_job *job, void *user)
     p->job = job;
     p->user = user;
     p->sink = ao_text_current();
-    p->busy = p->workers;
-    p->serial++;
+    atomic_store(&p->busy, p->workers);
+    atomic_fetch_add_explicit(&p->serial, 1, memory_order_release);
     pthread_cond_broadcast(&p->start);
     pthread_mutex_unlock(&p->lock);
     job(user, 0);
-    pthread_mutex_lock(&p->lock);
-    while (p->busy > 0)
-        pthread_cond_wait(&p->end, &p->lock);
-    pthread_mutex_unlock(&p->lock);
+    double until = 0.0;
+    unsigned steps = 0;
+    while (atomic_load(&p->busy) > 0 && spinning(&until, &steps))
+        continue;
+    if (atomic_load(&p->busy) > 0) {
+        pthread_mutex_lock(&p->lock);
+        while (atomic_load(&p->busy) > 0)
+            pthread_cond_wait(&p->end, &p->lock);
+        pthread_mutex_unlock(&p->lock);
+    }
 }

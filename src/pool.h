@@ -1,5 +1,7 @@
 /* A team of threads that runs one job at a time on every thread together: the render thread's
- * passes and previews. The thread that runs a job takes part in it as thread 0. */
+ * passes and previews. The thread that runs a job takes part in it as thread 0. Between jobs, and
+ * while thread 0 waits for the others, a thread spins briefly (yielding its core) before it sleeps,
+ * so that the many short passes of a small image do not wait for threads to wake. */
 #ifndef AO_POOL_H
 #define AO_POOL_H
 

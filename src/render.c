@@ -11,6 +11,7 @@
 
 #include "clock.h"
 #include "pass.h"
+#include "phases.h"
 #include "preview.h"
 #include "render_share.h"
 #include "text.h"
@@ -223,31 +224,44 @@ static bool step(struct ao_render *r, struct loop *l, bool *finishes, uint64_t *
 
     /* Plan the pass: its tiles, its samples (from every process's pixels). */
     uint64_t pixels;
+    double planned = ao_phases_clock();
+    ao_phases_begin();
     if (!ao_pass_plan(run, s.adaptive, &pixels))
         return false;
     uint32_t spppp = ao_pass_prepare(run, &s, pixels);
+    ao_phases_add(AO_PHASE_PLAN, ao_phases_clock() - planned);
 
     /* Run it, unless nothing is left to sample (adaptive sampling was just turned on), and survey it. */
     bool counts = false;
+    uint64_t rays[2] = {0, 0};
+    double seconds = 0.0;
     if (pixels) {
         double start = ao_clock_seconds();
         ao_camera_view(&s.camera, run->width, run->height, &run->ctx.view);
         atomic_store(&run->eye_rays, 0);
         atomic_store(&run->shadow_rays, 0);
         bool finished = share ? ao_render_share_pass(run) : ao_pass_run(run);
-        uint64_t rays[2] = {atomic_load(&run->eye_rays), atomic_load(&run->shadow_rays)};
-        if (!ao_pass_survey(run, &l->info, s.adaptive, finished, rays, ao_clock_seconds() - start, spppp, &counts))
+        rays[0] = atomic_load(&run->eye_rays);
+        rays[1] = atomic_load(&run->shadow_rays);
+        seconds = ao_clock_seconds() - start;
+        double surveyed = ao_phases_clock();
+        if (!ao_pass_survey(run, &l->info, s.adaptive, finished, rays, seconds, spppp, &counts))
             return false;
+        ao_phases_add(AO_PHASE_SURVEY, ao_phases_clock() - surveyed);
     }
 
     /* Publish and report it. */
     bool ending = false;
     if (counts && !follows) {
+        double published = ao_phases_clock();
         if (leads ? !lead(r, l, &ending) : !ao_pass_publish(run, &l->info))
             return false;
         if (run->config.on_pass)
             run->config.on_pass(&l->info, run->config.user);
+        ao_phases_add(AO_PHASE_PUBLISH, ao_phases_clock() - published);
     }
+    if (pixels)
+        ao_phases_say(run->config.threads, l->info.pass, rays[0] + rays[1], seconds);
     if (ending)
         return false;
 

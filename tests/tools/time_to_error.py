@@ -6,13 +6,18 @@ time-to-error.csv (every run) into --out. See docs/time-to-error.md for what the
 
   time_to_error.py [--aoview BIN] [--exact BIN] [--sizes WxH,...] [--seeds N] [--cap S]
                    [--ref-spp N] [--work DIR] [--out DIR] [--quick] [--config NAME=ARGS]...
-                   [--large WxH] [--large-config NAME=ARGS]... [--large-ref-spp N] SCENE...
+                   [--large WxH] [--large-config NAME=ARGS]... [--large-ref-spp N] [--steady-spp N] SCENE...
 
 --config adds a configuration: NAME and the aoview arguments it adds (any, quoted as in a shell;
 empty for the binary's defaults; `--binary BIN` first runs another aoview binary, e.g. an older
 build); without any, the set in DEFAULT_CONFIGS. The ratios are the median time of the first
 configuration (the baseline) over each configuration's. --quick: only the first size, one seed,
 written into the work directory unless --out is given, and no large size.
+
+Every table gives each configuration's ray rate over its run to 1 % RMSE (eye and AO rays over
+render seconds, at the crossing). For the first SCENE at each of --sizes, every configuration also
+renders --steady-spp samples a pixel (default 1024; 0: not) to the end, once per seed, and the
+table gives its rate over that run and the ratio of the two.
 
 At the large size (--large, default 1920x1080; empty for none) only the first SCENE runs, with
 the configurations of --large-config (default LARGE_CONFIGS), to 1 % alone: the render seconds to
@@ -43,6 +48,8 @@ DEFAULT_CONFIGS = ['old-defaults=--sampler random --spppp 1 --adaptive off',
 LARGE_CONFIGS = ['spppp8=--spppp 8', 'defaults=']
 LARGE_LEVEL = 0.01
 LARGE_REF_SPP = 2048
+STEADY_SPP = 1024
+RATE_INDEX = LEVELS.index(0.01)   # the level whose ray rate the tables give
 # References: Owen-scrambled Sobol points at one sample per pass (one eye ray per AO sample, so the
 # anti-aliasing converges with the AO), seeds no timed run uses (benchlib.REFERENCE_SEEDS).
 REFERENCE_ARGS = ['--sampler', 'sobol', '--spppp', '1', '--adaptive', 'off']
@@ -66,27 +73,44 @@ def level_text(level):
 
 
 def parse_rows(text):
-    """Stats rows (pass, spp, seconds, ..., rmse, mean_spp, error, ...) of complete lines, as (spp,
-    seconds, rmse, estimated relative error)."""
+    """Stats rows (pass, spp, seconds, eye_rays, shadow_rays, ..., rmse, mean_spp, error, ...) of
+    complete lines, as (spp, seconds, rmse, estimated relative error, rays)."""
     rows = []
     for line in text.splitlines():
         if line and not line.startswith('pass'):
             fields = line.split(',')
-            rows.append((int(fields[1]), float(fields[2]), float(fields[6]), float(fields[8])))
+            rows.append((int(fields[1]), float(fields[2]), float(fields[6]), float(fields[8]),
+                         int(fields[3]) + int(fields[4])))
     return rows
 
 
-def render(aoview, scene, size, seed, args, ref, lowest, cap, work, estimated=False):
-    """Runs one render until its RMSE (and with `estimated` its estimated error) is at most lowest
-    or its render seconds reach cap, then interrupts it (aoview writes its image and exits 130);
-    returns its stats rows. Args starting with `--binary BIN` run BIN instead of aoview."""
+def rate_to(rows, seconds):
+    """Mrays/s over a run's first `seconds` render seconds (a crossing within its rows): the rays
+    of the passes before and the share of the crossing pass's that its seconds give, as the pass
+    traced them at its own rate; None when seconds is."""
+    if seconds is None:
+        return None
+    before = (0.0, 0)
+    for row in rows:
+        if row[1] >= seconds:
+            share = (seconds - before[0]) / (row[1] - before[0]) if row[1] > before[0] else 1.0
+            return (before[1] + share * (row[4] - before[1])) / seconds / 1e6
+        before = (row[1], row[4])
+    return rows[-1][4] / rows[-1][1] / 1e6
+
+
+def render(aoview, scene, size, seed, args, ref, lowest, cap, work, estimated=False, spp=SPP):
+    """Runs one render of `spp` samples a pixel until its RMSE (and with `estimated` its estimated
+    error) is at most lowest (None: to its end) or its render seconds reach cap, then interrupts it
+    (aoview writes its image and exits 130); returns its stats rows. Args starting with `--binary
+    BIN` run BIN instead of aoview."""
     stats, log = os.path.join(work, 'run.csv'), os.path.join(work, 'run.log')
     if os.path.exists(stats):
         os.remove(stats)
     if args[:1] == ['--binary']:
         aoview, args = args[1], args[2:]
     command = [aoview, '--headless', '-q', '--threads', str(THREADS), '--size', size, '--seed', str(seed),
-               '--spp', str(SPP)] + args + ['--reference', ref, '--stats', stats, '-o', os.path.join(work, 'run.pfm'),
+               '--spp', str(spp)] + args + ['--reference', ref, '--stats', stats, '-o', os.path.join(work, 'run.pfm'),
                                            scene]
     with open(log, 'w') as err:
         proc = subprocess.Popen(command, stderr=err)
@@ -101,8 +125,9 @@ def render(aoview, scene, size, seed, args, ref, lowest, cap, work, estimated=Fa
             rows += parse_rows(pending[:complete])
             pending = pending[complete:]
         # The wall clock backs up the render seconds, should a pass never end.
-        if not interrupted and ((rows and ((rows[-1][2] <= lowest and (not estimated or rows[-1][3] <= lowest))
-                                           or rows[-1][1] >= cap))
+        if not interrupted and ((rows and lowest is not None and
+                                 ((rows[-1][2] <= lowest and (not estimated or rows[-1][3] <= lowest))
+                                  or rows[-1][1] >= cap))
                                 or time.monotonic() - started > 2 * cap + 30):
             proc.send_signal(signal.SIGINT)
             interrupted = True
@@ -142,7 +167,7 @@ def large_block(a, scene, started):
     values = read_pfm(ref)[2]
     mean = sum(values) / len(values)
     noise = pair_noise(pair) if pair else 0.0
-    results, runs = {c[0]: [] for c in configs}, []
+    results, rates, runs = {c[0]: [] for c in configs}, {c[0]: [] for c in configs}, []
     for seed in range(1, a.seeds + 1):
         for label, args in configs:
             rows = render(a.aoview, scene, size, seed, args, ref, LARGE_LEVEL * mean, a.cap, a.work, estimated=True)
@@ -151,8 +176,10 @@ def large_block(a, scene, started):
             estimated = crossing([r[1] for r in known], [r[3] for r in known], LARGE_LEVEL) if known else None
             reached = [None if v is None or v > a.cap else v for v in (true, estimated)]
             results[label].append(reached)
+            rates[label].append(rate_to(rows, reached[0]))
             runs.append([name, size, label, shlex.join(args), seed, LARGE_LEVEL, '%.6g' % (LARGE_LEVEL * mean),
-                         '' if reached[0] is None else '%.6f' % reached[0], '', '%.6f' % rows[-1][1], rows[-1][0],
+                         '' if reached[0] is None else '%.6f' % reached[0], '',
+                         '' if reached[0] is None else '%.2f' % rates[label][-1], '%.6f' % rows[-1][1], rows[-1][0],
                          '%.6g' % rows[-1][2]])
             print('time_to_error.py: [%.0f s] %s %s %s seed %d: 1 %% RMSE %s, 1 %% estimated %s' % (
                 time.monotonic() - started, name, size, label, seed,
@@ -162,14 +189,17 @@ def large_block(a, scene, started):
     lines = ['### %s, %s: time to 1 %%\n\n' % (name, size),
              'Reference: %s (%d spp in all); made in this run in %.0f s (0 when cached). Mean %.4f; its own RMS '
              'error %s. Each cell: the median render seconds over %d seeds to 1 %% RMSE against it, or to 1 %% '
-             'estimated error (`--stats`\'s `error`), and %s\'s median over this one\'s.\n\n' % (
+             'estimated error (`--stats`\'s `error`), and %s\'s median over this one\'s; the ray rate: eye and AO '
+             'rays over render seconds to 1 %% RMSE (median over the seeds).\n\n' % (
                  kind, a.large_ref_spp, made, mean,
                  '%.2g (%.3g %% of the mean)' % (noise, 100 * noise / mean) if pair else 'none (exact)', a.seeds,
                  configs[0][0]),
-             '| config | aoview args | 1 % RMSE | 1 % estimated |\n|---|---|---|---|\n']
+             '| config | aoview args | 1 % RMSE | 1 % estimated | Mrays/s to 1 % |\n|---|---|---|---|---|\n']
     for label, args in configs:
         cells = ['> %g s' % a.cap if math.isinf(m) else '%.3g s · ×%.3g' % (m, b / m if math.isfinite(b) else math.inf)
                  for m, b in zip(medians[label], base)]
+        rate = rate_median(rates[label])
+        cells.append('%.1f' % rate if math.isfinite(rate) else '')
         lines.append('| %s | %s | %s |\n' % (label, '`%s`' % shlex.join(args) if args else '(none)', ' | '.join(cells)))
     return ''.join(lines) + '\n', runs
 
@@ -188,6 +218,12 @@ def parse_configs(specs):
 def median(values):
     """Median with a level not reached counting as infinitely late."""
     return statistics.median([math.inf if v is None else v for v in values])
+
+
+def rate_median(rates):
+    """Median of the ray rates of the runs that reached the level (NaN when none did)."""
+    known = [r for r in rates if r is not None]
+    return statistics.median(known) if known else math.nan
 
 
 def cell(seconds, spp, base, cap):
@@ -219,7 +255,7 @@ def write_outputs(out, blocks, runs, header, started):
     with open(os.path.join(out, 'time-to-error.csv'), 'w', newline='') as f:
         table = csv.writer(f)
         table.writerow(['scene', 'size', 'config', 'args', 'seed', 'level', 'target_rmse', 'seconds', 'spp',
-                        'last_seconds', 'last_spp', 'last_rmse'])
+                        'mrays_per_s', 'last_seconds', 'last_spp', 'last_rmse'])
         table.writerows(runs)
     results = '%s- Run time: %.0f s; load average at the end: %s\n\n%s' % (
         header, time.monotonic() - started, load(), ''.join(blocks))
@@ -248,6 +284,7 @@ def main():
     parser.add_argument('--large', default='1920x1080')
     parser.add_argument('--large-config', action='append')
     parser.add_argument('--large-ref-spp', type=int, default=LARGE_REF_SPP)
+    parser.add_argument('--steady-spp', type=int, default=STEADY_SPP)
     parser.add_argument('scenes', nargs='+')
     a = parser.parse_args()
     a.exact = a.exact or os.path.join(os.path.dirname(a.aoview), 'aoview-exact')
@@ -261,8 +298,8 @@ def main():
     for size in sizes + ([a.large] if a.large else []):
         if len(size.split('x')) != 2 or not all(p.isdigit() and int(p) > 0 for p in size.split('x')):
             parser.error("--sizes: '%s' is not WxH" % size)
-    if seeds < 1 or not a.cap > 0:
-        parser.error('--seeds and --cap must be positive')
+    if seeds < 1 or not a.cap > 0 or a.steady_spp < 0:
+        parser.error('--seeds and --cap must be positive, --steady-spp not negative')
     for tool in (a.aoview, a.exact):
         if not os.access(tool, os.X_OK):
             sys.exit('time_to_error.py: %s is not built (try ninja -C %s)' % (tool, os.path.dirname(tool)))
@@ -302,34 +339,55 @@ def main():
             targets = [v * mean for v in LEVELS]
             print('time_to_error.py: %s %s: reference %s (%.0f s, %.0f CPU-s), mean %.4f, own RMS error %.2g (%.3g %% of the '
                   'mean)' % (name, size, kind, made, cpu, mean, noise, 100 * noise / mean), file=sys.stderr, flush=True)
-            results = {c[0]: [] for c in configs}
+            results, rates, steady = {c[0]: [] for c in configs}, {c[0]: [] for c in configs}, {c[0]: [] for c in configs}
+            steady_spp = a.steady_spp if scene == a.scenes[0] else 0
             for seed in range(1, seeds + 1):
                 for label, args in configs:
                     rows = render(a.aoview, scene, size, seed, args, ref, targets[-1], a.cap, a.work)
                     reached = reaches(rows, targets, a.cap)
                     results[label].append(reached)
+                    rates[label].append(rate_to(rows, reached[RATE_INDEX] and reached[RATE_INDEX][0]))
                     for level, t, r in zip(LEVELS, targets, reached):
+                        rate = r and rate_to(rows, r[0])
                         runs.append([name, size, label, shlex.join(args), seed, level, '%.6g' % t,
                                      '' if r is None else '%.6f' % r[0], '' if r is None else '%.1f' % r[1],
-                                     '%.6f' % rows[-1][1], rows[-1][0], '%.6g' % rows[-1][2]])
+                                     '' if r is None else '%.2f' % rate, '%.6f' % rows[-1][1], rows[-1][0],
+                                     '%.6g' % rows[-1][2]])
                     done += 1
                     print('time_to_error.py: [%d/%d, %.0f s] %s %s %s seed %d: %s' % (
                         done, total, time.monotonic() - started, name, size, label, seed,
                         ', '.join('%s %s' % (level_text(v), '> cap' if r is None else '%.3g s' % r[0])
                                   for v, r in zip(LEVELS, reached))), file=sys.stderr, flush=True)
+                for label, args in configs if steady_spp else ():
+                    rows = render(a.aoview, scene, size, seed, args, ref, None, a.cap, a.work, spp=steady_spp)
+                    steady[label].append(rows[-1][4] / rows[-1][1] / 1e6)
+                    print('time_to_error.py: [%.0f s] %s %s %s seed %d: %d spp at %.1f Mrays/s' % (
+                        time.monotonic() - started, name, size, label, seed, steady_spp, steady[label][-1]),
+                        file=sys.stderr, flush=True)
             medians = {label: [(median([s[k] and s[k][0] for s in per_seed]),
                                 median([s[k] and s[k][1] for s in per_seed])) for k in range(len(LEVELS))]
                        for label, per_seed in results.items()}
             lines = ['### %s, %s\n\n' % (name, size),
                      'Reference: %s; made in this run in %.0f s, %.0f CPU-seconds (0 when cached). Mean %.4f; '
-                     'its own RMS error %s.\n\n' % (kind, made, cpu, mean,
-                         '%.2g (%.3g %% of the mean)' % (noise, 100 * noise / mean) if pair else 'none (exact)'),
-                     '| config | aoview args | %s |\n' % ' | '.join('%s (%.3g)' % (level_text(v), t)
-                                                                   for v, t in zip(LEVELS, targets)),
-                     '|---|---|%s\n' % ('---|' * len(LEVELS))]
+                     'its own RMS error %s.%s\n\n' % (kind, made, cpu, mean,
+                         '%.2g (%.3g %% of the mean)' % (noise, 100 * noise / mean) if pair else 'none (exact)',
+                         ' Ray rates: eye and AO rays over render seconds, to 1 %% RMSE and over a whole run of %d '
+                         'spp (median over the seeds each), and the first over the second.' % steady_spp
+                         if steady_spp else ' Ray rate: eye and AO rays over render seconds to 1 % RMSE (median '
+                         'over the seeds).'),
+                     '| config | aoview args | %s | Mrays/s to 1 %% |%s\n' % (
+                         ' | '.join('%s (%.3g)' % (level_text(v), t) for v, t in zip(LEVELS, targets)),
+                         ' Mrays/s, %d spp | ratio |' % steady_spp if steady_spp else ''),
+                     '|---|---|%s\n' % ('---|' * (len(LEVELS) + (3 if steady_spp else 1)))]
             for label, args in configs:
-                lines.append('| %s | %s | %s |\n' % (label, '`%s`' % shlex.join(args) if args else '(none)', ' | '.join(
-                    cell(s, n, medians[base][k][0], a.cap) for k, (s, n) in enumerate(medians[label]))))
+                rate = rate_median(rates[label])
+                cells = [cell(s, n, medians[base][k][0], a.cap) for k, (s, n) in enumerate(medians[label])]
+                cells.append('%.1f' % rate if math.isfinite(rate) else '')
+                if steady_spp:
+                    cells += ['%.1f' % median(steady[label]),
+                              '%.2f' % (rate / median(steady[label])) if math.isfinite(rate) else '']
+                lines.append('| %s | %s | %s |\n' % (label, '`%s`' % shlex.join(args) if args else '(none)',
+                                                     ' | '.join(cells)))
             blocks.append(''.join(lines) + '\n')
             write_outputs(a.out, blocks, runs, header, started)
     if a.large:

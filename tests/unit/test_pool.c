@@ -1,7 +1,7 @@
 /* The thread team (pool.c): a job runs once on every thread, the caller as thread 0, and the run
  * returns only when all have returned; each worker calls thread_init once, before its first job;
  * a team of one is the caller alone; many runs in a row (the threads suite runs this under
- * ThreadSanitizer too). */
+ * ThreadSanitizer too); a team without jobs stops spinning and sleeps. */
 #include <stdarg.h>
 #include <stddef.h>
 #include <setjmp.h>
@@ -106,12 +106,39 @@ static void test_team_of_one(void **state)
     ao_pool_destroy(NULL);
 }
 
+/* The process's CPU seconds so far. */
+static double cpu_seconds(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* After a job the workers spin (pool.c's SPIN_SECONDS, 0.5 ms) and then sleep: over 0.3 s that
+ * the caller sleeps 30 ms after a job, the process takes at most 30 ms of CPU (the spins, and the
+ * scheduler's and clock's noise; three workers that kept spinning would take about 0.3 s each,
+ * on however many cores they share). */
+static void test_idle_team_sleeps(void **state)
+{
+    (void)state;
+    struct ao_pool *pool = ao_pool_create(THREADS, NULL);
+    assert_non_null(pool);
+    struct record r = {0};
+    ao_pool_run(pool, job, &r);
+    nanosleep(&(struct timespec){.tv_nsec = 30 * 1000 * 1000}, NULL);
+    double before = cpu_seconds();
+    nanosleep(&(struct timespec){.tv_nsec = 300 * 1000 * 1000}, NULL);
+    assert_true(cpu_seconds() - before < 0.03);
+    ao_pool_destroy(pool);
+}
+
 int main(void)
 {
     const struct CMUnitTest tests[] = {
         cmocka_unit_test(test_every_thread_once),
         cmocka_unit_test(test_run_waits_for_all),
         cmocka_unit_test(test_team_of_one),
+        cmocka_unit_test(test_idle_team_sleeps),
     };
     return cmocka_run_group_tests(tests, NULL, NULL);
 }
