@@ -9,7 +9,10 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "app.h"
+#include "app_load.h"
+#include "app_output.h"
+#include "app_report.h"
+#include "app_signals.h"
 #include "cli.h"
 #include "compare.h"
 #include "config.h"

@@ -12,7 +12,9 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "app.h"
+#include "app_load.h"
+#include "app_output.h"
+#include "app_signals.h"
 #include "cli.h"
 #include "cluster.h"
 #include "cluster_faults.h"
