@@ -5,7 +5,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "clock.h"
 #include "phases.h"
 #include "sum.h"
 #include "text.h"
@@ -34,22 +33,11 @@ bool ao_pass_allocate(struct ao_run *r)
     r->tiles_y = (r->height + AO_TILE - 1) / AO_TILE;
     if (!ao_accum_init(&r->accum, r->width, r->height))
         return false;
-    size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y, owned = 0;
-    const struct ao_render_share *share = r->config.share;
+    size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y;
     r->tiles = calloc(tiles, sizeof *r->tiles);
     r->tile_stamps = calloc(tiles, sizeof *r->tile_stamps);
     r->work = calloc(tiles, sizeof *r->work);
-    r->mine = malloc(tiles);
-    if (r->mine)
-        for (size_t t = 0; t < tiles; t++)
-            owned += r->mine[t] = !share || share->owns(share->user, (int)t, (int)tiles);
-    if (share) {
-        r->pass_sums = malloc(tiles * AO_TILE * AO_TILE * sizeof *r->pass_sums);
-        r->records = malloc((owned ? owned : 1) * sizeof *r->records);
-        r->all_records = share->follows ? NULL : malloc(tiles * sizeof *r->all_records);
-    }
-    if (!r->tiles || !r->tile_stamps || !r->work || !r->mine ||
-        (share && (!r->pass_sums || !r->records || (!share->follows && !r->all_records)))) {
+    if (!r->tiles || !r->tile_stamps || !r->work) {
         ao_text_report("aoview: out of memory for a %dx%d image", r->width, r->height);
         return false;
     }
@@ -62,16 +50,9 @@ void ao_pass_free(struct ao_run *r)
     free(r->tiles);
     free(r->tile_stamps);
     free(r->work);
-    free(r->mine);
-    free(r->pass_sums);
-    free(r->records);
-    free(r->all_records);
     r->tiles = NULL;
     r->tile_stamps = NULL;
     r->work = NULL;
-    r->mine = NULL;
-    r->pass_sums = NULL;
-    r->records = r->all_records = NULL;
 }
 
 bool ao_pass_restart(struct ao_run *r, int width, int height)
@@ -92,8 +73,7 @@ bool ao_pass_restart(struct ao_run *r, int width, int height)
     uint64_t pixels = r->config.target_spp ? (uint64_t)r->width * (uint64_t)r->height : 0;
     r->next[0] = r->next[1] = pixels;
     r->next_known[0] = r->next_known[1] = true;
-    r->ungathered = false;
-    return true;
+    return r->share->restart(r->share, r->tiles_x * r->tiles_y);
 }
 
 /* ---- tiles: run by the render thread and every thread of the team ---- */
@@ -153,7 +133,7 @@ void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shado
     }
 }
 
-/* The team's job for a pass without a share: thread `self`'s lane, then what is left of the
+/* The team's job for a pass of the solo share's: thread `self`'s lane, then what is left of the
  * others'. */
 static void render_tiles(void *user, int self)
 {
@@ -180,8 +160,6 @@ int ao_pass_begin(struct ao_run *r)
     int count = r->lanes[r->config.threads - 1].end;
     for (int k = 0; k < r->config.threads; k++)
         atomic_store(&r->lanes[k].next, 0);
-    atomic_store(&r->span, (uint_fast64_t)count << 32);
-    atomic_store(&r->given_up, false);
     r->pass_serial++;
     return count;
 }
@@ -214,14 +192,13 @@ static int tile_pixels(const struct ao_run *r, int t)
     return (rect.x1 - rect.x0) * (rect.y1 - rect.y0);
 }
 
-/* Fills the work list with the tiles of this process's (every tile without a share) that the next
- * pass traces, dealt to the threads' shares by tile row, and returns how many pixels they hold:
- * the tiles ao_tile_wanted picks, with the busiest tile's spp and the largest gain that the last
- * survey found. */
+/* Fills the work list with the tiles of this process's (every tile with the solo share) that the
+ * next pass traces, dealt to the threads' shares by tile row (or in row order: one_list), and
+ * returns how many pixels they hold: the tiles ao_tile_wanted picks, with the busiest tile's spp
+ * and the largest gain that the last survey found. */
 static uint64_t select_tiles(struct ao_run *r, bool adaptive)
 {
-    /* With a share, one list in row order, the same whatever the threads. */
-    int threads = r->config.threads, groups = r->config.share ? 1 : threads, tiles = r->tiles_x * r->tiles_y;
+    int threads = r->config.threads, groups = r->share->one_list ? 1 : threads, tiles = r->tiles_x * r->tiles_y;
     uint32_t target = r->config.target_spp, busiest = r->busiest;
     double fastest = r->fastest;
     uint64_t pixels = 0;
@@ -233,7 +210,8 @@ static uint64_t select_tiles(struct ao_run *r, bool adaptive)
             continue;
         }
         for (int t = k * r->tiles_x; t < tiles; t++) {
-            if (r->mine[t] && ao_tile_wanted(&r->tiles[t], tile_pixels(r, t), target, adaptive, busiest, fastest)) {
+            if (r->share->owns(r->share, t) &&
+                ao_tile_wanted(&r->tiles[t], tile_pixels(r, t), target, adaptive, busiest, fastest)) {
                 r->work[n++] = t;
                 pixels += (uint64_t)tile_pixels(r, t);
             }
@@ -286,7 +264,7 @@ static void tally_tiles(const struct ao_run *r, struct ao_share_tally *tally)
     uint32_t target = r->config.target_spp;
     bool reference = ao_pass_has_reference(r);
     for (int t = 0; t < r->tiles_x * r->tiles_y; t++) {
-        if (!r->mine[t])
+        if (!r->share->owns(r->share, t))
             continue;
         const struct ao_tile_state *ts = &r->tiles[t];
         uint32_t spp = ao_tile_spp(ts);
@@ -316,12 +294,8 @@ bool ao_pass_plan(struct ao_run *r, bool adaptive, uint64_t *pixels)
 {
     if (!r->next_known[adaptive]) {
         uint64_t own = select_tiles(r, adaptive);
-        const struct ao_render_share *share = r->config.share;
-        double start = ao_clock_seconds();
-        if (share && !share->add_up(share->user, &own, 1))
+        if (!r->share->add_up(r->share, &own, 1))
             return false;
-        if (share)
-            r->share_seconds += ao_clock_seconds() - start;
         r->next[adaptive] = own;
         r->next_known[adaptive] = true;
     }
@@ -336,16 +310,13 @@ bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive,
     memset(&tally, 0, sizeof tally);
     tally.total[TOTAL_EYE] = rays[0];
     tally.total[TOTAL_SHADOW] = rays[1];
-    tally.most[MOST_SECONDS] = seconds + r->share_seconds;
+    tally.most[MOST_SECONDS] = seconds + r->share->waited(r->share);
     tally.most[MOST_GAVE_UP] = finished ? 0.0 : 1.0;
     tally.most[MOST_SPPPP] = spppp;
-    if (finished || r->config.share)
+    if (finished) /* else no process counts the pass, nor uses its tiles' tally */
         tally_tiles(r, &tally);
-    const struct ao_render_share *share = r->config.share;
-    double start = ao_clock_seconds();
-    if (share && !share->combine(share->user, &tally))
+    if (!r->share->combine(r->share, &tally))
         return false;
-    r->share_seconds = share ? ao_clock_seconds() - start : 0.0;
     info->eye_rays += tally.total[TOTAL_EYE];
     info->shadow_rays += tally.total[TOTAL_SHADOW];
     info->seconds += tally.most[MOST_SECONDS];
