@@ -36,8 +36,8 @@ bool ao_pass_allocate(struct ao_run *r)
     size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y;
     r->tiles = calloc(tiles, sizeof *r->tiles);
     r->tile_stamps = calloc(tiles, sizeof *r->tile_stamps);
-    r->work = calloc(tiles, sizeof *r->work);
-    if (!r->tiles || !r->tile_stamps || !r->work) {
+    r->pass.work = calloc(tiles, sizeof *r->pass.work);
+    if (!r->tiles || !r->tile_stamps || !r->pass.work) {
         ao_text_report("aoview: out of memory for a %dx%d image", r->width, r->height);
         return false;
     }
@@ -49,10 +49,10 @@ void ao_pass_free(struct ao_run *r)
     ao_accum_finish(&r->accum);
     free(r->tiles);
     free(r->tile_stamps);
-    free(r->work);
+    free(r->pass.work);
     r->tiles = NULL;
     r->tile_stamps = NULL;
-    r->work = NULL;
+    r->pass.work = NULL;
 }
 
 bool ao_pass_restart(struct ao_run *r, int width, int height)
@@ -81,7 +81,7 @@ bool ao_pass_restart(struct ao_run *r, int width, int height)
 bool ao_pass_aborted(const struct ao_run *r)
 {
     return atomic_load_explicit(&r->live_stop, memory_order_relaxed) ||
-           atomic_load_explicit(&r->live_restarts, memory_order_relaxed) != r->pass_restarts;
+           atomic_load_explicit(&r->live_restarts, memory_order_relaxed) != r->pass.restarts;
 }
 
 struct ao_tile ao_pass_tile_rect(const struct ao_run *r, int t)
@@ -91,7 +91,7 @@ struct ao_tile ao_pass_tile_rect(const struct ao_run *r, int t)
 
 struct ao_tile_work ao_pass_tile_work(const struct ao_run *r, int t, uint32_t *next)
 {
-    return ao_tile_work_of(&r->tiles[t], &r->tile_pass, next);
+    return ao_tile_work_of(&r->tiles[t], &r->pass.tile_pass, next);
 }
 
 /* Stamps tile t's change and resolves the tile into the frame begun, if any. */
@@ -119,13 +119,13 @@ void ao_pass_clear_tile(struct ao_run *r, int t)
 
 void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shadow)
 {
-    int t = r->work[n];
+    int t = r->pass.work[n];
     struct ao_tile rect = ao_pass_tile_rect(r, t);
     uint32_t next;
     struct ao_tile_work work = ao_pass_tile_work(r, t, &next);
     struct ao_vec3 sums[AO_TILE_PIXELS];
     double start = ao_phases_clock();
-    if (ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow)) { /* else cut: the pass is aborted */
+    if (ao_estimate_tile(&r->pass.ctx, &rect, &work, sums, eye, shadow)) { /* else cut: the pass is aborted */
         double traced = ao_phases_clock();
         ao_phases_add(AO_PHASE_TRACE, traced - start);
         ao_pass_add_tile(r, t, &work, next, sums);
@@ -142,7 +142,7 @@ static void render_tiles(void *user, int self)
     uint64_t eye = 0, shadow = 0;
     ao_phases_enter(self);
     for (int v = 0; v < threads && !ao_pass_aborted(r); v++) {
-        struct ao_lane *lane = &r->lanes[(self + v) % threads];
+        struct ao_lane *lane = &r->pass.lanes[(self + v) % threads];
         for (;;) {
             int n = lane->begin + atomic_fetch_add_explicit(&lane->next, 1, memory_order_relaxed);
             if (n >= lane->end || ao_pass_aborted(r))
@@ -150,17 +150,17 @@ static void render_tiles(void *user, int self)
             ao_pass_render_tile(r, n, &eye, &shadow);
         }
     }
-    atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
-    atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
+    atomic_fetch_add_explicit(&r->pass.eye_rays, eye, memory_order_relaxed);
+    atomic_fetch_add_explicit(&r->pass.shadow_rays, shadow, memory_order_relaxed);
     ao_phases_leave(self);
 }
 
 int ao_pass_begin(struct ao_run *r)
 {
-    int count = r->lanes[r->config.threads - 1].end;
+    int count = r->pass.lanes[r->config.threads - 1].end;
     for (int k = 0; k < r->config.threads; k++)
-        atomic_store(&r->lanes[k].next, 0);
-    r->pass_serial++;
+        atomic_store(&r->pass.lanes[k].next, 0);
+    r->pass.serial++;
     return count;
 }
 
@@ -178,7 +178,7 @@ bool ao_pass_run(struct ao_run *r)
     if (!r->frame)
         begin_frame(r);
     ao_pass_begin(r);
-    ao_pool_run(r->pool, render_tiles, r);
+    ao_pool_run(r->pass.pool, render_tiles, r);
     ao_phases_job_end(r->config.threads, ao_phases_clock());
     return !ao_pass_aborted(r);
 }
@@ -204,21 +204,21 @@ static uint64_t select_tiles(struct ao_run *r, bool adaptive)
     uint64_t pixels = 0;
     int n = 0;
     for (int k = 0; k < threads; k++) {
-        r->lanes[k].begin = n;
+        r->pass.lanes[k].begin = n;
         if (k >= groups) {
-            r->lanes[k].end = n;
+            r->pass.lanes[k].end = n;
             continue;
         }
         for (int t = k * r->tiles_x; t < tiles; t++) {
             if (r->share->owns(r->share, t) &&
                 ao_tile_wanted(&r->tiles[t], tile_pixels(r, t), target, adaptive, busiest, fastest)) {
-                r->work[n++] = t;
+                r->pass.work[n++] = t;
                 pixels += (uint64_t)tile_pixels(r, t);
             }
             if ((t + 1) % r->tiles_x == 0) /* the end of a row: on to this share's next row */
                 t += (groups - 1) * r->tiles_x;
         }
-        r->lanes[k].end = n;
+        r->pass.lanes[k].end = n;
     }
     return pixels;
 }
@@ -303,17 +303,17 @@ bool ao_pass_plan(struct ao_run *r, bool adaptive, uint64_t *pixels)
     return true;
 }
 
-bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive, bool finished, uint64_t rays[2],
-                    double seconds, uint32_t spppp, bool *counts)
+bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive, const struct ao_pass_result *pass,
+                    bool *counts)
 {
     struct ao_share_tally tally;
     memset(&tally, 0, sizeof tally);
-    tally.total[TOTAL_EYE] = rays[0];
-    tally.total[TOTAL_SHADOW] = rays[1];
-    tally.most[MOST_SECONDS] = seconds + r->share->waited(r->share);
-    tally.most[MOST_GAVE_UP] = finished ? 0.0 : 1.0;
-    tally.most[MOST_SPPPP] = spppp;
-    if (finished) /* else no process counts the pass, nor uses its tiles' tally */
+    tally.total[TOTAL_EYE] = pass->rays[0];
+    tally.total[TOTAL_SHADOW] = pass->rays[1];
+    tally.most[MOST_SECONDS] = pass->seconds + r->share->waited(r->share);
+    tally.most[MOST_GAVE_UP] = pass->finished ? 0.0 : 1.0;
+    tally.most[MOST_SPPPP] = pass->spppp;
+    if (pass->finished) /* else no process counts the pass, nor uses its tiles' tally */
         tally_tiles(r, &tally);
     if (!r->share->combine(r->share, &tally))
         return false;
@@ -348,7 +348,7 @@ bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive,
     if (!ao_pass_plan(r, adaptive, &next))
         return false;
     info->converged = adaptive ? 1.0 - (double)next / image : 0.0;
-    double target_error = r->ctx.output == AO_OUTPUT_NORMALS ? fmax(r->config.target_error, NORMALS_FINAL)
+    double target_error = r->pass.ctx.output == AO_OUTPUT_NORMALS ? fmax(r->config.target_error, NORMALS_FINAL)
                                                              : r->config.target_error;
     bool error_reached = target_error > 0.0 && tally.most[MOST_UNSETTLED] == 0.0 && info->error <= target_error;
     bool time_up = r->config.time_limit > 0.0 && info->seconds >= r->config.time_limit;
@@ -373,10 +373,10 @@ static int pass_samples(const struct ao_settings *s, size_t pixels)
 static uint32_t largest_share(const struct ao_run *r)
 {
     uint32_t most = 0;
-    struct ao_tile_pass uncapped = r->tile_pass;
+    struct ao_tile_pass uncapped = r->pass.tile_pass;
     uncapped.target_spp = UINT32_MAX;
-    for (int n = 0; n < r->lanes[r->config.threads - 1].end; n++) {
-        struct ao_tile_work w = ao_tile_work_of(&r->tiles[r->work[n]], &uncapped, NULL);
+    for (int n = 0; n < r->pass.lanes[r->config.threads - 1].end; n++) {
+        struct ao_tile_work w = ao_tile_work_of(&r->tiles[r->pass.work[n]], &uncapped, NULL);
         uint32_t samples = (uint32_t)(w.rounds * w.count);
         most = samples > most ? samples : most;
     }
@@ -386,9 +386,9 @@ static uint32_t largest_share(const struct ao_run *r)
 uint32_t ao_pass_prepare(struct ao_run *r, const struct ao_settings *s, uint64_t pixels)
 {
     select_tiles(r, s->adaptive);
-    r->tile_pass = (struct ao_tile_pass){.target_spp = r->config.target_spp, .samples = pass_samples(s, pixels),
+    r->pass.tile_pass = (struct ao_tile_pass){.target_spp = r->config.target_spp, .samples = pass_samples(s, pixels),
                                          .per_ray = s->spppp > 0 ? 0 : AUTO_PER_RAY,
-                                         .sobol = r->ctx.sequence == AO_SEQUENCE_SOBOL};
+                                         .sobol = r->pass.ctx.sequence == AO_SEQUENCE_SOBOL};
     return largest_share(r);
 }
 

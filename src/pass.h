@@ -98,23 +98,30 @@ struct ao_run_share {
     void (*destroy)(struct ao_run_share *s);
 };
 
-/* What the passes of a run read and write: owned by the render thread, which writes the pass's
- * fields before the team runs it; the team's threads write disjoint tiles, counters atomically. */
+/* The pass in flight: written by the render thread before the team runs it, read by the team,
+ * which adds to the ray counts atomically. */
+struct ao_pass {
+    struct ao_pool *pool;                /* the thread team that traces it */
+    uint64_t serial;                     /* numbers the passes */
+    struct ao_context ctx;
+    uint64_t restarts;                   /* the restarts it was begun at: another count aborts it */
+    struct ao_tile_pass tile_pass;       /* what the pass gives each tile */
+    int *work;                           /* its tiles, grouped by lane: the run's tiles at most */
+    struct ao_lane *lanes;               /* one per thread, the render thread's first */
+    atomic_uint_fast64_t eye_rays, shadow_rays;
+};
+
+/* A run: the accumulation between two restarts, its tiles and frames, what the last survey planned
+ * and the pass in flight. Owned by the render thread; the team's threads write disjoint tiles. */
 struct ao_run {
     struct ao_render_config config;
     int width, height;                   /* of the accumulation: the size of the current run */
     struct ao_accum accum;               /* render thread (and its team, pixel-disjoint) only */
     struct ao_frames frames;             /* to the consumer */
-    struct ao_run_share *share;          /* how its passes meet other processes' (below) */
+    struct ao_run_share *share;          /* how its passes meet other processes' (above) */
     atomic_uint_fast64_t live_restarts;  /* the renderer's restarts and stop, for the tile loop */
     atomic_bool live_stop;
 
-    /* The pass in flight: written by the render thread before the team runs it. */
-    struct ao_pool *pool;
-    uint64_t pass_serial;                /* numbers the passes */
-    struct ao_context ctx;
-    uint64_t pass_restarts;              /* the restarts it was begun at: another count aborts it */
-    struct ao_tile_pass tile_pass;       /* what the pass gives each tile */
     int tiles_x, tiles_y;
     struct ao_tile_state *tiles;         /* tiles_x * tiles_y, row by row */
     uint64_t *tile_stamps;               /* per tile: the stamp of its sums' last change */
@@ -126,11 +133,8 @@ struct ao_run {
                                             (NULL: none) */
     uint64_t frame_kept;                 /* the stamp its pixels had when it was begun */
     double image_mean;                   /* of the running average, as of the last survey */
-    int *work;                           /* the pass's tiles, grouped by lane */
-    struct ao_lane *lanes;               /* one per thread, the render thread's first */
-    atomic_uint_fast64_t eye_rays, shadow_rays;
 
-    /* What the last survey planned (or a restart: nothing sampled yet), for ao_pass_select and the
+    /* What the last survey planned (or a restart: nothing sampled yet), for select_tiles (pass.c) and the
      * next pass's size: the busiest tile's spp and the largest gain among the tiles short of the
      * target, and the pixels the next pass traces without and with adaptive sampling (known[k]:
      * counted; with adaptive sampling off the survey counts only the first). */
@@ -139,6 +143,7 @@ struct ao_run {
     uint64_t next[2];
     bool next_known[2];
 
+    struct ao_pass pass;                 /* the pass in flight */
 };
 
 /* Allocates the accumulation, tile states and work lists of a run of r->width x r->height; false
@@ -191,13 +196,22 @@ bool ao_pass_run(struct ao_run *r);
  * share stops. Render thread. */
 bool ao_pass_plan(struct ao_run *r, bool adaptive, uint64_t *pixels);
 
-/* After a pass this process ran (finished or not), with the pass's rays, seconds and largest share
- * of samples: combines the tally over the processes (the run's share), adds the pass's rays and
+/* What a pass this process ran gives its survey: whether it finished it (not aborted nor given
+ * up), its eye and shadow rays, its seconds and the most samples per pixel a tile of it took
+ * (ao_pass_prepare's). */
+struct ao_pass_result {
+    bool finished;
+    uint64_t rays[2];
+    double seconds;
+    uint32_t spppp;
+};
+
+/* After a pass this process ran (finished or not), with what it gave: combines the tally over the processes (the run's share), adds the pass's rays and
  * seconds to info and, when every process finished it, fills in info's per-pixel counts, error
  * estimate, RMSE, converged share and whether the run is done, keeps the image mean and plans the
  * next pass. *counts: whether the pass counts; false when the share stops. Render thread. */
-bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive, bool finished, uint64_t rays[2],
-                    double seconds, uint32_t spppp, bool *counts);
+bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive, const struct ao_pass_result *pass,
+                    bool *counts);
 
 /* Readies the planned pass of `pixels` pixels (ao_pass_plan) with settings s: fills the work list
  * with the tiles of this process's (every tile with the solo share) that it traces, the tiles

@@ -62,7 +62,7 @@ static bool navigation_allows(struct ao_render *r, int first, int block)
     if (block >= first / 4)
         return true;
     pthread_mutex_lock(&r->lock);
-    while (r->settings.navigating && !r->stop && r->restarts == r->run.pass_restarts)
+    while (r->settings.navigating && !r->stop && r->restarts == r->run.pass.restarts)
         pthread_cond_wait(&r->wake, &r->lock);
     pthread_mutex_unlock(&r->lock);
     return !ao_pass_aborted(&r->run);
@@ -78,13 +78,13 @@ static bool preview(struct ao_render *r, const struct ao_camera *camera, const s
     for (int block = first; block > 1 && !ao_pass_aborted(run) && navigation_allows(r, first, block);
          block = ao_preview_next_block(block)) {
         struct ao_preview *p = &r->preview;
-        if (!ao_preview_begin(p, &run->ctx, camera, run->width, run->height, block))
+        if (!ao_preview_begin(p, &run->pass.ctx, camera, run->width, run->height, block))
             return true;
         struct ao_frame *f = ao_frames_back(&run->frames, p->width, p->height, 0);
         if (!f)
             return false;
         p->rgb = f->rgb;
-        ao_pool_run(run->pool, preview_job, r);
+        ao_pool_run(run->pass.pool, preview_job, r);
         if (ao_pass_aborted(run))
             break;
         f->tile = AO_TILE;
@@ -192,11 +192,11 @@ static bool step(struct ao_render *r, const struct ao_pass_start *p, struct ao_f
     struct ao_run *run = &r->run;
     struct ao_run_share *share = r->share;
     const struct ao_settings *s = &p->settings;
-    run->ctx.sampling = s->sampling;
-    run->ctx.aa = s->aa;
-    run->ctx.output = s->output;
-    run->ctx.shading = s->shading;
-    run->pass_restarts = p->own;
+    run->pass.ctx.sampling = s->sampling;
+    run->pass.ctx.aa = s->aa;
+    run->pass.ctx.output = s->output;
+    run->pass.ctx.shading = s->shading;
+    run->pass.restarts = p->own;
     if (info->restarts != p->restarts && !start_run(r, s, p->restarts, info))
         return false;
 
@@ -206,24 +206,22 @@ static bool step(struct ao_render *r, const struct ao_pass_start *p, struct ao_f
     ao_phases_begin();
     if (!ao_pass_plan(run, s->adaptive, &pixels))
         return false;
-    uint32_t spppp = ao_pass_prepare(run, s, pixels);
+    struct ao_pass_result result = {.spppp = ao_pass_prepare(run, s, pixels)};
     ao_phases_add(AO_PHASE_PLAN, ao_phases_clock() - planned);
 
     /* Run it, unless nothing is left to sample (adaptive sampling was just turned on), and survey it. */
     bool counts = false;
-    uint64_t rays[2] = {0, 0};
-    double seconds = 0.0;
     if (pixels) {
         double start = ao_clock_seconds();
-        ao_camera_view(&s->camera, run->width, run->height, &run->ctx.view);
-        atomic_store(&run->eye_rays, 0);
-        atomic_store(&run->shadow_rays, 0);
-        bool finished = share->run(share, run);
-        rays[0] = atomic_load(&run->eye_rays);
-        rays[1] = atomic_load(&run->shadow_rays);
-        seconds = ao_clock_seconds() - start;
+        ao_camera_view(&s->camera, run->width, run->height, &run->pass.ctx.view);
+        atomic_store(&run->pass.eye_rays, 0);
+        atomic_store(&run->pass.shadow_rays, 0);
+        result.finished = share->run(share, run);
+        result.rays[0] = atomic_load(&run->pass.eye_rays);
+        result.rays[1] = atomic_load(&run->pass.shadow_rays);
+        result.seconds = ao_clock_seconds() - start;
         double surveyed = ao_phases_clock();
-        if (!ao_pass_survey(run, info, s->adaptive, finished, rays, seconds, spppp, &counts))
+        if (!ao_pass_survey(run, info, s->adaptive, &result, &counts))
             return false;
         ao_phases_add(AO_PHASE_SURVEY, ao_phases_clock() - surveyed);
     }
@@ -237,7 +235,7 @@ static bool step(struct ao_render *r, const struct ao_pass_start *p, struct ao_f
         ao_phases_add(AO_PHASE_PUBLISH, ao_phases_clock() - published);
     }
     if (pixels)
-        ao_phases_say(run->config.threads, info->pass, rays[0] + rays[1], seconds);
+        ao_phases_say(run->config.threads, info->pass, result.rays[0] + result.rays[1], result.seconds);
     if (ending)
         return false;
 
@@ -306,24 +304,24 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
     run->width = settings->width;
     run->height = settings->height;
     ao_frames_init(&run->frames);
-    run->ctx = (struct ao_context){.scene = config->scene, .tracer = config->tracer,
+    run->pass.ctx = (struct ao_context){.scene = config->scene, .tracer = config->tracer,
                                    .ao_distance = config->ao_distance, .seed = config->seed,
                                    .sequence = config->sequence, .below = config->below,
                                    .cut = tile_cut, .cut_user = run};
     pthread_mutex_init(&r->lock, NULL);
     pthread_cond_init(&r->wake, NULL);
     pthread_cond_init(&r->finished, NULL);
-    run->lanes = aligned_alloc(_Alignof(struct ao_lane), (size_t)config->threads * sizeof *run->lanes);
-    if (!run->lanes) {
+    run->pass.lanes = aligned_alloc(_Alignof(struct ao_lane), (size_t)config->threads * sizeof *run->pass.lanes);
+    if (!run->pass.lanes) {
         ao_text_report("aoview: out of memory starting the renderer");
         ao_render_destroy(r);
         return NULL;
     }
     for (int k = 0; k < config->threads; k++)
-        atomic_init(&run->lanes[k].next, 0);
+        atomic_init(&run->pass.lanes[k].next, 0);
     /* The render thread works tiles too, so the team has threads - 1 workers besides it. */
     struct ao_run_loop loop = {.paused = loop_paused, .take = loop_take, .rests = loop_rests, .render = r};
-    if (!ao_pass_allocate(run) || !(run->pool = ao_pool_create(config->threads, ao_tracer_thread_init)) ||
+    if (!ao_pass_allocate(run) || !(run->pass.pool = ao_pool_create(config->threads, ao_tracer_thread_init)) ||
         !(r->share = config->share ? ao_render_share_create(run, config->share, &loop) : ao_solo_share())) {
         ao_render_destroy(r);
         return NULL;
@@ -363,14 +361,14 @@ void ao_render_destroy(struct ao_render *render)
     if (!render)
         return;
     join_render_thread(render);
-    ao_pool_destroy(render->run.pool);
+    ao_pool_destroy(render->run.pass.pool);
     if (render->share)
         render->share->destroy(render->share);
     pthread_cond_destroy(&render->finished);
     pthread_cond_destroy(&render->wake);
     pthread_mutex_destroy(&render->lock);
     ao_frames_finish(&render->run.frames);
-    free(render->run.lanes);
+    free(render->run.pass.lanes);
     ao_pass_free(&render->run);
     free(render);
 }

@@ -59,7 +59,7 @@ static void add_entries(struct shared *st, int begin, int end)
 {
     struct ao_run *r = st->run;
     for (int n = begin; n < end; n++) {
-        int t = r->work[n];
+        int t = r->pass.work[n];
         uint32_t next;
         struct ao_tile_work work = ao_pass_tile_work(r, t, &next);
         ao_pass_add_tile(r, t, &work, next, st->pass_sums + (size_t)n * AO_TILE * AO_TILE);
@@ -106,7 +106,7 @@ static int lend_entries(void *renderer, int most, int *first, int *tiles, struct
                                                     memory_order_relaxed, memory_order_relaxed));
     *first = (int)(back - count);
     for (uint32_t k = 0; k < count; k++) {
-        tiles[k] = st->run->work[*first + (int)k];
+        tiles[k] = st->run->pass.work[*first + (int)k];
         works[k] = ao_pass_tile_work(st->run, tiles[k], NULL);
     }
     return (int)count;
@@ -138,11 +138,11 @@ static void render_shared(void *user, int self)
         if (!share->borrow(share->user, &st->pass, &loan))
             break;
         struct ao_tile rect = ao_pass_tile_rect(r, loan.tile);
-        ao_estimate_tile(&r->ctx, &rect, &loan.work, loan.sums, &eye, &shadow);
+        ao_estimate_tile(&r->pass.ctx, &rect, &loan.work, loan.sums, &eye, &shadow);
         share->repay(share->user, &st->pass, &loan);
     }
-    atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
-    atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
+    atomic_fetch_add_explicit(&r->pass.eye_rays, eye, memory_order_relaxed);
+    atomic_fetch_add_explicit(&r->pass.shadow_rays, shadow, memory_order_relaxed);
 }
 
 /* The run hook: the pass on every thread of the team, then the sums of the entries it lent. */
@@ -152,10 +152,10 @@ static bool run_pass(struct ao_run_share *s, struct ao_run *r)
     int count = ao_pass_begin(r);
     atomic_store(&st->span, (uint_fast64_t)count << 32);
     atomic_store(&st->given_up, false);
-    st->pass = (struct ao_share_pass){.serial = r->pass_serial, .count = count, .pixels = AO_TILE * AO_TILE,
+    st->pass = (struct ao_share_pass){.serial = r->pass.serial, .count = count, .pixels = AO_TILE * AO_TILE,
                                       .sums = st->pass_sums, .left = entries_left, .lend = lend_entries,
                                       .renderer = st};
-    ao_pool_run(r->pool, render_shared, st);
+    ao_pool_run(r->pass.pool, render_shared, st);
     bool finished = !ao_pass_aborted(r) && !atomic_load(&st->given_up);
     for (int arrived[2] = {0, 1}; arrived[0] < arrived[1];) {
         arrived[0] = arrived[1] = 0;
@@ -432,7 +432,7 @@ struct ao_run_share *ao_render_share_create(struct ao_run *run, const struct ao_
     st->share = share;
     st->loop = *loop;
     st->run = run;
-    run->ctx.cut = NULL; /* a borrowed tile is traced to the end: its owner adds its sums */
+    run->pass.ctx.cut = NULL; /* a borrowed tile is traced to the end: its owner adds its sums */
     atomic_init(&st->span, 0);
     atomic_init(&st->given_up, false);
     if (!restart(&st->hooks, run->tiles_x * run->tiles_y)) {
