@@ -5,7 +5,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "clock.h"
 #include "phases.h"
 #include "sum.h"
 #include "text.h"
@@ -34,22 +33,11 @@ bool ao_pass_allocate(struct ao_run *r)
     r->tiles_y = (r->height + AO_TILE - 1) / AO_TILE;
     if (!ao_accum_init(&r->accum, r->width, r->height))
         return false;
-    size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y, owned = 0;
-    const struct ao_render_share *share = r->config.share;
+    size_t tiles = (size_t)r->tiles_x * (size_t)r->tiles_y;
     r->tiles = calloc(tiles, sizeof *r->tiles);
     r->tile_stamps = calloc(tiles, sizeof *r->tile_stamps);
-    r->work = calloc(tiles, sizeof *r->work);
-    r->mine = malloc(tiles);
-    if (r->mine)
-        for (size_t t = 0; t < tiles; t++)
-            owned += r->mine[t] = !share || share->owns(share->user, (int)t, (int)tiles);
-    if (share) {
-        r->pass_sums = malloc(tiles * AO_TILE * AO_TILE * sizeof *r->pass_sums);
-        r->records = malloc((owned ? owned : 1) * sizeof *r->records);
-        r->all_records = share->follows ? NULL : malloc(tiles * sizeof *r->all_records);
-    }
-    if (!r->tiles || !r->tile_stamps || !r->work || !r->mine ||
-        (share && (!r->pass_sums || !r->records || (!share->follows && !r->all_records)))) {
+    r->pass.work = calloc(tiles, sizeof *r->pass.work);
+    if (!r->tiles || !r->tile_stamps || !r->pass.work) {
         ao_text_report("aoview: out of memory for a %dx%d image", r->width, r->height);
         return false;
     }
@@ -61,17 +49,10 @@ void ao_pass_free(struct ao_run *r)
     ao_accum_finish(&r->accum);
     free(r->tiles);
     free(r->tile_stamps);
-    free(r->work);
-    free(r->mine);
-    free(r->pass_sums);
-    free(r->records);
-    free(r->all_records);
+    free(r->pass.work);
     r->tiles = NULL;
     r->tile_stamps = NULL;
-    r->work = NULL;
-    r->mine = NULL;
-    r->pass_sums = NULL;
-    r->records = r->all_records = NULL;
+    r->pass.work = NULL;
 }
 
 bool ao_pass_restart(struct ao_run *r, int width, int height)
@@ -92,8 +73,7 @@ bool ao_pass_restart(struct ao_run *r, int width, int height)
     uint64_t pixels = r->config.target_spp ? (uint64_t)r->width * (uint64_t)r->height : 0;
     r->next[0] = r->next[1] = pixels;
     r->next_known[0] = r->next_known[1] = true;
-    r->ungathered = false;
-    return true;
+    return r->share->restart(r->share, r->tiles_x * r->tiles_y);
 }
 
 /* ---- tiles: run by the render thread and every thread of the team ---- */
@@ -101,7 +81,7 @@ bool ao_pass_restart(struct ao_run *r, int width, int height)
 bool ao_pass_aborted(const struct ao_run *r)
 {
     return atomic_load_explicit(&r->live_stop, memory_order_relaxed) ||
-           atomic_load_explicit(&r->live_restarts, memory_order_relaxed) != r->pass_restarts;
+           atomic_load_explicit(&r->live_restarts, memory_order_relaxed) != r->pass.restarts;
 }
 
 struct ao_tile ao_pass_tile_rect(const struct ao_run *r, int t)
@@ -111,7 +91,7 @@ struct ao_tile ao_pass_tile_rect(const struct ao_run *r, int t)
 
 struct ao_tile_work ao_pass_tile_work(const struct ao_run *r, int t, uint32_t *next)
 {
-    return ao_tile_work_of(&r->tiles[t], &r->tile_pass, next);
+    return ao_tile_work_of(&r->tiles[t], &r->pass.tile_pass, next);
 }
 
 /* Stamps tile t's change and resolves the tile into the frame begun, if any. */
@@ -139,13 +119,13 @@ void ao_pass_clear_tile(struct ao_run *r, int t)
 
 void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shadow)
 {
-    int t = r->work[n];
+    int t = r->pass.work[n];
     struct ao_tile rect = ao_pass_tile_rect(r, t);
     uint32_t next;
     struct ao_tile_work work = ao_pass_tile_work(r, t, &next);
     struct ao_vec3 sums[AO_TILE_PIXELS];
     double start = ao_phases_clock();
-    if (ao_estimate_tile(&r->ctx, &rect, &work, sums, eye, shadow)) { /* else cut: the pass is aborted */
+    if (ao_estimate_tile(&r->pass.ctx, &rect, &work, sums, eye, shadow)) { /* else cut: the pass is aborted */
         double traced = ao_phases_clock();
         ao_phases_add(AO_PHASE_TRACE, traced - start);
         ao_pass_add_tile(r, t, &work, next, sums);
@@ -153,7 +133,7 @@ void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shado
     }
 }
 
-/* The team's job for a pass without a share: thread `self`'s lane, then what is left of the
+/* The team's job for a pass of the solo share's: thread `self`'s lane, then what is left of the
  * others'. */
 static void render_tiles(void *user, int self)
 {
@@ -162,7 +142,7 @@ static void render_tiles(void *user, int self)
     uint64_t eye = 0, shadow = 0;
     ao_phases_enter(self);
     for (int v = 0; v < threads && !ao_pass_aborted(r); v++) {
-        struct ao_lane *lane = &r->lanes[(self + v) % threads];
+        struct ao_lane *lane = &r->pass.lanes[(self + v) % threads];
         for (;;) {
             int n = lane->begin + atomic_fetch_add_explicit(&lane->next, 1, memory_order_relaxed);
             if (n >= lane->end || ao_pass_aborted(r))
@@ -170,19 +150,17 @@ static void render_tiles(void *user, int self)
             ao_pass_render_tile(r, n, &eye, &shadow);
         }
     }
-    atomic_fetch_add_explicit(&r->eye_rays, eye, memory_order_relaxed);
-    atomic_fetch_add_explicit(&r->shadow_rays, shadow, memory_order_relaxed);
+    atomic_fetch_add_explicit(&r->pass.eye_rays, eye, memory_order_relaxed);
+    atomic_fetch_add_explicit(&r->pass.shadow_rays, shadow, memory_order_relaxed);
     ao_phases_leave(self);
 }
 
 int ao_pass_begin(struct ao_run *r)
 {
-    int count = r->lanes[r->config.threads - 1].end;
+    int count = r->pass.lanes[r->config.threads - 1].end;
     for (int k = 0; k < r->config.threads; k++)
-        atomic_store(&r->lanes[k].next, 0);
-    atomic_store(&r->span, (uint_fast64_t)count << 32);
-    atomic_store(&r->given_up, false);
-    r->pass_serial++;
+        atomic_store(&r->pass.lanes[k].next, 0);
+    r->pass.serial++;
     return count;
 }
 
@@ -200,7 +178,7 @@ bool ao_pass_run(struct ao_run *r)
     if (!r->frame)
         begin_frame(r);
     ao_pass_begin(r);
-    ao_pool_run(r->pool, render_tiles, r);
+    ao_pool_run(r->pass.pool, render_tiles, r);
     ao_phases_job_end(r->config.threads, ao_phases_clock());
     return !ao_pass_aborted(r);
 }
@@ -214,33 +192,33 @@ static int tile_pixels(const struct ao_run *r, int t)
     return (rect.x1 - rect.x0) * (rect.y1 - rect.y0);
 }
 
-/* Fills the work list with the tiles of this process's (every tile without a share) that the next
- * pass traces, dealt to the threads' shares by tile row, and returns how many pixels they hold:
- * the tiles ao_tile_wanted picks, with the busiest tile's spp and the largest gain that the last
- * survey found. */
+/* Fills the work list with the tiles of this process's (every tile with the solo share) that the
+ * next pass traces, dealt to the threads' shares by tile row (or in row order: one_list), and
+ * returns how many pixels they hold: the tiles ao_tile_wanted picks, with the busiest tile's spp
+ * and the largest gain that the last survey found. */
 static uint64_t select_tiles(struct ao_run *r, bool adaptive)
 {
-    /* With a share, one list in row order, the same whatever the threads. */
-    int threads = r->config.threads, groups = r->config.share ? 1 : threads, tiles = r->tiles_x * r->tiles_y;
+    int threads = r->config.threads, groups = r->share->one_list ? 1 : threads, tiles = r->tiles_x * r->tiles_y;
     uint32_t target = r->config.target_spp, busiest = r->busiest;
     double fastest = r->fastest;
     uint64_t pixels = 0;
     int n = 0;
     for (int k = 0; k < threads; k++) {
-        r->lanes[k].begin = n;
+        r->pass.lanes[k].begin = n;
         if (k >= groups) {
-            r->lanes[k].end = n;
+            r->pass.lanes[k].end = n;
             continue;
         }
         for (int t = k * r->tiles_x; t < tiles; t++) {
-            if (r->mine[t] && ao_tile_wanted(&r->tiles[t], tile_pixels(r, t), target, adaptive, busiest, fastest)) {
-                r->work[n++] = t;
+            if (r->share->owns(r->share, t) &&
+                ao_tile_wanted(&r->tiles[t], tile_pixels(r, t), target, adaptive, busiest, fastest)) {
+                r->pass.work[n++] = t;
                 pixels += (uint64_t)tile_pixels(r, t);
             }
             if ((t + 1) % r->tiles_x == 0) /* the end of a row: on to this share's next row */
                 t += (groups - 1) * r->tiles_x;
         }
-        r->lanes[k].end = n;
+        r->pass.lanes[k].end = n;
     }
     return pixels;
 }
@@ -286,7 +264,7 @@ static void tally_tiles(const struct ao_run *r, struct ao_share_tally *tally)
     uint32_t target = r->config.target_spp;
     bool reference = ao_pass_has_reference(r);
     for (int t = 0; t < r->tiles_x * r->tiles_y; t++) {
-        if (!r->mine[t])
+        if (!r->share->owns(r->share, t))
             continue;
         const struct ao_tile_state *ts = &r->tiles[t];
         uint32_t spp = ao_tile_spp(ts);
@@ -316,12 +294,8 @@ bool ao_pass_plan(struct ao_run *r, bool adaptive, uint64_t *pixels)
 {
     if (!r->next_known[adaptive]) {
         uint64_t own = select_tiles(r, adaptive);
-        const struct ao_render_share *share = r->config.share;
-        double start = ao_clock_seconds();
-        if (share && !share->add_up(share->user, &own, 1))
+        if (!r->share->add_up(r->share, &own, 1))
             return false;
-        if (share)
-            r->share_seconds += ao_clock_seconds() - start;
         r->next[adaptive] = own;
         r->next_known[adaptive] = true;
     }
@@ -329,23 +303,20 @@ bool ao_pass_plan(struct ao_run *r, bool adaptive, uint64_t *pixels)
     return true;
 }
 
-bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive, bool finished, uint64_t rays[2],
-                    double seconds, uint32_t spppp, bool *counts)
+bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive, const struct ao_pass_result *pass,
+                    bool *counts)
 {
     struct ao_share_tally tally;
     memset(&tally, 0, sizeof tally);
-    tally.total[TOTAL_EYE] = rays[0];
-    tally.total[TOTAL_SHADOW] = rays[1];
-    tally.most[MOST_SECONDS] = seconds + r->share_seconds;
-    tally.most[MOST_GAVE_UP] = finished ? 0.0 : 1.0;
-    tally.most[MOST_SPPPP] = spppp;
-    if (finished || r->config.share)
+    tally.total[TOTAL_EYE] = pass->rays[0];
+    tally.total[TOTAL_SHADOW] = pass->rays[1];
+    tally.most[MOST_SECONDS] = pass->seconds + r->share->waited(r->share);
+    tally.most[MOST_GAVE_UP] = pass->finished ? 0.0 : 1.0;
+    tally.most[MOST_SPPPP] = pass->spppp;
+    if (pass->finished) /* else no process counts the pass, nor uses its tiles' tally */
         tally_tiles(r, &tally);
-    const struct ao_render_share *share = r->config.share;
-    double start = ao_clock_seconds();
-    if (share && !share->combine(share->user, &tally))
+    if (!r->share->combine(r->share, &tally))
         return false;
-    r->share_seconds = share ? ao_clock_seconds() - start : 0.0;
     info->eye_rays += tally.total[TOTAL_EYE];
     info->shadow_rays += tally.total[TOTAL_SHADOW];
     info->seconds += tally.most[MOST_SECONDS];
@@ -377,7 +348,7 @@ bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive,
     if (!ao_pass_plan(r, adaptive, &next))
         return false;
     info->converged = adaptive ? 1.0 - (double)next / image : 0.0;
-    double target_error = r->ctx.output == AO_OUTPUT_NORMALS ? fmax(r->config.target_error, NORMALS_FINAL)
+    double target_error = r->pass.ctx.output == AO_OUTPUT_NORMALS ? fmax(r->config.target_error, NORMALS_FINAL)
                                                              : r->config.target_error;
     bool error_reached = target_error > 0.0 && tally.most[MOST_UNSETTLED] == 0.0 && info->error <= target_error;
     bool time_up = r->config.time_limit > 0.0 && info->seconds >= r->config.time_limit;
@@ -402,10 +373,10 @@ static int pass_samples(const struct ao_settings *s, size_t pixels)
 static uint32_t largest_share(const struct ao_run *r)
 {
     uint32_t most = 0;
-    struct ao_tile_pass uncapped = r->tile_pass;
+    struct ao_tile_pass uncapped = r->pass.tile_pass;
     uncapped.target_spp = UINT32_MAX;
-    for (int n = 0; n < r->lanes[r->config.threads - 1].end; n++) {
-        struct ao_tile_work w = ao_tile_work_of(&r->tiles[r->work[n]], &uncapped, NULL);
+    for (int n = 0; n < r->pass.lanes[r->config.threads - 1].end; n++) {
+        struct ao_tile_work w = ao_tile_work_of(&r->tiles[r->pass.work[n]], &uncapped, NULL);
         uint32_t samples = (uint32_t)(w.rounds * w.count);
         most = samples > most ? samples : most;
     }
@@ -415,9 +386,9 @@ static uint32_t largest_share(const struct ao_run *r)
 uint32_t ao_pass_prepare(struct ao_run *r, const struct ao_settings *s, uint64_t pixels)
 {
     select_tiles(r, s->adaptive);
-    r->tile_pass = (struct ao_tile_pass){.target_spp = r->config.target_spp, .samples = pass_samples(s, pixels),
+    r->pass.tile_pass = (struct ao_tile_pass){.target_spp = r->config.target_spp, .samples = pass_samples(s, pixels),
                                          .per_ray = s->spppp > 0 ? 0 : AUTO_PER_RAY,
-                                         .sobol = r->ctx.sequence == AO_SEQUENCE_SOBOL};
+                                         .sobol = r->pass.ctx.sequence == AO_SEQUENCE_SOBOL};
     return largest_share(r);
 }
 

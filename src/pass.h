@@ -1,8 +1,9 @@
 /* A run of the renderer and its passes: the accumulation between two restarts with its tiles, work
  * list and frames (struct ao_run), and one pass over it, planned from the last one's survey, traced
  * by the thread team, surveyed (the error estimate, RMSE, whether the run is done) and published.
- * Private to the renderer: render.c drives passes from its thread, render_share.c runs them with a
- * share; neither the frames' consumers nor the share see this header. */
+ * And the run share, the way its passes meet other processes' (none: the solo share). Private to
+ * the renderer: render.c drives passes from its thread, solo.c and render_share.c are its shares;
+ * neither the frames' consumers nor the cluster see this header. */
 #ifndef AO_PASS_H
 #define AO_PASS_H
 
@@ -28,32 +29,99 @@ struct ao_lane {
     int begin, end;                      /* its tiles in the work list */
 };
 
-/* One tile of the image as a gather moves it (struct ao_render_share's gather): its running average
- * (its pixels row by row, clipped to the image), its error estimate (as struct ao_frame's), the
- * most samples a pixel of it has and their sum over its pixels. */
-struct ao_tile_record {
-    float rgb[3 * AO_TILE * AO_TILE];
-    float error;
-    uint32_t most;
-    uint64_t samples;
+struct ao_run;
+
+/* What a pass is rendered with: the settings, the restarts (the generation of the sums: with an
+ * aoview-mpi share, the leader's) and `own`, this renderer's restarts when it was taken, which a
+ * later restart aborts. */
+struct ao_pass_start {
+    struct ao_settings settings;
+    uint64_t own, restarts;
 };
 
-/* What the passes of a run read and write: owned by the render thread, which writes the pass's
- * fields before the team runs it; the team's threads write disjoint tiles, counters atomically. */
+/* What a share may ask of the render thread's loop (render.c's, each under its lock): whether the
+ * settings pause; when a pass is due now (neither stopped nor idle after the pass of info), its
+ * start, taken into *p; whether the loop rests after a pass (not stopped, and done: `finishes`
+ * at restarts `own`, or idle). Render thread. */
+struct ao_run_loop {
+    bool (*paused)(void *render);
+    bool (*take)(void *render, const struct ao_frame_info *info, struct ao_pass_start *p);
+    bool (*rests)(void *render, const struct ao_frame_info *info, bool finishes, uint64_t own);
+    void *render;
+};
+
+/* How the passes of a run meet the other processes rendering the same image: the solo share
+ * (solo.c) does nothing, one process renders every tile; render_share.c runs them with an
+ * aoview-mpi share (share.h) and keeps that share's state. pass.c and render.c call these hooks on
+ * the render thread, the loop's in its order: begin, run, publish, rest; end when it stops. */
+struct ao_run_share {
+    /* The share paces the passes (an aoview-mpi follower: the leader's): this renderer's own pause
+     * and target neither hold nor end its loop, which the share's begin ends. */
+    bool paced;
+    /* The work list in row order, as loans take it, not dealt to the threads' lanes. */
+    bool one_list;
+    /* A run of `tiles` tiles begins (at ao_pass_restart); false with one message when memory is
+     * short. */
+    bool (*restart)(struct ao_run_share *s, int tiles);
+    /* Whether tile t of the run is this process's, to plan, trace and keep. */
+    bool (*owns)(const struct ao_run_share *s, int tile);
+    /* Sums each of values[0..count) over the processes, in place; false when the run stops. */
+    bool (*add_up)(struct ao_run_share *s, uint64_t *values, int count);
+    /* The seconds spent in the share's waits since the last combine, which count in this pass. */
+    double (*waited)(struct ao_run_share *s);
+    /* Combines tally over the processes, in place; false when the run stops. */
+    bool (*combine)(struct ao_run_share *s, struct ao_share_tally *tally);
+    /* Begins the pass p (taken from the loop; info the last pass's facts) on every process: may
+     * replace it with another start (the leader's, one begun already); false when the share ended
+     * the run. */
+    bool (*begin)(struct ao_run_share *s, struct ao_run *run, struct ao_pass_start *p,
+                  const struct ao_frame_info *info);
+    /* Whether a pass was begun already, which the loop runs whatever the settings. */
+    bool (*begun)(const struct ao_run_share *s);
+    /* Runs the pass readied (ao_pass_prepare); false when it was aborted or given up. */
+    bool (*run)(struct ao_run_share *s, struct ao_run *run);
+    /* After a pass that counts (run with settings, its facts info): publishes it where frames are
+     * kept and reports it (config's on_pass); false when the run must stop; *ending when the share
+     * ended the run after it (the pass is still reported). */
+    bool (*publish)(struct ao_run_share *s, struct ao_run *run, const struct ao_settings *settings,
+                    const struct ao_frame_info *info, bool *ending);
+    /* After every pass (of settings, own its restarts; *finishes whether it ended the run): what
+     * is due before the loop rests; false when the share stops or memory is short. */
+    bool (*rest)(struct ao_run_share *s, struct ao_run *run, const struct ao_settings *settings,
+                 const struct ao_frame_info *info, bool finishes, uint64_t own);
+    /* After an interruption, the render thread joined: the accumulation as it stands as a frame
+     * (see ao_render_resolve_stopped); NULL where frames are not kept or the share failed. Main. */
+    struct ao_frame *(*stopped)(struct ao_run_share *s, struct ao_run *run, const struct ao_frame_info *info);
+    /* The render thread ends. */
+    void (*end)(struct ao_run_share *s);
+    /* Frees the share's state; the solo share's does nothing. */
+    void (*destroy)(struct ao_run_share *s);
+};
+
+/* The pass in flight: written by the render thread before the team runs it, read by the team,
+ * which adds to the ray counts atomically. */
+struct ao_pass {
+    struct ao_pool *pool;                /* the thread team that traces it */
+    uint64_t serial;                     /* numbers the passes */
+    struct ao_context ctx;
+    uint64_t restarts;                   /* the restarts it was begun at: another count aborts it */
+    struct ao_tile_pass tile_pass;       /* what the pass gives each tile */
+    int *work;                           /* its tiles, grouped by lane: the run's tiles at most */
+    struct ao_lane *lanes;               /* one per thread, the render thread's first */
+    atomic_uint_fast64_t eye_rays, shadow_rays;
+};
+
+/* A run: the accumulation between two restarts, its tiles and frames, what the last survey planned
+ * and the pass in flight. Owned by the render thread; the team's threads write disjoint tiles. */
 struct ao_run {
     struct ao_render_config config;
     int width, height;                   /* of the accumulation: the size of the current run */
     struct ao_accum accum;               /* render thread (and its team, pixel-disjoint) only */
     struct ao_frames frames;             /* to the consumer */
+    struct ao_run_share *share;          /* how its passes meet other processes' (above) */
     atomic_uint_fast64_t live_restarts;  /* the renderer's restarts and stop, for the tile loop */
     atomic_bool live_stop;
 
-    /* The pass in flight: written by the render thread before the team runs it. */
-    struct ao_pool *pool;
-    uint64_t pass_serial;                /* numbers the passes */
-    struct ao_context ctx;
-    uint64_t pass_restarts;              /* the restarts it was begun at: another count aborts it */
-    struct ao_tile_pass tile_pass;       /* what the pass gives each tile */
     int tiles_x, tiles_y;
     struct ao_tile_state *tiles;         /* tiles_x * tiles_y, row by row */
     uint64_t *tile_stamps;               /* per tile: the stamp of its sums' last change */
@@ -65,11 +133,8 @@ struct ao_run {
                                             (NULL: none) */
     uint64_t frame_kept;                 /* the stamp its pixels had when it was begun */
     double image_mean;                   /* of the running average, as of the last survey */
-    int *work;                           /* the pass's tiles, grouped by lane */
-    struct ao_lane *lanes;               /* one per thread, the render thread's first */
-    atomic_uint_fast64_t eye_rays, shadow_rays;
 
-    /* What the last survey planned (or a restart: nothing sampled yet), for ao_pass_select and the
+    /* What the last survey planned (or a restart: nothing sampled yet), for select_tiles (pass.c) and the
      * next pass's size: the busiest tile's spp and the largest gain among the tiles short of the
      * target, and the pixels the next pass traces without and with adaptive sampling (known[k]:
      * counted; with adaptive sampling off the survey counts only the first). */
@@ -78,20 +143,7 @@ struct ao_run {
     uint64_t next[2];
     bool next_known[2];
 
-    /* With a share (aoview-mpi): the tiles this process owns; its work list as one span of entries
-     * [front, back) (front in the low half) that its threads take from the front and the share
-     * lends from the back; the lent entries' sums (AO_TILE x AO_TILE an entry); whether the share
-     * gave the pass up; the records of a gather (this process's tiles', and the leader's of every
-     * tile); the leader's passes not gathered yet; seconds in the share's waits since the last
-     * pass, which count in the next. */
-    unsigned char *mine;                 /* per tile; every tile without a share */
-    atomic_uint_fast64_t span;
-    struct ao_vec3 *pass_sums;
-    atomic_bool given_up;
-    struct ao_share_pass share_pass;
-    struct ao_tile_record *records, *all_records;
-    bool ungathered;
-    double share_seconds;
+    struct ao_pass pass;                 /* the pass in flight */
 };
 
 /* Allocates the accumulation, tile states and work lists of a run of r->width x r->height; false
@@ -132,12 +184,11 @@ void ao_pass_clear_tile(struct ao_run *r, int t);
  * them (the tile is left as it was); adds the rays traced to *eye and *shadow. */
 void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shadow);
 
-/* Readies the pass's counters (every lane from its first entry, this process's list whole, nothing
- * given up) and numbers it; returns the entries of the work list. Render thread. */
+/* Readies the pass's counters (every lane from its first entry) and numbers it; returns the entries of the work list. Render thread. */
 int ao_pass_begin(struct ao_run *r);
 
-/* Runs one pass on every thread of the team, without a share; false when it was aborted. Render
- * thread. */
+/* Runs one pass on every thread of the team, each from its lane (the solo share's run); false
+ * when it was aborted. Render thread. */
 bool ao_pass_run(struct ao_run *r);
 
 /* The pixels of the next pass with adaptive sampling (`adaptive`) or without: as the last survey
@@ -145,16 +196,25 @@ bool ao_pass_run(struct ao_run *r);
  * share stops. Render thread. */
 bool ao_pass_plan(struct ao_run *r, bool adaptive, uint64_t *pixels);
 
-/* After a pass this process ran (finished or not), with the pass's rays, seconds and largest share
- * of samples: combines the tally over the processes (with a share), adds the pass's rays and
+/* What a pass this process ran gives its survey: whether it finished it (not aborted nor given
+ * up), its eye and shadow rays, its seconds and the most samples per pixel a tile of it took
+ * (ao_pass_prepare's). */
+struct ao_pass_result {
+    bool finished;
+    uint64_t rays[2];
+    double seconds;
+    uint32_t spppp;
+};
+
+/* After a pass this process ran (finished or not), with what it gave: combines the tally over the processes (the run's share), adds the pass's rays and
  * seconds to info and, when every process finished it, fills in info's per-pixel counts, error
  * estimate, RMSE, converged share and whether the run is done, keeps the image mean and plans the
  * next pass. *counts: whether the pass counts; false when the share stops. Render thread. */
-bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive, bool finished, uint64_t rays[2],
-                    double seconds, uint32_t spppp, bool *counts);
+bool ao_pass_survey(struct ao_run *r, struct ao_frame_info *info, bool adaptive, const struct ao_pass_result *pass,
+                    bool *counts);
 
 /* Readies the planned pass of `pixels` pixels (ao_pass_plan) with settings s: fills the work list
- * with the tiles of this process's (every tile without a share) that it traces, the tiles
+ * with the tiles of this process's (every tile with the solo share) that it traces, the tiles
  * ao_tile_wanted picks with the busiest tile's spp and the largest gain the last survey found,
  * dealt to the lanes by tile row, and sets what it gives each tile (its samples: the setting, or
  * --spppp auto's schedule). Returns the most samples per pixel a tile of it takes. Render thread. */

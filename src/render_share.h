@@ -1,30 +1,21 @@
-/* The renderer's side of a share (share.h): a pass whose work list other processes borrow from
- * and whose borrowed tiles this process traces, and the image gathered from every process's tiles.
- * Private to the renderer: render.c calls these when its config has a share. */
+/* The renderer's side of an aoview-mpi share (share.h): the run share (pass.h's struct
+ * ao_run_share) that begins each pass on every process, runs it lending and borrowing tiles,
+ * combines what the decisions need and gathers the image for the leader, which alone keeps frames;
+ * and the solo share, which does nothing. Private to the renderer: render.c picks one of them. */
 #ifndef AO_RENDER_SHARE_H
 #define AO_RENDER_SHARE_H
 
-#include <stdbool.h>
-
-#include "frame.h"
 #include "pass.h"
 
-/* Runs one pass on every thread of the team with the share: the entries of this process's list,
- * adding those that other processes traced for it as their sums come, then tiles borrowed from
- * other processes; then waits for the sums of the entries it lent. False when the pass was aborted
- * or given up by the share, or the share stops. Render thread. */
-bool ao_render_share_pass(struct ao_run *r);
+/* The run share of run with share, its arrays fitted to run's tiles; loop: the render thread's,
+ * which the leader asks between passes. NULL with one message when memory is short. Frees with its
+ * destroy hook. Whichever thread creates the renderer. */
+struct ao_run_share *ao_render_share_create(struct ao_run *run, const struct ao_render_share *share,
+                                            const struct ao_run_loop *loop);
 
-/* Gathers every process's tiles (a tile not traced in this run black, with no samples); the leader
- * resolves them into the back frame with info, its spp and mean spp those of the tiles gathered
- * when `counted` (after an interruption, when the aborted pass's finished tiles hold more than info
- * says). False when the share stops (or, the leader, memory is short). Render thread, or main
- * after the render thread was joined. */
-bool ao_render_share_gather(struct ao_run *r, const struct ao_frame_info *info, bool counted);
-
-/* The leader: tells the others that a gather comes (with settings, which it leaves as they are),
- * gathers the image and publishes it with info; false when the share stops or memory is short.
- * Render thread. */
-bool ao_render_share_frame(struct ao_run *r, const struct ao_settings *settings, const struct ao_frame_info *info);
+/* The solo share (solo.c): one process renders every tile; it begins, combines and adds up
+ * nothing, runs a pass on the threads' lanes (ao_pass_run), publishes every pass and resolves the
+ * accumulation after an interruption. Stateless: one for every renderer. */
+struct ao_run_share *ao_solo_share(void);
 
 #endif
