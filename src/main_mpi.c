@@ -354,6 +354,7 @@ static int run(struct ao_app *app, const struct ao_options *opts, double copy, i
         fprintf(stderr, "aoview-mpi: %s\n", summary);
     if (rank == 0 && !shown)
         status = ao_app_write(app, &mine, ao_render_take_frame(app->render), NULL, false, 0);
+    ao_app_stop_watcher(&app->interrupt);   /* a signal from now on must not stop a freed renderer */
     ao_render_destroy(app->render);   /* before the cluster, which its render thread may still use */
     app->render = NULL;
     ao_cluster_destroy(cluster);
