@@ -14,15 +14,10 @@
 
 bool ao_cursor_fail(const struct ao_cursor *c, const char *fmt, ...)
 {
-    char message[512];
     va_list ap;
     va_start(ap, fmt);
-    vsnprintf(message, sizeof message, fmt, ap);
+    ao_text_vreport_at(c->path, (size_t)c->line, fmt, ap);
     va_end(ap);
-    if (c->line)
-        ao_text_report("%s:%d: %s", c->path, c->line, message);
-    else
-        ao_text_report("%s: %s", c->path, message);
     return false;
 }
 

@@ -29,6 +29,7 @@
 #include <json.h>
 
 #include "load/gltf.h"
+#include "text.h"
 
 /* JSON nesting depth accepted (glTF needs 6 or so; deep nesting is an attack on the parser). */
 #define MAX_DEPTH 64
@@ -283,14 +284,14 @@ static bool parse_json(struct ao_gltf *g, const char *text, size_t size)
     if (size > INT32_MAX)
         return ao_gltf_error(g, "JSON of %zu bytes is too large", size);
     if (!g->root || error != json_tokener_success) {
-        ao_load_report(g->path, line, "JSON: %s", error == json_tokener_continue
+        ao_text_report_at(g->path, line, "JSON: %s", error == json_tokener_continue
                                                       ? "unexpected end of text"
                                                       : json_tokener_error_desc(error));
         return false;
     }
     for (; end < size; end++)
         if (text[end] != ' ' && text[end] != '\t' && text[end] != '\r' && text[end] != '\n') {
-            ao_load_report(g->path, line, "JSON: text after the top-level value");
+            ao_text_report_at(g->path, line, "JSON: text after the top-level value");
             return false;
         }
     if (!json_object_is_type(g->root, json_type_object))

@@ -14,6 +14,7 @@
 #include "load/gltf.h"
 #include "load/meshopt.h"
 #include "load/quantize.h"
+#include "text.h"
 
 /* GLB container constants: magic "glTF", chunk types "JSON" and "BIN\0". */
 enum { GLB_MAGIC = 0x46546C67, GLB_JSON = 0x4E4F534A, GLB_BIN = 0x004E4942, GLB_HEADER = 12 };
@@ -21,12 +22,10 @@ enum { GLB_MAGIC = 0x46546C67, GLB_JSON = 0x4E4F534A, GLB_BIN = 0x004E4942, GLB_
 /* Reports "path: message" and returns false. */
 bool ao_gltf_error(const struct ao_gltf *g, const char *format, ...)
 {
-    char message[400];
     va_list args;
     va_start(args, format);
-    vsnprintf(message, sizeof message, format, args);
+    ao_text_vreport_at(g->path, 0, format, args);
     va_end(args);
-    ao_load_report(g->path, 0, "%s", message);
     return false;
 }
 

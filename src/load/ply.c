@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "load/loader.h"
+#include "text.h"
 
 /* PLY scalar types, indexing ply_types. */
 enum ply_type { PLY_INT8, PLY_UINT8, PLY_INT16, PLY_UINT16, PLY_INT32, PLY_UINT32, PLY_FLOAT32,
@@ -78,16 +79,16 @@ struct ply_reader {
 /* The reader's one error line, located by line (header, ascii) or element row (binary). */
 static bool ply_error(const struct ply_reader *r, const char *format, ...)
 {
-    char message[400];
+    /* In a binary body, the element's row where a text one has its line. */
+    bool row = r->binary && r->element;
+    char place[AO_TEXT_SIZE + 4096];
+    if (row)
+        snprintf(place, sizeof place, "%s: %.*s %llu", r->path, ao_load_span_length(r->element->name),
+                 r->element->name.begin, (unsigned long long)r->row_index);
     va_list args;
     va_start(args, format);
-    vsnprintf(message, sizeof message, format, args);
+    ao_text_vreport_at(row ? place : r->path, row ? 0 : r->line, format, args);
     va_end(args);
-    if (r->binary && r->element)
-        ao_load_report(r->path, 0, "%.*s %llu: %s", ao_load_span_length(r->element->name),
-                       r->element->name.begin, (unsigned long long)r->row_index, message);
-    else
-        ao_load_report(r->path, r->line, "%s", message);
     return false;
 }
 
