@@ -1,6 +1,6 @@
 /* glTF 2.0: .gltf (JSON, buffers in external files or data URIs) and .glb (binary container). The
  * JSON is parsed by json-c; this file, its node tree gltf_nodes.c and its data layer gltf_data.c
- * (JSON access, containers, buffers, bufferViews, accessors; gltf.h) read what aoview needs from
+ * (JSON access, containers, buffers, bufferViews, accessors; gltf_reader.h) read what aoview needs from
  * it: the default scene's nodes (or scene 0's, or every root node when there is no scene), their
  * transforms (matrix, or translation/rotation/scale; nested), and their meshes' primitives of
  * triangles, triangle strips and fans (modes 4, 5, 6; indexed by any unsigned type or not indexed)
@@ -28,7 +28,7 @@
 
 #include <json.h>
 
-#include "load/gltf.h"
+#include "load/gltf_reader.h"
 #include "text.h"
 
 /* JSON nesting depth accepted (glTF needs 6 or so; deep nesting is an attack on the parser). */

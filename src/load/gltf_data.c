@@ -1,6 +1,6 @@
-/* The glTF loader's data layer (see gltf.h): JSON access, the GLB container, buffers (the BIN
- * chunk, base64 data URIs, files in the model's folder) and accessors, every range checked before
- * anything is read through it. */
+/* The glTF loader's data layer (see gltf_reader.h): JSON access, the GLB container, buffers (the
+ * BIN chunk, base64 data URIs, files in the model's folder) and accessors, every range checked
+ * before anything is read through it. */
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -11,7 +11,7 @@
 
 #include "file.h"
 #include "load/draco.h"
-#include "load/gltf.h"
+#include "load/gltf_reader.h"
 #include "load/meshopt.h"
 #include "load/quantize.h"
 #include "text.h"

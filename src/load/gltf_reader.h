@@ -1,8 +1,8 @@
-/* What the glTF loader's files share (gltf.c: the file, its meshes and their placements;
- * gltf_nodes.c: the node tree; gltf_data.c: JSON access, the GLB container, buffers and
- * accessors). Only src/load/gltf*.c include this. */
-#ifndef AO_LOAD_GLTF_H
-#define AO_LOAD_GLTF_H
+/* The glTF reader: the state of one file being read, and what the glTF loader's files share over it
+ * (gltf.c: the file, its meshes and their placements; gltf_nodes.c: the node tree; gltf_data.c:
+ * JSON access, the GLB container, buffers and accessors). Only src/load/gltf*.c include this. */
+#ifndef AO_LOAD_GLTF_READER_H
+#define AO_LOAD_GLTF_READER_H
 
 #include <stdbool.h>
 #include <stddef.h>
