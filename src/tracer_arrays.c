@@ -12,11 +12,11 @@
 #include <xmmintrin.h>
 #endif
 
-/* The Python module's ray_mesh_intersect. Each ray is brought to the mesh before Embree sees it, so that what Embree's robust triangle test
- * (Pluecker's, in single precision, with flush-to-zero) forms stays between 2^-126 and 2^128 for
- * any ray the caller may give: coordinates within AO_TRACER_ARRAYS_LIMIT, a mesh from
- * AO_SCENE_MIN_EXTENT to AO_SCENE_MAX_EXTENT across (the scenes' range, scene_place.c). With E the
- * mesh's largest side:
+/* The Python module's ray_mesh_intersect. Each ray is brought to the mesh before Embree sees it,
+ * so that what Embree's robust triangle test (Pluecker's, in single precision, with flush-to-zero)
+ * forms stays between 2^-126 and 2^128 for any ray the caller may give: coordinates within
+ * AO_TRACER_ARRAYS_LIMIT, a mesh from AO_SCENE_MIN_EXTENT to AO_SCENE_MAX_EXTENT across (the
+ * scenes' range, scene_place.c). With E the mesh's largest side:
  * - The direction is scaled by a power of two that puts its largest component in [1, 2): exact,
  *   and the triangle test's t and weights scale with it exactly, so t comes back in the caller's
  *   units (in double: a short direction's t may pass the float range). A zero direction meets
