@@ -7,6 +7,7 @@
 #include "sampling.h"
 #include "text.h"
 
+#include <assert.h>
 #include <ctype.h>
 #include <inttypes.h>
 #include <math.h>
@@ -400,13 +401,53 @@ void ao_cli_side_name(const struct ao_compare_side *side, char *out, size_t size
              side->aa ? "aa" : "noaa");
 }
 
+/* The names an option that picks one of a list picks from; NULL for any other option. */
+static const char *const *choices_of(enum option_id id)
+{
+    switch (id) {
+    case OPT_SAMPLER: return sequences;
+    case OPT_BELOW: return belows;
+    case OPT_ADAPTIVE: case OPT_GROUND: return switches;
+    case OPT_SAVE_FORMAT: return save_formats;
+    case OPT_VIEW: return views;
+    case OPT_SHADING: return shadings;
+    case OPT_PIXEL_SIZE: return pixel_sizes;
+    case OPT_BVH: return bvhs;
+    default: return NULL;
+    }
+}
+
+/* Stores the choice (an index into choices_of(id)) of a list option into opts. */
+static void set_choice(enum option_id id, int choice, struct ao_options *opts)
+{
+    switch (id) {
+    case OPT_SAMPLER: opts->sequence = (enum ao_sequence)choice; break;
+    case OPT_BELOW: opts->below = (enum ao_below)choice; break;
+    case OPT_ADAPTIVE: opts->adaptive = choice; break;
+    case OPT_GROUND: opts->ground = choice; break;
+    case OPT_SAVE_FORMAT: opts->save_exr = choice == 1; break;
+    case OPT_VIEW: opts->view = (enum ao_view_mode)choice; break;
+    case OPT_SHADING: opts->shading = (enum ao_shading)choice; break;
+    case OPT_PIXEL_SIZE: opts->pixel_size = choice ? 1 << (choice - 1) : 0; break;
+    case OPT_BVH: opts->bvh = (enum ao_bvh)choice; break;
+    default: assert(!"not a list option"); break;
+    }
+}
+
 /* Applies one option (value is NULL for flags) to opts. */
 static bool apply(const struct option_spec *spec, const char *value, struct ao_options *opts,
                   char *msg, size_t msg_size)
 {
     const char *name = spec->name;
-    uint64_t n;
+    const char *const *choices = choices_of(spec->id);
     int choice;
+    if (choices) {
+        if (!parse_choice(name, value, choices, &choice, msg, msg_size))
+            return false;
+        set_choice(spec->id, choice, opts);
+        return true;
+    }
+    uint64_t n;
     switch (spec->id) {
     case OPT_HEADLESS: opts->headless = true; return true;
     case OPT_AA: opts->aa = true; return true;
@@ -421,6 +462,11 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
     case OPT_SIZE: return parse_size(name, value, opts, msg, msg_size);
     case OPT_AO_DISTANCE: return parse_distance(name, value, &opts->ao_distance, msg, msg_size);
     case OPT_SEED: return parse_count(name, value, 0, UINT64_MAX, &opts->seed, msg, msg_size);
+    case OPT_TARGET_ERROR: return parse_fraction(name, value, &opts->target_error, msg, msg_size);
+    case OPT_TIME: return parse_seconds(name, value, &opts->time_limit, msg, msg_size);
+    case OPT_CREASE_ANGLE: return parse_degrees(name, value, &opts->crease, msg, msg_size);
+    case OPT_COMPARE: opts->compare = value; return true;
+    case OPT_SCENE_BUDGET: return parse_budget(name, value, &opts->scene_budget, msg, msg_size);
     case OPT_SPP:
         if (!parse_count(name, value, 1, MAX_SPP, &n, msg, msg_size))
             return false;
@@ -440,58 +486,8 @@ static bool apply(const struct option_spec *spec, const char *value, struct ao_o
             return false;
         opts->threads = (int)n;
         return true;
-    case OPT_SAMPLER:
-        if (!parse_choice(name, value, sequences, &choice, msg, msg_size))
-            return false;
-        opts->sequence = (enum ao_sequence)choice;
-        return true;
-    case OPT_BELOW:
-        if (!parse_choice(name, value, belows, &choice, msg, msg_size))
-            return false;
-        opts->below = (enum ao_below)choice;
-        return true;
-    case OPT_ADAPTIVE:
-        if (!parse_choice(name, value, switches, &choice, msg, msg_size))
-            return false;
-        opts->adaptive = choice;
-        return true;
-    case OPT_TARGET_ERROR: return parse_fraction(name, value, &opts->target_error, msg, msg_size);
-    case OPT_SAVE_FORMAT:
-        if (!parse_choice(name, value, save_formats, &choice, msg, msg_size))
-            return false;
-        opts->save_exr = choice == 1;
-        return true;
-    case OPT_TIME: return parse_seconds(name, value, &opts->time_limit, msg, msg_size);
-    case OPT_CREASE_ANGLE: return parse_degrees(name, value, &opts->crease, msg, msg_size);
-    case OPT_VIEW:
-        if (!parse_choice(name, value, views, &choice, msg, msg_size))
-            return false;
-        opts->view = (enum ao_view_mode)choice;
-        return true;
-    case OPT_SHADING:
-        if (!parse_choice(name, value, shadings, &choice, msg, msg_size))
-            return false;
-        opts->shading = (enum ao_shading)choice;
-        return true;
-    case OPT_COMPARE: opts->compare = value; return true;
-    case OPT_PIXEL_SIZE:
-        if (!parse_choice(name, value, pixel_sizes, &choice, msg, msg_size))
-            return false;
-        opts->pixel_size = choice ? 1 << (choice - 1) : 0;
-        return true;
-    case OPT_SCENE_BUDGET: return parse_budget(name, value, &opts->scene_budget, msg, msg_size);
-    case OPT_GROUND:
-        if (!parse_choice(name, value, switches, &choice, msg, msg_size))
-            return false;
-        opts->ground = choice;
-        return true;
-    case OPT_BVH:
-        if (!parse_choice(name, value, bvhs, &choice, msg, msg_size))
-            return false;
-        opts->bvh = (enum ao_bvh)choice;
-        return true;
+    default: return false;   /* the list options, applied above */
     }
-    return false;
 }
 
 /* The table row for arg's first name_len characters ("--name" or "-c"), or NULL. */

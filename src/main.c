@@ -158,6 +158,24 @@ static bool check_outputs(const struct ao_options *opts)
     return ao_app_check_files(opts, names, count);
 }
 
+/* Headless: waits for the render (stopped early by a signal) and writes what it made. */
+static int finish_headless(struct ao_app *base, const struct ao_options *opts, const struct ao_settings *settings)
+{
+    /* A PNG that could not be drawn is refused now rather than after the render. */
+    const char *output = opts->output ? opts->output : "aoview.png";
+    if (ao_image_has_extension(output, ".png") && !ao_headless_check_room(output, settings->width, settings->height))
+        return AO_EXIT_RUNTIME;
+    atomic_store(&base->interrupt.graceful, true);
+    int sig;
+    bool finished = ao_app_wait(base, &sig);
+    if (!finished && !sig)
+        return AO_EXIT_RUNTIME;
+    char why[64];
+    snprintf(why, sizeof why, "interrupted by %s", ao_app_signal_name(sig));
+    const struct ao_frame *frame = finished ? ao_render_take_frame(base->render) : ao_render_resolve_stopped(base->render);
+    return ao_app_write(base, opts, frame, finished ? NULL : why, true, finished ? 0 : 128 + sig);
+}
+
 static int run(struct app *app, const struct ao_options *opts)
 {
     struct ao_app *base = &app->base;
@@ -232,19 +250,7 @@ static int run(struct app *app, const struct ao_options *opts)
         }
         ao_render_set_settings(base->render, &settings);   /* unpaused: nothing was rendered yet */
     }
-    /* A PNG that could not be drawn is refused now rather than after the render. */
-    const char *output = opts->output ? opts->output : "aoview.png";
-    if (ao_image_has_extension(output, ".png") && !ao_headless_check_room(output, settings.width, settings.height))
-        return AO_EXIT_RUNTIME;
-    atomic_store(&base->interrupt.graceful, true);
-    int sig;
-    bool finished = ao_app_wait(base, &sig);
-    if (!finished && !sig)
-        return AO_EXIT_RUNTIME;
-    char why[64];
-    snprintf(why, sizeof why, "interrupted by %s", ao_app_signal_name(sig));
-    const struct ao_frame *frame = finished ? ao_render_take_frame(base->render) : ao_render_resolve_stopped(base->render);
-    return ao_app_write(base, opts, frame, finished ? NULL : why, true, finished ? 0 : 128 + sig);
+    return finish_headless(base, opts, &settings);
 }
 
 int main(int argc, char **argv)

@@ -101,6 +101,24 @@ void ao_text_report(const char *format, ...)
     va_end(args);
 }
 
+void ao_text_vreport_at(const char *path, size_t line, const char *format, va_list args)
+{
+    char message[512];
+    vsnprintf(message, sizeof message, format, args);
+    if (line)
+        ao_text_report("%s:%zu: %s", path, line, message);
+    else
+        ao_text_report("%s: %s", path, message);
+}
+
+void ao_text_report_at(const char *path, size_t line, const char *format, ...)
+{
+    va_list args;
+    va_start(args, format);
+    ao_text_vreport_at(path, line, format, args);
+    va_end(args);
+}
+
 void ao_text_note(const char *format, ...)
 {
     va_list args;

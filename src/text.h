@@ -5,6 +5,7 @@
 #ifndef AO_TEXT_H
 #define AO_TEXT_H
 
+#include <stdarg.h>
 #include <stddef.h>
 
 /* A buffer size for ao_text_escape that holds most names whole. */
@@ -50,6 +51,15 @@ const struct ao_text_sink *ao_text_current(void);
  * newline in a file name or a JSON string, an escape sequence in a scene token) written as \n,
  * \r, \t or \xNN, so that a message never spans lines or drives the terminal. Any thread. */
 void ao_text_report(const char *format, ...);
+
+/* One error line naming where it happened: "path:line: message", or "path: message" when line is
+ * 0, the message printf-formatted (its first 511 bytes) and the line escaped as ao_text_report's.
+ * Any thread. */
+void ao_text_report_at(const char *path, size_t line, const char *format, ...);
+
+/* ao_text_report_at with the message's arguments as a va_list, for the readers' own report
+ * functions. Any thread. */
+void ao_text_vreport_at(const char *path, size_t line, const char *format, va_list args);
 
 /* One note line, escaped as ao_text_report's: something the host may want to know that does not
  * fail the call. Any thread. */

@@ -44,12 +44,6 @@ static inline struct ao_vec3 ao_vec3_scale(struct ao_vec3 a, float s)
     return ao_vec3_make(a.x * s, a.y * s, a.z * s);
 }
 
-/* Component-wise product a * b. */
-static inline struct ao_vec3 ao_vec3_mul(struct ao_vec3 a, struct ao_vec3 b)
-{
-    return ao_vec3_make(a.x * b.x, a.y * b.y, a.z * b.z);
-}
-
 /* Dot product. */
 static inline float ao_vec3_dot(struct ao_vec3 a, struct ao_vec3 b)
 {

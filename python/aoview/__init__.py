@@ -364,7 +364,7 @@ def exact(scene, *, size=None, aa=None, spp=None):
     return _image(out, scene)
 
 
-# What ray_mesh_intersect takes (tracer.h and tracer.c derive both): every coordinate of the
+# What ray_mesh_intersect takes (tracer_arrays.h/.c derive both): every coordinate of the
 # vertices, origins and directions within 2^60 = 1.153e18 in magnitude (Embree aborts the process on
 # a ray past 1.844e18), a mesh from 2^-12 to 2^31 across (the range of aoview's scenes, within
 # which Embree's triangle test neither overflows nor flushes to zero).

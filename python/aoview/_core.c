@@ -33,6 +33,7 @@
 #include "scene_load.h"
 #include "scene_object.h"
 #include "tracer.h"
+#include "tracer_arrays.h"
 
 /* Seconds between two checks for a pending signal while a render is waited for. */
 static const double SIGNAL_POLL = 0.02;

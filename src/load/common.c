@@ -57,20 +57,6 @@ void ao_load_free(struct ao_load_array *a)
     free(ao_load_take(a));
 }
 
-/* Prints the load's one error line: "path:line: message", or "path: message" when line is 0. */
-void ao_load_report(const char *path, size_t line, const char *format, ...)
-{
-    char message[512];
-    va_list args;
-    va_start(args, format);
-    vsnprintf(message, sizeof message, format, args);
-    va_end(args);
-    if (line)
-        ao_text_report("%s:%zu: %s", path, line, message);
-    else
-        ao_text_report("%s: %s", path, message);
-}
-
 bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements,
                         const char *path)
 {
@@ -81,7 +67,7 @@ bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint
     ao_budget_explain(budget, charge, why, sizeof why);
     if (placements != 1) /* a model placed once is just its triangles */
         snprintf(placed, sizeof placed, " placed %llu times", (unsigned long long)placements);
-    ao_load_report(path, 0, "%llu triangles and %llu vertices%s %s", (unsigned long long)triangles,
+    ao_text_report_at(path, 0, "%llu triangles and %llu vertices%s %s", (unsigned long long)triangles,
                    (unsigned long long)vertices, placed, why);
     return false;
 }
@@ -100,7 +86,7 @@ void ao_load_vnote(char *note, const char *format, va_list args)
 /* Reports an allocation failure; returns false for the caller to pass on. */
 bool ao_load_out_of_memory(const char *path)
 {
-    ao_load_report(path, 0, "out of memory");
+    ao_text_report_at(path, 0, "out of memory");
     return false;
 }
 

@@ -1,6 +1,6 @@
 /* KHR_draco_mesh_compression: one Draco-compressed primitive decoded by Debian's libdraco (C++),
  * behind this C interface; src/load/draco.cc is the only C++ in the program and the only file that
- * includes Draco's headers; only the glTF loader's files include this (through gltf.h). */
+ * includes Draco's headers; only the glTF loader's files include this (through gltf_reader.h). */
 #ifndef AO_LOAD_DRACO_H
 #define AO_LOAD_DRACO_H
 

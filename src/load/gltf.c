@@ -1,6 +1,6 @@
 /* glTF 2.0: .gltf (JSON, buffers in external files or data URIs) and .glb (binary container). The
  * JSON is parsed by json-c; this file, its node tree gltf_nodes.c and its data layer gltf_data.c
- * (JSON access, containers, buffers, bufferViews, accessors; gltf.h) read what aoview needs from
+ * (JSON access, containers, buffers, bufferViews, accessors; gltf_reader.h) read what aoview needs from
  * it: the default scene's nodes (or scene 0's, or every root node when there is no scene), their
  * transforms (matrix, or translation/rotation/scale; nested), and their meshes' primitives of
  * triangles, triangle strips and fans (modes 4, 5, 6; indexed by any unsigned type or not indexed)
@@ -28,7 +28,8 @@
 
 #include <json.h>
 
-#include "load/gltf.h"
+#include "load/gltf_reader.h"
+#include "text.h"
 
 /* JSON nesting depth accepted (glTF needs 6 or so; deep nesting is an attack on the parser). */
 #define MAX_DEPTH 64
@@ -91,6 +92,42 @@ static bool add_vertices(struct ao_gltf *g, const struct ao_gltf_elements *posit
     return true;
 }
 
+/* Appends the triangles of a primitive of `mode` over `corners` corners: the indices' (NULL: the
+ * vertices' in order), each checked once below vertex_count (a strip's and a fan's corners serve
+ * several; a list's in one pass), offset by base. */
+static bool add_triangles(struct ao_gltf *g, uint64_t mode, const struct ao_gltf_elements *indices, size_t corners,
+                          uint32_t base, size_t vertex_count, const char *where)
+{
+    size_t triangles = triangles_of(mode, corners);
+    size_t bad;
+    uint32_t *list = indices && mode == MODE_TRIANGLES ? ao_load_append(&g->indices, corners) : NULL;
+    if (indices && mode == MODE_TRIANGLES && !list && corners)
+        return ao_load_out_of_memory(g->path);
+    if (list && !ao_gltf_list_indices(indices, base, vertex_count, list, &bad))
+        return ao_gltf_error(g, "%s: index %u at %zu is out of range (%zu vertices)", where,
+                             ao_gltf_index_at(indices, bad), bad, vertex_count);
+    g->triangles += list ? triangles : 0;
+    if (list)
+        return true;
+    for (size_t i = 0; indices && i < corners; i++) {
+        uint32_t v = ao_gltf_index_at(indices, i);
+        if (v >= vertex_count)
+            return ao_gltf_error(g, "%s: index %u at %zu is out of range (%zu vertices)", where, v, i,
+                                 vertex_count);
+    }
+    uint32_t *t = ao_load_append(&g->indices, 3 * triangles);
+    if (!t && triangles)
+        return ao_load_out_of_memory(g->path);
+    for (size_t k = 0; k < triangles; k++) {
+        size_t c[3];
+        triangle_corners(mode, k, c);
+        for (int j = 0; j < 3; j++)
+            t[3 * k + j] = base + (indices ? ao_gltf_index_at(indices, c[j]) : (uint32_t)c[j]);
+    }
+    g->triangles += triangles;
+    return true;
+}
+
 /* Appends one primitive of triangles (mode 4), a strip (5) or a fan (6) to the mesh being built:
  * its vertices (or those of an earlier primitive of the same mesh), its triangles offset. With
  * count_only, adds its size to the totals. */
@@ -149,35 +186,7 @@ static bool add_primitive(struct ao_gltf *g, json_object *primitive, uint64_t mo
     if (shared)
         *shared = (struct shared){g->instance, normal_key, base};
 
-    /* Triangles, every index checked once (a strip's and a fan's corners serve several); a list's
-     * in one pass. */
-    size_t bad;
-    uint32_t *list = indexed && mode == MODE_TRIANGLES ? ao_load_append(&g->indices, corners) : NULL;
-    if (indexed && mode == MODE_TRIANGLES && !list && corners)
-        return ao_load_out_of_memory(g->path);
-    if (list && !ao_gltf_list_indices(&indices, base, positions.count, list, &bad))
-        return ao_gltf_error(g, "%s: index %u at %zu is out of range (%zu vertices)", where,
-                             ao_gltf_index_at(&indices, bad), bad, positions.count);
-    g->triangles += list ? triangles : 0;
-    if (list)
-        return true;
-    for (size_t i = 0; indexed && i < corners; i++) {
-        uint32_t v = ao_gltf_index_at(&indices, i);
-        if (v >= positions.count)
-            return ao_gltf_error(g, "%s: index %u at %zu is out of range (%zu vertices)", where, v, i,
-                              positions.count);
-    }
-    uint32_t *t = ao_load_append(&g->indices, 3 * triangles);
-    if (!t && triangles)
-        return ao_load_out_of_memory(g->path);
-    for (size_t k = 0; k < triangles; k++) {
-        size_t c[3];
-        triangle_corners(mode, k, c);
-        for (int j = 0; j < 3; j++)
-            t[3 * k + j] = base + (indexed ? ao_gltf_index_at(&indices, c[j]) : (uint32_t)c[j]);
-    }
-    g->triangles += triangles;
-    return true;
+    return add_triangles(g, mode, indexed ? &indices : NULL, corners, base, positions.count, where);
 }
 
 /* Walks the primitives of mesh: with count_only, adds the size of its triangle primitives (lists,
@@ -283,14 +292,14 @@ static bool parse_json(struct ao_gltf *g, const char *text, size_t size)
     if (size > INT32_MAX)
         return ao_gltf_error(g, "JSON of %zu bytes is too large", size);
     if (!g->root || error != json_tokener_success) {
-        ao_load_report(g->path, line, "JSON: %s", error == json_tokener_continue
+        ao_text_report_at(g->path, line, "JSON: %s", error == json_tokener_continue
                                                       ? "unexpected end of text"
                                                       : json_tokener_error_desc(error));
         return false;
     }
     for (; end < size; end++)
         if (text[end] != ' ' && text[end] != '\t' && text[end] != '\r' && text[end] != '\n') {
-            ao_load_report(g->path, line, "JSON: text after the top-level value");
+            ao_text_report_at(g->path, line, "JSON: text after the top-level value");
             return false;
         }
     if (!json_object_is_type(g->root, json_type_object))

@@ -1,4 +1,4 @@
-/* glTF's node tree (see gltf.h): every node's parent recorded and the nodes checked to form trees,
+/* glTF's node tree (see gltf_reader.h): every node's parent recorded and the nodes checked to form trees,
  * the roots of the scene shown found, and each node under them placed by its world matrix (its
  * local matrix, or translation, rotation and scale, after its parent's). */
 #include <math.h>
@@ -7,7 +7,7 @@
 
 #include <json.h>
 
-#include "load/gltf.h"
+#include "load/gltf_reader.h"
 
 /* A node's place in the tree. */
 enum { NODE_UNSEEN, NODE_WALKING, NODE_CHECKED };

@@ -15,6 +15,7 @@
 
 #include "file.h"
 #include "load/loader.h"
+#include "text.h"
 
 /* ------------------------------------------------------------------ entry points */
 
@@ -68,7 +69,7 @@ bool ao_load_finish(struct ao_mesh *mesh, const char *path)
     ao_mesh_drop_degenerate(mesh);
     if (mesh->triangle_count > 0)
         return true;
-    ao_load_report(path, 0, "no triangles (%zu degenerate ones skipped)", mesh->degenerate_count);
+    ao_text_report_at(path, 0, "no triangles (%zu degenerate ones skipped)", mesh->degenerate_count);
     return false;
 }
 
@@ -128,12 +129,12 @@ bool ao_load_model(struct ao_model *model, const char *path, struct ao_budget *b
     if (format < 0) {
         char extensions[64];
         ao_load_extensions(extensions, sizeof extensions);
-        ao_load_report(path, 0, "unknown mesh format; expected %s", extensions);
+        ao_text_report_at(path, 0, "unknown mesh format; expected %s", extensions);
         return false;
     }
     struct stat st;
     if (formats[format].largest && stat(path, &st) == 0 && (uint64_t)st.st_size > formats[format].largest) {
-        ao_load_report(path, 0, "%llu bytes of JSON, more than the %llu its parser reads", (unsigned long long)st.st_size,
+        ao_text_report_at(path, 0, "%llu bytes of JSON, more than the %llu its parser reads", (unsigned long long)st.st_size,
                        (unsigned long long)formats[format].largest);
         return false;
     }
@@ -160,7 +161,7 @@ static bool flatten(const struct ao_model *model, struct ao_mesh *out, const cha
         vertices += m->vertex_count;
         triangles += m->triangle_count;
         if (vertices >= AO_MESH_INDEX_LIMIT || triangles > SIZE_MAX / 12) {
-            ao_load_report(path, 0, "more than %u vertices once its placements are applied", AO_MESH_INDEX_LIMIT - 1);
+            ao_text_report_at(path, 0, "more than %u vertices once its placements are applied", AO_MESH_INDEX_LIMIT - 1);
             return false;
         }
     }
@@ -176,7 +177,7 @@ static bool flatten(const struct ao_model *model, struct ao_mesh *out, const cha
         const struct ao_mesh *m = &model->meshes[p->mesh];
         size_t bad = ao_mesh_place(out, out->vertex_count, out->triangle_count, m, &p->to_model);
         if (bad < m->vertex_count) {
-            ao_load_report(path, 0, "mesh %zu: vertex %zu is not a finite float once placed", p->mesh, bad);
+            ao_text_report_at(path, 0, "mesh %zu: vertex %zu is not a finite float once placed", p->mesh, bad);
             return false;
         }
         out->vertex_count += m->vertex_count;
@@ -248,18 +249,18 @@ bool ao_load_model_arrays(struct ao_model *model, const char *name, const float 
     struct ao_budget defaults = {.limit = ao_budget_default()};
     budget = budget ? budget : &defaults;
     if (vertex_count >= AO_MESH_INDEX_LIMIT || triangle_count > SIZE_MAX / 12) {
-        ao_load_report(name, 0, "too many vertices for 32-bit indices");
+        ao_text_report_at(name, 0, "too many vertices for 32-bit indices");
         return false;
     }
     for (size_t i = 0; i < 3 * triangle_count; i++)
         if (indices[i] >= vertex_count) {
-            ao_load_report(name, 0, "triangle %zu: vertex index %u out of range (%zu vertices)", i / 3, indices[i],
+            ao_text_report_at(name, 0, "triangle %zu: vertex index %u out of range (%zu vertices)", i / 3, indices[i],
                            vertex_count);
             return false;
         }
     for (size_t i = 0; i < 3 * vertex_count; i++)
         if (!isfinite(positions[i])) {
-            ao_load_report(name, 0, "vertex %zu: position not finite", i / 3);
+            ao_text_report_at(name, 0, "vertex %zu: position not finite", i / 3);
             return false;
         }
     if (!ao_mesh_fits(budget, triangle_count, normals ? 2 * vertex_count : vertex_count, name, 0))

@@ -68,9 +68,6 @@ void *ao_load_take(struct ao_load_array *a);
 /* Frees the array's storage. */
 void ao_load_free(struct ao_load_array *a);
 
-/* Prints the load's one error line: "path:line: message", or "path: message" when line is 0. */
-void ao_load_report(const char *path, size_t line, const char *format, ...);
-
 /* ao_mesh_fits for unique meshes of so many triangles and vertices placed so many times in all
  * (ao_budget_charge); the report names the placements too. */
 bool ao_load_fits_model(const struct ao_budget *budget, uint64_t triangles, uint64_t vertices, uint64_t placements,

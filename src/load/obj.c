@@ -5,6 +5,7 @@
 #include <string.h>
 
 #include "load/loader.h"
+#include "text.h"
 
 /* Parsed indices saturate here, far above any possible vertex count. */
 #define INDEX_SATURATION 1000000000000000LL
@@ -38,11 +39,11 @@ static bool read_floats(struct obj_reader *o, struct ao_load_tokens *t, float *o
     struct ao_load_span s;
     for (*count = 0; ao_load_next_token(t, &s); ++*count) {
         if (*count == 6) {
-            ao_load_report(o->path, o->line, "too many numbers; expected %s", usage);
+            ao_text_report_at(o->path, o->line, "too many numbers; expected %s", usage);
             return false;
         }
         if (!ao_load_parse_float(s, &out[*count])) {
-            ao_load_report(o->path, o->line, "bad number '%.*s' (must be finite)",
+            ao_text_report_at(o->path, o->line, "bad number '%.*s' (must be finite)",
                            ao_load_span_length(s), s.begin);
             return false;
         }
@@ -58,11 +59,11 @@ static bool parse_obj_vertex(struct obj_reader *o, struct ao_load_tokens *t)
     if (!read_floats(o, t, f, &n, "'v x y z [w]'"))
         return false;
     if (n != 3 && n != 4 && n != 6) {
-        ao_load_report(o->path, o->line, "expected 'v x y z [w]', found %zu numbers", n);
+        ao_text_report_at(o->path, o->line, "expected 'v x y z [w]', found %zu numbers", n);
         return false;
     }
     if (o->positions.count == AO_LOAD_NO_INDEX - 1) {
-        ao_load_report(o->path, o->line, "too many vertices for 32-bit indices");
+        ao_text_report_at(o->path, o->line, "too many vertices for 32-bit indices");
         return false;
     }
     struct ao_vec3 *p = ao_load_append(&o->positions, 1);
@@ -81,15 +82,15 @@ static bool parse_obj_normal(struct obj_reader *o, struct ao_load_tokens *t)
     struct ao_load_span s;
     for (; ao_load_next_token(t, &s); n++)
         if (n < 3 && !ao_load_parse_number(s, &f[n])) {
-            ao_load_report(o->path, o->line, "bad number '%.*s'", ao_load_span_length(s), s.begin);
+            ao_text_report_at(o->path, o->line, "bad number '%.*s'", ao_load_span_length(s), s.begin);
             return false;
         }
     if (n != 3) {
-        ao_load_report(o->path, o->line, "expected 'vn x y z', found %zu numbers", n);
+        ao_text_report_at(o->path, o->line, "expected 'vn x y z', found %zu numbers", n);
         return false;
     }
     if (o->normals.count == AO_LOAD_NO_INDEX - 1) {
-        ao_load_report(o->path, o->line, "too many normals for 32-bit indices");
+        ao_text_report_at(o->path, o->line, "too many normals for 32-bit indices");
         return false;
     }
     struct ao_vec3 *normal = ao_load_append(&o->normals, 1);
@@ -155,7 +156,7 @@ static bool resolve(long long index, size_t count, uint32_t *out)
 static bool index_error(const struct obj_reader *o, struct ao_load_span s, const char *what,
                         size_t count)
 {
-    ao_load_report(o->path, o->line, "face corner '%.*s': %s index out of range (%zu defined so far)",
+    ao_text_report_at(o->path, o->line, "face corner '%.*s': %s index out of range (%zu defined so far)",
                    ao_load_span_length(s), s.begin, what, count);
     return false;
 }
@@ -166,7 +167,7 @@ static bool parse_corner(struct obj_reader *o, struct ao_load_span s, struct cor
     long long index[3];
     uint32_t texcoord;
     if (!split_corner(s, index)) {
-        ao_load_report(o->path, o->line, "bad face corner '%.*s' (expected v, v/vt, v//vn or v/vt/vn "
+        ao_text_report_at(o->path, o->line, "bad face corner '%.*s' (expected v, v/vt, v//vn or v/vt/vn "
                        "with nonzero indices)", ao_load_span_length(s), s.begin);
         return false;
     }
@@ -188,7 +189,7 @@ static bool parse_obj_face(struct obj_reader *o, struct ao_load_tokens *t)
     o->face.count = 0;
     while (ao_load_next_token(t, &s)) {
         if (o->face.count == AO_LOAD_MAX_FACE_VERTICES) {
-            ao_load_report(o->path, o->line, "face with more than %d vertices",
+            ao_text_report_at(o->path, o->line, "face with more than %d vertices",
                            AO_LOAD_MAX_FACE_VERTICES);
             return false;
         }
@@ -199,7 +200,7 @@ static bool parse_obj_face(struct obj_reader *o, struct ao_load_tokens *t)
             return false;
     }
     if (o->face.count < 3) {
-        ao_load_report(o->path, o->line, "face with %zu vertices; at least 3 needed", o->face.count);
+        ao_text_report_at(o->path, o->line, "face with %zu vertices; at least 3 needed", o->face.count);
         return false;
     }
     /* The fan (c0, ci, ci+1): positions, and normals (AO_LOAD_NO_INDEX where absent) once any
@@ -293,7 +294,7 @@ static bool map_reserve(struct vertex_map *map, uint64_t mesh, const char *path,
     if (mesh > UINT64_MAX - bytes || !ao_budget_fits(map->budget, mesh + bytes)) {
         char why[200];
         ao_budget_explain(map->budget, mesh > UINT64_MAX - bytes ? UINT64_MAX : mesh + bytes, why, sizeof why);
-        ao_load_report(path, 0, "%zu distinct position/normal pairs and the table that indexes them %s",
+        ao_text_report_at(path, 0, "%zu distinct position/normal pairs and the table that indexes them %s",
                        map->count + 1, why);
         return !(*over = true);
     }
@@ -338,7 +339,7 @@ static bool split_vertex(struct obj_reader *o, struct vertex_map *map, struct sp
         return true;
     }
     if (map->count == AO_LOAD_NO_INDEX - 1) {
-        ao_load_report(o->path, 0, "too many distinct vertices for 32-bit indices");
+        ao_text_report_at(o->path, 0, "too many distinct vertices for 32-bit indices");
         return false;
     }
     if (!ao_mesh_fits(o->budget, o->corner_positions.count / 3, map->count + 1, o->path, 0))

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "load/loader.h"
+#include "text.h"
 
 /* Bytes of the binary header, of its triangle count and of one triangle record. */
 enum { BINARY_HEADER = 80, BINARY_PREFIX = 84, BINARY_RECORD = 50 };
@@ -77,7 +78,7 @@ static bool weld_vertex(struct weld *w, struct ao_vec3 p, struct ao_load_array *
     uint32_t *slot = weld_slot(w, p);
     if (*slot == AO_LOAD_NO_INDEX) {
         if (w->positions.count == AO_LOAD_NO_INDEX - 1) {
-            ao_load_report(path, line, "too many distinct vertices for 32-bit indices");
+            ao_text_report_at(path, line, "too many distinct vertices for 32-bit indices");
             return false;
         }
         if (!ao_mesh_fits(w->budget, w->corners->count / 3 + 1, w->positions.count + 1, path, line))
@@ -121,7 +122,7 @@ static bool read_binary(struct weld *w, struct ao_load_array *indices, const cha
             const char *v = record + 12 + 12 * k;
             struct ao_vec3 p = ao_vec3_make(le_float(v), le_float(v + 4), le_float(v + 8));
             if (!ao_vec3_is_finite(p)) {
-                ao_load_report(path, 0, "triangle %u: vertex position is not a finite float", t);
+                ao_text_report_at(path, 0, "triangle %u: vertex position is not a finite float", t);
                 return false;
             }
             if (!weld_vertex(w, p, indices, path, 0))
@@ -144,7 +145,7 @@ struct ascii_reader {
 /* Reports at the reader's line; returns false. */
 static bool ascii_error(const struct ascii_reader *r, const char *message)
 {
-    ao_load_report(r->path, r->line, "%s", message);
+    ao_text_report_at(r->path, r->line, "%s", message);
     return false;
 }
 
@@ -159,7 +160,7 @@ static bool ascii_vertex(struct ascii_reader *r, struct ao_load_tokens *t, struc
         if (!ao_load_next_token(t, &s))
             return ascii_error(r, "expected 'vertex x y z'");
         if (!ao_load_parse_float(s, &f[i])) {
-            ao_load_report(r->path, r->line, "bad number '%.*s' (must be a finite float)",
+            ao_text_report_at(r->path, r->line, "bad number '%.*s' (must be a finite float)",
                            ao_load_span_length(s), s.begin);
             return false;
         }
@@ -167,7 +168,7 @@ static bool ascii_vertex(struct ascii_reader *r, struct ao_load_tokens *t, struc
     if (ao_load_next_token(t, &s))
         return ascii_error(r, "expected 'vertex x y z'");
     if (r->loop.count == AO_LOAD_MAX_FACE_VERTICES) {
-        ao_load_report(r->path, r->line, "loop with more than %d vertices",
+        ao_text_report_at(r->path, r->line, "loop with more than %d vertices",
                        AO_LOAD_MAX_FACE_VERTICES);
         return false;
     }
@@ -218,7 +219,7 @@ static bool ascii_line(struct ascii_reader *r, struct ao_load_tokens *t, struct 
         if (!r->in_loop)
             return ascii_error(r, "'endloop' without 'outer loop'");
         if (r->loop.count < 3) {
-            ao_load_report(r->path, r->line, "loop with %zu vertices; at least 3 needed",
+            ao_text_report_at(r->path, r->line, "loop with %zu vertices; at least 3 needed",
                            r->loop.count);
             return false;
         }
@@ -236,7 +237,7 @@ static bool ascii_line(struct ascii_reader *r, struct ao_load_tokens *t, struct 
         r->in_facet = false;
         return true;
     }
-    ao_load_report(r->path, r->line, "unknown STL keyword '%.*s'", ao_load_span_length(keyword),
+    ao_text_report_at(r->path, r->line, "unknown STL keyword '%.*s'", ao_load_span_length(keyword),
                    keyword.begin);
     return false;
 }
@@ -293,11 +294,11 @@ bool ao_load_stl(struct ao_mesh *mesh, const char *path, const char *text, size_
     } else if (starts_with_solid(text, size) && strlen(text) == size) {
         ok = read_ascii(&w, &indices, path, text, size, mesh->note);
     } else if (size < BINARY_PREFIX) {
-        ao_load_report(path, 0, "neither ASCII STL (no 'solid') nor binary (%zu bytes, fewer "
+        ao_text_report_at(path, 0, "neither ASCII STL (no 'solid') nor binary (%zu bytes, fewer "
                        "than the 84 of a header)", size);
         ok = false;
     } else {
-        ao_load_report(path, 0, "binary STL header declares %u triangles (%llu bytes) but the "
+        ao_text_report_at(path, 0, "binary STL header declares %u triangles (%llu bytes) but the "
                        "file has %zu bytes", n,
                        (unsigned long long)(BINARY_PREFIX + (uint64_t)n * BINARY_RECORD), size);
         ok = false;

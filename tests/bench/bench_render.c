@@ -21,6 +21,7 @@
 #include "scene.h"
 #include "scene_load.h"
 #include "tracer.h"
+#include "tracer_bench.h"
 
 enum { SIZE = 512, REPEATS = 5, RECORDED = 1 << 16 };
 

@@ -16,7 +16,7 @@
 
 #include "scene.h"
 #include "scene_load.h"
-#include "tracer.h"
+#include "tracer_arrays.h"
 
 /* A bent strip: two triangles meeting at 90 degrees (sharper than the crease angle), a third
  * flatter one, a degenerate one (dropped by both routes) and a vertex no triangle uses. */
@@ -151,7 +151,7 @@ static void test_bad_arrays(void **state)
 
 /* ao_tracer_intersect_arrays on the same mesh: each hit's point from its weights lies on its ray
  * at t, misses as gpytoolbox has them; the same rays with their directions scaled by 2^40 or 2^-40
- * give the same triangles and weights and t scaled back exactly (tracer.c scales directions by
+ * give the same triangles and weights and t scaled back exactly (tracer_arrays.c scales directions by
  * powers of two); rays from 10^15 away (brought to the mesh) the same triangles as from nearby, at
  * t within the mesh's rounding, not 10^15's; nothing nearer than tnear. */
 static void test_intersect_arrays(void **state)

@@ -23,6 +23,7 @@
 #include "scene.h"
 #include "scene_load.h"
 #include "tracer.h"
+#include "tracer_arrays.h"
 
 enum { THREADS = 4, ROUNDS = 20 };
 

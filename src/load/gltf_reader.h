@@ -1,8 +1,9 @@
-/* What the glTF loader's files share (gltf.c: the file, its meshes and their placements;
- * gltf_nodes.c: the node tree; gltf_data.c: JSON access, the GLB container, buffers and
- * accessors). Only src/load/gltf*.c include this. */
-#ifndef AO_LOAD_GLTF_H
-#define AO_LOAD_GLTF_H
+/* The glTF reader: the state of one file being read, and what the glTF loader's files share over it
+ * (gltf.c: the file, its meshes and their placements; gltf_nodes.c: the node tree; gltf_data.c:
+ * JSON access and accessors; gltf_buffers.c: the GLB container, buffers and bufferViews). Only
+ * src/load/gltf*.c include this. */
+#ifndef AO_LOAD_GLTF_READER_H
+#define AO_LOAD_GLTF_READER_H
 
 #include <stdbool.h>
 #include <stddef.h>
@@ -137,6 +138,16 @@ bool ao_gltf_integer(const struct ao_gltf *g, json_object *obj, const char *key,
 /* An index into an array of count entries. */
 bool ao_gltf_index(const struct ao_gltf *g, json_object *obj, const char *key, size_t count,
                    const char *where, size_t *out);
+
+/* A little-endian 32-bit word. */
+static inline uint32_t ao_gltf_le32(const unsigned char *b)
+{
+    return (uint32_t)b[0] | (uint32_t)b[1] << 8 | (uint32_t)b[2] << 16 | (uint32_t)b[3] << 24;
+}
+
+/* bufferView index, read and checked against its buffer on first use: its bytes and stride
+ * (gltf_buffers.c). */
+bool ao_gltf_view(struct ao_gltf *g, size_t index, const struct ao_gltf_view **out);
 
 /* A GLB: header, then chunks; the first must be JSON, a BIN chunk may follow. Sets *json. */
 bool ao_gltf_parse_glb(struct ao_gltf *g, const unsigned char *data, size_t size,

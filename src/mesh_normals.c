@@ -1,0 +1,198 @@
+/* A mesh's missing normals made (see mesh.h), as its format means them: flat (glTF), or
+ * angle-weighted across the edges flatter than a crease angle (OBJ, PLY, STL), the vertices on
+ * sharper edges then split by mesh_creases.c so that each side keeps its own normal. */
+#include "mesh.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "mesh_pass.h"
+#include "text.h"
+
+/* A 64-bit hash of a vertex number (a multiply, shift and multiply, as splitmix64's finalizer
+ * mixes). */
+static inline uint64_t vertex_hash(uint32_t v)
+{
+    uint64_t z = ((uint64_t)v + 1) * 0x9E3779B97F4A7C15u;
+    return (z ^ (z >> 29)) * 0xBF58476D1CE4E5B9u;
+}
+
+/* Adds a corner of triangle t, of unit normal u (in float) and angle `angle` at the vertex, whose
+ * next neighbour's hash less its previous neighbour's is link, to what the cone gathers there. */
+static inline void gather_corner(struct cone_vertex *at, size_t t, struct ao_vec3 u, double angle, uint64_t link)
+{
+    if (at->angle_sum == 0.0) {
+        at->first[0] = u.x, at->first[1] = u.y, at->first[2] = u.z;
+        at->from = (uint32_t)t;
+    } else {
+        float d = u.x * at->first[0] + u.y * at->first[1] + u.z * at->first[2];
+        at->nearest = d < at->nearest ? d : at->nearest;
+    }
+    at->angle_sum += angle;
+    at->link += link;
+    at->to = (uint32_t)t;
+}
+
+/* Whether vertex i (gathered at `at`) must have its sides found edge by edge, or is one side for
+ * certain, as sides_of would find it: where (1) every triangle's unit normal u_j lies within half
+ * the crease angle (alpha) of the first's, f (dot products in float above cos alpha, with 1e-6
+ * for their rounding), every two lie closer than the crease, and sides_of joins
+ * every two corners that share an edge; (2) the corners' next and previous neighbours are the same
+ * vertices as often (hash sums equal: a 2^-64 chance of being wrong otherwise), so that the corners
+ * chain into closed fans, each corner's wedge ending on the edge where another's begins; and (3)
+ * the angles sum to less than 4 pi cos alpha, the fans are one: seen along f, each wedge of angle a_j
+ * and normal within alpha of f spans at most a_j / cos alpha (its unit sector's shadow, of area
+ * cos beta a_j / 2, holds the sector of radius cos beta of the shadow's angle), and each closed fan
+ * at least 2 pi. A vertex without triangles is one side; one given a normal is never split. */
+static bool needs_sides(const struct cone *cone, size_t i)
+{
+    const struct cone_vertex *at = &cone->at[i];
+    if (at->angle_sum == 0.0 || (cone->given && !ao_mesh_normal_is_missing(cone->given[i])))
+        return false;
+    const double four_pi = 4.0 * 3.14159265358979323846;
+    return !(at->nearest > cone->cos_half + 1e-6 && at->link == 0 && at->angle_sum < four_pi * cone->cos_half);
+}
+
+/* Angle-weighted vertex normals (Thürmer and Wüthrich 1998) of part k of the vertices: each
+ * triangle adds its unit normal times its interior angle at the vertex, so the result does not
+ * depend on how a surface is split into triangles; the sum is then normalized. Every part reads
+ * every triangle and adds only at its own vertices, in triangle order: each vertex's sum is the
+ * same, bit for bit, whatever the number of parts. Vertices without a nondegenerate triangle get
+ * the zero vector. With a cone, also what it gathers and its marks, the marked counted in
+ * pass->counts[k]. */
+static inline void normals_of(struct mesh_pass *pass, int k, struct cone *cone)
+{
+    const struct ao_mesh *mesh = pass->mesh;
+    struct ao_vec3 *out = pass->out;
+    uint32_t first = (uint32_t)ao_mesh_part_start(mesh->vertex_count, k, pass->threads);
+    uint32_t count = (uint32_t)ao_mesh_part_start(mesh->vertex_count, k + 1, pass->threads) - first;
+    memset(out + first, 0, count * sizeof *out);
+    for (uint32_t i = first; cone && i < first + count; i++)
+        cone->at[i] = (struct cone_vertex){.nearest = 1.0f};
+    for (size_t t = 0; t < mesh->triangle_count; t++) {
+        const uint32_t *v = mesh->indices + 3 * t;
+        bool mine[3] = {v[0] - first < count, v[1] - first < count, v[2] - first < count};
+        struct triangle_terms terms;
+        if (!(mine[0] | mine[1] | mine[2]) || !ao_mesh_triangle_terms(mesh, v, &terms))
+            continue;
+        double angles[3] = {0.0, 0.0, 0.0};   /* set where mine[c], read only there */
+        for (int c = 0; c < 3; c++)
+            if (mine[c])
+                out[v[c]] = ao_vec3_add(out[v[c]], ao_mesh_corner_share(&terms, c, &angles[c]));
+        if (!cone)
+            continue;
+        struct ao_vec3 u = ao_dvec3_narrow(ao_dvec3_scale(terms.n, terms.scale));
+        uint64_t h0 = vertex_hash(v[0]), h1 = vertex_hash(v[1]), h2 = vertex_hash(v[2]);
+        uint64_t links[3] = {h1 - h2, h2 - h0, h0 - h1};   /* next less previous, at each corner */
+        for (int c = 0; c < 3; c++)
+            if (mine[c])
+                gather_corner(&cone->at[v[c]], t, u, angles[c], links[c]);
+    }
+    size_t marked = 0;
+    for (uint32_t i = first; i < first + count; i++) {
+        if (cone)
+            marked += cone->marked[i] = needs_sides(cone, i);
+        out[i] = ao_mesh_unit(out[i].x, out[i].y, out[i].z);
+    }
+    pass->counts[k] = marked;
+}
+
+/* normals_of, compiled apart without the cone and with it (pass->cone). */
+static void normals_part(void *user, int k)
+{
+    struct mesh_pass *pass = user;
+    if (pass->cone)
+        normals_of(pass, k, pass->cone);
+    else
+        normals_of(pass, k, NULL);
+}
+
+size_t ao_mesh_angle_weighted_normals(const struct ao_mesh *mesh, struct ao_vec3 *out, int threads, struct cone *cone)
+{
+    struct mesh_pass pass = {.mesh = mesh, .out = out, .threads = threads, .cone = cone};
+    ao_mesh_run_parts(normals_part, &pass);
+    size_t marked = 0;
+    for (int k = 0; k < pass.threads; k++)
+        marked += pass.counts[k];
+    return marked;
+}
+
+/* Angle-weighted normals of every vertex into mesh->normals (allocated when NULL), on so many
+ * threads (0: ao_mesh_run_parts's choice); false when memory runs out (not reported). */
+static bool compute_normals(struct ao_mesh *mesh, int threads)
+{
+    if (mesh->vertex_count == 0)
+        return true;
+    if (!mesh->normals) {
+        if (!(mesh->normals = malloc(mesh->vertex_count * sizeof *mesh->normals)))
+            return false;
+        ao_mesh_advise_huge(mesh->normals, mesh->vertex_count * sizeof *mesh->normals);
+    }
+    ao_mesh_angle_weighted_normals(mesh, mesh->normals, threads, NULL);
+    return true;
+}
+
+bool ao_mesh_complete_normals(struct ao_mesh *mesh, const char *path, double crease, const struct ao_budget *budget)
+{
+    size_t missing = mesh->normals ? 0 : mesh->vertex_count;
+    for (size_t v = 0; mesh->normals && v < mesh->vertex_count; v++)
+        missing += ao_mesh_normal_is_missing(mesh->normals[v]);
+    if (missing == 0 || mesh->triangle_count == 0)
+        return true;
+    if (crease <= 0.0) {   /* flat: a zero normal, which shading replaces by the triangle's own */
+        if (!mesh->normals && !(mesh->normals = calloc(mesh->vertex_count, sizeof *mesh->normals)))
+            return ao_mesh_out_of_memory(path);
+        for (size_t v = 0; v < mesh->vertex_count; v++)
+            if (ao_mesh_normal_is_missing(mesh->normals[v]))
+                mesh->normals[v] = ao_vec3_make(0.0f, 0.0f, 0.0f);
+        return true;
+    }
+    /* Every vertex's smooth normal first, what a vertex keeps unless it splits, and below 180
+     * degrees the vertices marked whose sides must be found. */
+    const double degree = 3.14159265358979323846 / 180.0;
+    size_t n = mesh->vertex_count;
+    struct ao_vec3 *smooth = malloc(n * sizeof *smooth);
+    struct cone cone = {.given = mesh->normals, .cos_half = cos(crease * degree / 2.0)};
+    bool creased = crease < 180.0;
+    if (creased) {
+        cone.at = malloc(n * sizeof *cone.at);
+        cone.marked = malloc(n);
+        if (cone.at)
+            ao_mesh_advise_huge(cone.at, n * sizeof *cone.at);
+    }
+    bool ok = smooth && (!creased || (cone.at && cone.marked));
+    size_t marked = 0;
+    if (ok) {
+        ao_mesh_advise_huge(smooth, n * sizeof *smooth);
+        marked = ao_mesh_angle_weighted_normals(mesh, smooth, 0, creased ? &cone : NULL);
+        if (mesh->normals) {
+            for (size_t v = 0; v < n; v++)
+                if (ao_mesh_normal_is_missing(mesh->normals[v]))
+                    mesh->normals[v] = smooth[v];
+            free(smooth);
+        } else {
+            mesh->normals = smooth;
+        }
+        smooth = NULL;
+    }
+    free(smooth);
+    bool split = ok && (marked == 0 || ao_mesh_split_creases(mesh, path, &cone, marked, cos(crease * degree),
+                                                            budget));   /* reports its failures */
+    free(cone.at);
+    free(cone.marked);
+    return split || (!ok && ao_mesh_out_of_memory(path));
+}
+
+bool ao_mesh_compute_normals_on(struct ao_mesh *mesh, int threads)
+{
+    if (compute_normals(mesh, threads))
+        return true;
+    ao_text_report("out of memory computing mesh normals");
+    return false;
+}
+
+bool ao_mesh_compute_normals(struct ao_mesh *mesh)
+{
+    return ao_mesh_compute_normals_on(mesh, 0);
+}
