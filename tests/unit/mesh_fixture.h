@@ -1,5 +1,5 @@
 /* What the loader tests share (test_obj.c, test_ply.c, test_stl.c, test_gltf.c, test_load_files.c,
- * test_load_budget.c, test_normals.c, test_scene.c): their main (the fixtures' folder,
+ * test_load_budget.c, test_mesh.c, test_scene.c): their main (the fixtures' folder,
  * tests/data/mesh, and a scratch folder for generated files), loads that capture the one error line,
  * assertions every loaded mesh must meet, the test of a format's bad fixtures, and writers of binary
  * PLY and glTF files. Include after cmocka.h. */

@@ -373,7 +373,7 @@ static void test_bunny(void **state)
     ao_mesh_finish(&mesh);
 }
 
-MESH_FIXTURE_MAIN("test_normals", cmocka_unit_test(test_degenerate_counted), cmocka_unit_test(test_compute_normals),
+MESH_FIXTURE_MAIN("test_mesh", cmocka_unit_test(test_degenerate_counted), cmocka_unit_test(test_compute_normals),
                                   cmocka_unit_test(test_normals_any_thread_count), cmocka_unit_test(test_crease_cube),
                                   cmocka_unit_test(test_crease_keeps_a_smooth_mesh),
                                   cmocka_unit_test(test_crease_many_triangles_at_a_vertex),
