@@ -83,69 +83,78 @@ static void test_size(void **state)
     ao_scene_finish(&bare);
 }
 
+/* A scene parsed from text, its tracer, and what ao_options_render makes of them. */
+struct rendered {
+    struct ao_scene scene;
+    struct ao_tracer *tracer;
+    struct ao_options opts;
+    struct ao_render_config config;
+    struct ao_settings settings;
+};
+
+static void rendered_begin(struct rendered *r, const char *text, const char *name)
+{
+    assert_true(ao_scene_parse(&r->scene, text, name, NULL));
+    r->tracer = ao_tracer_create(&r->scene);
+    assert_non_null(r->tracer);
+}
+
+static void rendered_finish(struct rendered *r)
+{
+    ao_tracer_destroy(r->tracer);
+    ao_scene_finish(&r->scene);
+}
+
 /* The config and settings: the options' values where given, the scene's or the machine's where not. */
 static void test_render_config(void **state)
 {
     (void)state;
-    struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, SIZED, "sized.scene", NULL));
-    struct ao_tracer *tracer = ao_tracer_create(&scene);
-    assert_non_null(tracer);
-    struct ao_options opts;
-    struct ao_render_config config;
-    struct ao_settings settings;
-    PARSE(&opts, "x.scene");
-    assert_true(ao_options_render(&opts, &scene, tracer, &config, &settings));
-    assert_ptr_equal(config.scene, &scene);
-    assert_ptr_equal(config.tracer, tracer);
+    struct rendered r;
+    rendered_begin(&r, SIZED, "sized.scene");
+    PARSE(&r.opts, "x.scene");
+    assert_true(ao_options_render(&r.opts, &r.scene, r.tracer, &r.config, &r.settings));
+    assert_ptr_equal(r.config.scene, &r.scene);
+    assert_ptr_equal(r.config.tracer, r.tracer);
     long cores = sysconf(_SC_NPROCESSORS_ONLN);
-    assert_int_equal(config.threads, cores > 0 ? cores : 1);
-    assert_true(config.ao_distance == 2.5f);   /* the scene's */
-    assert_true(config.seed == 1 && config.target_spp == 256);
-    assert_null(config.reference);
-    assert_true(settings.width == 320 && settings.height == 200);
-    assert_int_equal(settings.output, AO_OUTPUT_AO);
-    assert_int_equal(settings.sampling, AO_SAMPLING_COSINE);
-    assert_true(settings.aa);
-    assert_memory_equal(&settings.camera, &scene.camera, sizeof scene.camera);
+    assert_int_equal(r.config.threads, cores > 0 ? cores : 1);
+    assert_true(r.config.ao_distance == 2.5f);   /* the scene's */
+    assert_true(r.config.seed == 1 && r.config.target_spp == 256);
+    assert_null(r.config.reference);
+    assert_true(r.settings.width == 320 && r.settings.height == 200);
+    assert_int_equal(r.settings.output, AO_OUTPUT_AO);
+    assert_int_equal(r.settings.sampling, AO_SAMPLING_COSINE);
+    assert_true(r.settings.aa);
+    assert_memory_equal(&r.settings.camera, &r.scene.camera, sizeof r.scene.camera);
 
-    PARSE(&opts, "--threads", "3", "--seed", "7", "--spp", "16", "--ao-distance", "0.5", "--size",
-          "40x30", "--view", "normals", "--sampling", "uniform", "--no-aa", "--spppp", "4",
-          "x.scene");
-    assert_true(ao_options_render(&opts, &scene, tracer, &config, &settings));
-    assert_int_equal(config.threads, 3);
-    assert_true(config.seed == 7 && config.target_spp == 16);
-    assert_true(config.ao_distance == 0.5f);
-    assert_true(settings.width == 40 && settings.height == 30);
-    assert_int_equal(settings.output, AO_OUTPUT_NORMALS);
-    assert_int_equal(settings.sampling, AO_SAMPLING_UNIFORM);
-    assert_false(settings.aa);
-    assert_int_equal(settings.spppp, 4);
-    ao_tracer_destroy(tracer);
-    ao_scene_finish(&scene);
+    PARSE(&r.opts, "--threads", "3", "--seed", "7", "--spp", "16", "--ao-distance", "0.5", "--size", "40x30",
+          "--view", "normals", "--sampling", "uniform", "--no-aa", "--spppp", "4", "x.scene");
+    assert_true(ao_options_render(&r.opts, &r.scene, r.tracer, &r.config, &r.settings));
+    assert_int_equal(r.config.threads, 3);
+    assert_true(r.config.seed == 7 && r.config.target_spp == 16);
+    assert_true(r.config.ao_distance == 0.5f);
+    assert_true(r.settings.width == 40 && r.settings.height == 30);
+    assert_int_equal(r.settings.output, AO_OUTPUT_NORMALS);
+    assert_int_equal(r.settings.sampling, AO_SAMPLING_UNIFORM);
+    assert_false(r.settings.aa);
+    assert_int_equal(r.settings.spppp, 4);
+    rendered_finish(&r);
 }
 
 /* A camera that cannot form an image (looking along its up): false, after one line naming the scene. */
 static void test_camera_refused(void **state)
 {
     (void)state;
-    struct ao_scene scene;
-    assert_true(ao_scene_parse(&scene, BARE, "bare.scene", NULL));
-    struct ao_tracer *tracer = ao_tracer_create(&scene);
-    assert_non_null(tracer);
-    scene.camera.up = ao_vec3_sub(scene.camera.target, scene.camera.eye);
-    struct ao_options opts;
-    struct ao_render_config config;
-    struct ao_settings settings;
-    PARSE(&opts, "x.scene");
+    struct rendered r;
+    rendered_begin(&r, BARE, "bare.scene");
+    r.scene.camera.up = ao_vec3_sub(r.scene.camera.target, r.scene.camera.eye);
+    PARSE(&r.opts, "x.scene");
     struct capture c;
     char err[512];
     capture_begin(&c);
-    assert_false(ao_options_render(&opts, &scene, tracer, &config, &settings));
+    assert_false(ao_options_render(&r.opts, &r.scene, r.tracer, &r.config, &r.settings));
     capture_end(&c, err, sizeof err);
     assert_string_equal(err, "bare.scene: the camera cannot form an image\n");
-    ao_tracer_destroy(tracer);
-    ao_scene_finish(&scene);
+    rendered_finish(&r);
 }
 
 UNIT_TEST_MAIN(cmocka_unit_test(test_scene_options), cmocka_unit_test(test_size), cmocka_unit_test(test_render_config),
