@@ -374,8 +374,8 @@ static void test_bunny(void **state)
 }
 
 MESH_FIXTURE_MAIN("test_mesh", cmocka_unit_test(test_degenerate_counted), cmocka_unit_test(test_compute_normals),
-                                  cmocka_unit_test(test_normals_any_thread_count), cmocka_unit_test(test_crease_cube),
-                                  cmocka_unit_test(test_crease_keeps_a_smooth_mesh),
-                                  cmocka_unit_test(test_crease_many_triangles_at_a_vertex),
-                                  cmocka_unit_test(test_crease_fans_without_a_shared_edge),
-                                  cmocka_unit_test(test_invalid_normals), cmocka_unit_test(test_bunny))
+                               cmocka_unit_test(test_normals_any_thread_count), cmocka_unit_test(test_crease_cube),
+                               cmocka_unit_test(test_crease_keeps_a_smooth_mesh),
+                               cmocka_unit_test(test_crease_many_triangles_at_a_vertex),
+                               cmocka_unit_test(test_crease_fans_without_a_shared_edge),
+                               cmocka_unit_test(test_invalid_normals), cmocka_unit_test(test_bunny))
