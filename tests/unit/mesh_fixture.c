@@ -18,18 +18,7 @@
 char data_dir[4096];
 char temp_dir[4096];
 
-bool mesh_fixture_begin(const char *name)
-{
-    const char *root = getenv("AO_SOURCE_ROOT");
-    if (!root) {
-        fprintf(stderr, "%s: AO_SOURCE_ROOT is not set (run it through meson test)\n", name);
-        return false;
-    }
-    snprintf(data_dir, sizeof data_dir, "%s/tests/data/mesh", root);
-    return true;
-}
-
-int mesh_fixture_setup(void **state)
+static int make_temp_dir(void **state)
 {
     (void)state;
     const char *tmp = getenv("TMPDIR");
@@ -37,7 +26,7 @@ int mesh_fixture_setup(void **state)
     return mkdtemp(temp_dir) ? 0 : -1;
 }
 
-int mesh_fixture_teardown(void **state)
+static int remove_temp_dir(void **state)
 {
     (void)state;
     DIR *dir = opendir(temp_dir);
@@ -52,6 +41,17 @@ int mesh_fixture_teardown(void **state)
     if (dir)
         closedir(dir);
     return rmdir(temp_dir);
+}
+
+int mesh_fixture_run(const char *name, const struct CMUnitTest *tests, size_t count)
+{
+    const char *root = getenv("AO_SOURCE_ROOT");
+    if (!root) {
+        fprintf(stderr, "%s: AO_SOURCE_ROOT is not set (run it through meson test)\n", name);
+        return 77;
+    }
+    snprintf(data_dir, sizeof data_dir, "%s/tests/data/mesh", root);
+    return _cmocka_run_group_tests(name, tests, count, make_temp_dir, remove_temp_dir);
 }
 
 char *path_buffer(void)
@@ -135,6 +135,14 @@ void load_ok(struct ao_mesh *mesh, const char *path)
         print_error("loading %s printed: %s\n", path, err);
     assert_true(ok);
     assert_string_equal(err, "");
+}
+
+void load_counted(struct ao_mesh *mesh, const char *path, size_t vertices, size_t triangles)
+{
+    load_ok(mesh, path);
+    assert_mesh_valid(mesh);
+    assert_int_equal(mesh->vertex_count, vertices);
+    assert_int_equal(mesh->triangle_count, triangles);
 }
 
 void assert_mesh_empty(const struct ao_mesh *mesh)

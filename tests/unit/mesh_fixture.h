@@ -1,7 +1,8 @@
 /* What the loader tests share (test_obj.c, test_ply.c, test_stl.c, test_gltf.c, test_load_files.c,
- * test_load_budget.c, test_normals.c): the fixtures' folder (tests/data/mesh) and a scratch folder
- * for generated files, loads that capture the one error line, assertions every loaded mesh must
- * meet, and writers of binary PLY and glTF files. Include after cmocka.h. */
+ * test_load_budget.c, test_mesh.c, test_scene.c): their main (the fixtures' folder,
+ * tests/data/mesh, and a scratch folder for generated files), loads that capture the one error line,
+ * assertions every loaded mesh must meet, the test of a format's bad fixtures, and writers of binary
+ * PLY and glTF files. Include after cmocka.h. */
 #ifndef AO_TEST_MESH_FIXTURE_H
 #define AO_TEST_MESH_FIXTURE_H
 
@@ -19,13 +20,18 @@
 extern char data_dir[4096];
 extern char temp_dir[4096];
 
-/* Sets data_dir from AO_SOURCE_ROOT; false (the test then exits 77) when it is not set, said on
- * stderr as `name: ...`. */
-bool mesh_fixture_begin(const char *name);
+/* A loader test's main: sets data_dir from AO_SOURCE_ROOT and runs the count tests as the group
+ * `name` in a scratch folder made for them and removed after them; returns main's exit status, 77
+ * (said on stderr as `name: ...`) without AO_SOURCE_ROOT. */
+int mesh_fixture_run(const char *name, const struct CMUnitTest *tests, size_t count);
 
-/* cmocka group setup and teardown: makes the scratch folder, removes it with what it holds. */
-int mesh_fixture_setup(void **state);
-int mesh_fixture_teardown(void **state);
+/* Defines a loader test's main: mesh_fixture_run over the tests listed (cmocka_unit_test entries). */
+#define MESH_FIXTURE_MAIN(name, ...)                                                                                   \
+    int main(void)                                                                                                     \
+    {                                                                                                                  \
+        const struct CMUnitTest tests[] = {__VA_ARGS__};                                                               \
+        return mesh_fixture_run(name, tests, sizeof tests / sizeof tests[0]);                                          \
+    }
 
 /* A binary file (PLY, STL) under construction. */
 struct bytes {
@@ -63,12 +69,23 @@ bool load_within(struct ao_mesh *mesh, const char *path, uint64_t limit, char *e
 /* Loads a file that must load, and prints nothing. */
 void load_ok(struct ao_mesh *mesh, const char *path);
 
+/* load_ok, then the mesh must be valid (assert_mesh_valid) with these counts of vertices and
+ * triangles. */
+void load_counted(struct ao_mesh *mesh, const char *path, size_t vertices, size_t triangles);
+
 /* The mesh must be all zero, as a failed load leaves it. */
 void assert_mesh_empty(const struct ao_mesh *mesh);
 
 /* Loading path must fail, leave the mesh empty and print exactly one line that starts with
  * the path followed by location (":LINE: " or ": ") and contains message. */
 void expect_failure(const char *path, const char *location, const char *message);
+
+/* cmocka test (bad_meshes.c): every bad fixture whose name ends in the extension *state (".obj")
+ * fails with its one line and an empty mesh (expect_failure). */
+void test_bad_inputs(void **state);
+
+/* test_bad_inputs over the bad fixtures of extension ext, as an entry of a test list. */
+#define bad_inputs_test(ext) cmocka_unit_test_prestate(test_bad_inputs, (void *)(ext))
 
 /* a must be within 1e-5 of (x, y, z). */
 void assert_vec3_near(struct ao_vec3 a, float x, float y, float z);

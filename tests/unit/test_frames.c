@@ -15,6 +15,7 @@
 #include <stdlib.h>
 
 #include "frames.h"
+#include "unit_main.h"
 
 /* Fills the back frame, width x height pixels, with every value `serial`, and publishes it. */
 static void publish(struct ao_frames *fs, uint32_t serial, int width, int height)
@@ -200,13 +201,5 @@ static void test_handoff_under_contention(void **state)
     ao_frames_finish(&c.frames);
 }
 
-int main(void)
-{
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_take_newest),
-        cmocka_unit_test(test_log),
-        cmocka_unit_test(test_stamps),
-        cmocka_unit_test(test_handoff_under_contention),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
-}
+UNIT_TEST_MAIN(cmocka_unit_test(test_take_newest), cmocka_unit_test(test_log), cmocka_unit_test(test_stamps),
+               cmocka_unit_test(test_handoff_under_contention))

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "gestures.h"
+#include "unit_main.h"
 
 static struct ao_camera camera(void)
 {
@@ -81,12 +82,4 @@ static void test_divider(void **state)
     assert_int_equal(g.drag, AO_DRAG_ORBIT);
 }
 
-int main(void)
-{
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_orbit),
-        cmocka_unit_test(test_pan_and_zoom),
-        cmocka_unit_test(test_divider),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
-}
+UNIT_TEST_MAIN(cmocka_unit_test(test_orbit), cmocka_unit_test(test_pan_and_zoom), cmocka_unit_test(test_divider))

@@ -27,9 +27,7 @@ static void load_transformed_triangle(struct ao_mesh *mesh, const char *transfor
                      " \"type\": \"VEC3\"}], \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 36}],\n"
                      " \"buffers\": [{\"byteLength\": 36, \"uri\": \"data:application/gltf-buffer;base64,"
                      "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}]}\n", transform);
-    load_ok(mesh, temp_file("transformed.gltf", text, (size_t)n));
-    assert_mesh_valid(mesh);
-    assert_int_equal(mesh->triangle_count, 1);
+    load_counted(mesh, temp_file("transformed.gltf", text, (size_t)n), 3, 1);
 }
 
 /* A glTF whose mesh 0 (a strip of 202 vertices (i / 2, i % 2, 0) making 200 triangles) is named
@@ -169,10 +167,7 @@ static void test_gltf_nodes(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
-    load_ok(&mesh, fixture("nodes.gltf"));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.vertex_count, 6);
-    assert_int_equal(mesh.triangle_count, 2);
+    load_counted(&mesh, fixture("nodes.gltf"), 6, 2);
     /* (0,0,0) (1,0,0) (0,1,0) scaled by 2, turned (x, y) -> (-y, x), moved by (10, 1, 0). */
     size_t a = vertex_at(&mesh, 10, 1, 0), b = vertex_at(&mesh, 10, 3, 0);
     size_t c = vertex_at(&mesh, 8, 1, 0);
@@ -204,9 +199,7 @@ static void test_gltf_no_scene(void **state)
         " \"buffers\": [{\"byteLength\": 36, \"uri\": \"data:application/gltf-buffer;base64,"
         "AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAA\"}]}\n";
     struct ao_mesh mesh;
-    load_ok(&mesh, temp_file("triangle.gltf", text, sizeof text - 1));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.triangle_count, 1);
+    load_counted(&mesh, temp_file("triangle.gltf", text, sizeof text - 1), 3, 1);
     assert_triangle(&mesh, 0, 0, 1, 2);
     assert_vec3_near(mesh.positions[1], 1, 0, 1);
     assert_vec3_near(mesh.positions[2], 0, 1, 1);
@@ -252,9 +245,7 @@ static void test_gltf_huge_matrix_gives_finite_normals(void **state)
         " \"buffers\": [{\"byteLength\": 72, \"uri\": \"data:application/gltf-buffer;base64,"
         "AAAAAAAAAAAAAAAAAACAPwAAgD8AAAAAAAAAAAAAAAAAAIA/8wQ1P/MENb8AAAAA8wQ1P/MENb8AAAAA8wQ1P/MENb8AAAAA\"}]}\n";
     struct ao_mesh mesh;
-    load_ok(&mesh, temp_file("huge_matrix.gltf", text, sizeof text - 1));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.triangle_count, 1);
+    load_counted(&mesh, temp_file("huge_matrix.gltf", text, sizeof text - 1), 3, 1);
     ao_mesh_finish(&mesh);
 }
 
@@ -289,13 +280,11 @@ static void test_gltf_strips_and_fans(void **state)
         assert_non_null(at);
         snprintf(twice, sizeof twice, "%.*s%zu%s", (int)(at - format), format, sizeof data, at + 3);
         struct ao_mesh mesh;
-        load_ok(&mesh, gltf_file("strips.gltf", twice, &data, sizeof data));
-        assert_mesh_valid(&mesh);
-        assert_int_equal(mesh.triangle_count, 6);
+        /* 5 + 2 vertices: the fan shares the strip's. */
+        load_counted(&mesh, gltf_file("strips.gltf", twice, &data, sizeof data), 5 + 2, 6);
         assert_int_equal(mesh.point_primitives, 1);
         assert_int_equal(mesh.line_primitives, 0);
         static const uint32_t want[6][3] = {{0, 1, 2}, {1, 3, 2}, {2, 3, 4}, {0, 1, 4}, {1, 2, 4}, {2, 3, 4}};
-        assert_int_equal(mesh.vertex_count, 5 + 2);   /* the fan shares the strip's vertices */
         for (size_t t = 0; t < 6; t++) {
             if (mirror)
                 assert_triangle(&mesh, t, want[t][0], want[t][2], want[t][1]);
@@ -524,9 +513,7 @@ static void test_gltf_quantized(void **state)
         " {\"buffer\": 0, \"byteOffset\": 48, \"byteLength\": 24, \"byteStride\": 8}],\n"
         " \"buffers\": [{\"byteLength\": %zu, \"uri\": \"%s\"}]}\n";
     struct ao_mesh mesh;
-    load_ok(&mesh, gltf_file("quantized.gltf", json, &data, sizeof data));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.triangle_count, 3);
+    load_counted(&mesh, gltf_file("quantized.gltf", json, &data, sizeof data), 9, 3);
     assert_string_equal(mesh.note, "");
     static const float want[9][3] = {{0, 0, 0}, {2, 0, 0}, {0, -2, 0}, {2, 2, 2}, {6, 2, 2}, {2, 6, 2},
                                      {0, 0, 2}, {2, 0, 2}, {0, 2, 2}};
@@ -570,9 +557,7 @@ static void test_gltf_sparse(void **state)
         " \"bufferViews\": [{\"buffer\": 0, \"byteLength\": 80}],\n"
         " \"buffers\": [{\"byteLength\": %zu, \"uri\": \"%s\"}]}\n";
     struct ao_mesh mesh;
-    load_ok(&mesh, gltf_file("sparse.gltf", json, &data, sizeof data));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.triangle_count, 2);
+    load_counted(&mesh, gltf_file("sparse.gltf", json, &data, sizeof data), 6, 2);
     assert_vec3_near(mesh.positions[2], 0, 2, 0);
     assert_vec3_near(mesh.positions[3], 0, 0, 0);
     assert_vec3_near(mesh.positions[4], 1, 0, 0);
@@ -624,9 +609,7 @@ static void test_gltf_meshopt(void **state)
     meshopt_add(&f, "ATTRIBUTES", NULL, q, 9, 8);
     meshopt_add(&f, "INDICES", NULL, strip, 5, 4);
     struct ao_mesh mesh;
-    load_ok(&mesh, meshopt_gltf("meshopt.gltf", &f, 24));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.triangle_count, 8 + 3);
+    load_counted(&mesh, meshopt_gltf("meshopt.gltf", &f, 24), 9 + 9, 8 + 3);
     for (size_t i = 0; i < 9; i++) {
         assert_true(mesh.positions[i].x == p[i][0] && mesh.positions[i].y == p[i][1] &&
                     mesh.positions[i].z == p[i][2]);
@@ -704,51 +687,13 @@ static void test_gltf_points_and_lines_only(void **state)
                    "draws only triangles");
 }
 
-/* Each bad glTF fixture, where its one error line must point, and what it must say. */
-static const struct {
-    const char *name, *location, *message;
-} bad_inputs[] = {
-    {"bad_gltf_json.gltf", ":3: ", "JSON: unexpected character"},
-    {"bad_gltf_asset.gltf", ": ", "no asset.version"},
-    {"bad_gltf_version.gltf", ": ", "glTF version '1.0'; only 2.x is supported"},
-    {"bad_gltf_extension.gltf", ": ", "requires extension 'EXT_mesh_gpu_instancing', which places meshes many times "
-                                      "and which aoview does not read"},
-    {"bad_gltf_sparse.gltf", ": ", "accessor 0 (POSITION) sparse: no 'indices' and 'values' objects"},
-    {"bad_gltf_position_type.gltf", ": ", "componentType 5125; positions and normals must be float (5126), or byte"},
-    {"bad_gltf_index_count.gltf", ": ", "2 indices, not a whole number of triangles"},
-    {"bad_gltf_mesh_index.gltf", ": ", "node 1: 'mesh' 7 is out of range (2 defined)"},
-    {"bad_gltf_uri.gltf", ": ", "buffer 0 ('http://example.com/x.bin'): the URI scheme 'http:' is not supported"},
-    {"bad_gltf_base64.gltf", ": ", "buffer 0: bad base64 data"},
-};
-
-/* Every bad fixture fails with its one line and an empty mesh. */
-static void test_bad_inputs(void **state)
-{
-    (void)state;
-    for (size_t i = 0; i < sizeof bad_inputs / sizeof bad_inputs[0]; i++)
-        expect_failure(fixture(bad_inputs[i].name), bad_inputs[i].location, bad_inputs[i].message);
-}
-
-int main(void)
-{
-    if (!mesh_fixture_begin("test_gltf"))
-        return 77;
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_gltf_nodes),
-        cmocka_unit_test(test_gltf_no_scene),
-        cmocka_unit_test(test_gltf_rotation_of_any_length),
-        cmocka_unit_test(test_gltf_huge_matrix_gives_finite_normals),
-        cmocka_unit_test(test_gltf_strips_and_fans),
-        cmocka_unit_test(test_gltf_meshes_load_once),
-        cmocka_unit_test(test_gltf_deep_node_tree),
-        cmocka_unit_test(test_gltf_required_extensions),
-        cmocka_unit_test(test_gltf_leniency),
-        cmocka_unit_test(test_gltf_normals_from_a_later_primitive),
-        cmocka_unit_test(test_gltf_quantized),
-        cmocka_unit_test(test_gltf_sparse),
-        cmocka_unit_test(test_gltf_meshopt),
-        cmocka_unit_test(test_gltf_points_and_lines_only),
-        cmocka_unit_test(test_bad_inputs),
-    };
-    return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);
-}
+MESH_FIXTURE_MAIN("test_gltf", cmocka_unit_test(test_gltf_nodes), cmocka_unit_test(test_gltf_no_scene),
+                               cmocka_unit_test(test_gltf_rotation_of_any_length),
+                               cmocka_unit_test(test_gltf_huge_matrix_gives_finite_normals),
+                               cmocka_unit_test(test_gltf_strips_and_fans),
+                               cmocka_unit_test(test_gltf_meshes_load_once), cmocka_unit_test(test_gltf_deep_node_tree),
+                               cmocka_unit_test(test_gltf_required_extensions), cmocka_unit_test(test_gltf_leniency),
+                               cmocka_unit_test(test_gltf_normals_from_a_later_primitive),
+                               cmocka_unit_test(test_gltf_quantized), cmocka_unit_test(test_gltf_sparse),
+                               cmocka_unit_test(test_gltf_meshopt), cmocka_unit_test(test_gltf_points_and_lines_only),
+                               bad_inputs_test(".gltf"))

@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "heatmap.h"
+#include "unit_main.h"
 
 /* The colour's brightness, to compare where the ramp stands. */
 static float sum(const float rgb[3])
@@ -84,12 +85,4 @@ static void test_pixels(void **state)
         assert_float_equal(heat[3 + c], want[c], 1e-6f);
 }
 
-int main(void)
-{
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ramp),
-        cmocka_unit_test(test_tiles),
-        cmocka_unit_test(test_pixels),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
-}
+UNIT_TEST_MAIN(cmocka_unit_test(test_ramp), cmocka_unit_test(test_tiles), cmocka_unit_test(test_pixels))

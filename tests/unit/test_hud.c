@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "hud.h"
+#include "unit_main.h"
 
 /* The facts of a run's first frame, a preview (render.c's start_run): nothing measured yet. */
 static struct ao_frame_info preview_info(void)
@@ -120,13 +121,7 @@ static void test_the_normals_view_shows_no_ao_figure(void **state)
     assert_absent(text, none, sizeof none / sizeof none[0]);
 }
 
-int main(void)
-{
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_a_preview_shows_no_figure),
-        cmocka_unit_test(test_the_first_passes_say_what_is_not_known),
-        cmocka_unit_test(test_the_samples_are_the_mean),
-        cmocka_unit_test(test_the_normals_view_shows_no_ao_figure),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
-}
+UNIT_TEST_MAIN(cmocka_unit_test(test_a_preview_shows_no_figure),
+               cmocka_unit_test(test_the_first_passes_say_what_is_not_known),
+               cmocka_unit_test(test_the_samples_are_the_mean),
+               cmocka_unit_test(test_the_normals_view_shows_no_ao_figure))

@@ -284,6 +284,19 @@ static void put_be(unsigned char *b, float v)
         b[i] = (unsigned char)(u >> (24 - 8 * i));
 }
 
+/* The PFM at path must read as a width x height image whose values count 1, 2, 3, ... top row first. */
+static void assert_pfm_counts(const char *path, int width, int height)
+{
+    float *rgb = NULL;
+    int w = 0, h = 0;
+    assert_true(ao_image_read_pfm(path, &rgb, &w, &h));
+    assert_int_equal(w, width);
+    assert_int_equal(h, height);
+    for (int i = 0; i < 3 * width * height; i++)
+        assert_float_equal(rgb[i], (float)(i + 1), 0.0f);
+    free(rgb);
+}
+
 static void test_pfm_big_endian_and_loose_header(void **state)
 {
     struct fixture *fx = *state;
@@ -292,14 +305,7 @@ static void test_pfm_big_endian_and_loose_header(void **state)
     for (int i = 0; i < 12; i++)
         put_be(payload + 4 * i, (float)((i + 6) % 12 + 1));
     write_pfm_raw(in_dir(fx, "be.pfm"), "PF \t\n 2\n\n  2 \r\n 4.5\n", payload, sizeof payload);
-    float *rgb = NULL;
-    int w = 0, h = 0;
-    assert_true(ao_image_read_pfm(fx->path, &rgb, &w, &h));
-    assert_int_equal(w, 2);
-    assert_int_equal(h, 2);
-    for (int i = 0; i < 12; i++)
-        assert_float_equal(rgb[i], (float)(i + 1), 0.0f);
-    free(rgb);
+    assert_pfm_counts(fx->path, 2, 2);
 }
 
 /* Header lines ended by CR LF, as a tool writing in Windows' text mode makes them: read as the
@@ -313,14 +319,9 @@ static void test_pfm_crlf_header(void **state)
     for (int i = 0; i < 6; i++)
         put_be(payload + 4 * i, (float)(i + 1));
     write_pfm_raw(in_dir(fx, "crlf.pfm"), "PF\r\n2 1\r\n1.0\r\n", payload, sizeof payload);
+    assert_pfm_counts(fx->path, 2, 1);
     float *rgb = NULL;
     int w = 0, h = 0;
-    assert_true(ao_image_read_pfm(fx->path, &rgb, &w, &h));
-    assert_int_equal(w, 2);
-    assert_int_equal(h, 1);
-    for (int i = 0; i < 6; i++)
-        assert_float_equal(rgb[i], (float)(i + 1), 0.0f);
-    free(rgb);
     unsigned char lf_first[12] = {0x0a, 0, 0x80, 0x3f, 0, 0, 0, 0x40, 0, 0, 0x40, 0x40}; /* 1.0000012, 2, 3 LE */
     write_pfm_raw(in_dir(fx, "cr.pfm"), "PF\r1 1\r-1.0\r", lf_first, sizeof lf_first);
     assert_true(ao_image_read_pfm(fx->path, &rgb, &w, &h));

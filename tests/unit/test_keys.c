@@ -10,6 +10,7 @@
 #include <string.h>
 
 #include "keys.h"
+#include "unit_main.h"
 
 /* Settings as a run starts with them. */
 static struct ao_settings start(void)
@@ -97,13 +98,5 @@ static void test_help(void **state)
             fail_msg("the help lacks '%s'", lines[k]);
 }
 
-int main(void)
-{
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_settings_keys),
-        cmocka_unit_test(test_samples_per_pass),
-        cmocka_unit_test(test_actions),
-        cmocka_unit_test(test_help),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
-}
+UNIT_TEST_MAIN(cmocka_unit_test(test_settings_keys), cmocka_unit_test(test_samples_per_pass),
+               cmocka_unit_test(test_actions), cmocka_unit_test(test_help))

@@ -87,13 +87,5 @@ static void test_loaders_keep_to_the_budget(void **state)
     ao_mesh_finish(&mesh);
 }
 
-int main(void)
-{
-    if (!mesh_fixture_begin("test_load_budget"))
-        return 77;
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_budget_default_follows_memory),
-        cmocka_unit_test(test_loaders_keep_to_the_budget),
-    };
-    return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);
-}
+MESH_FIXTURE_MAIN("test_load_budget", cmocka_unit_test(test_budget_default_follows_memory),
+                                      cmocka_unit_test(test_loaders_keep_to_the_budget))

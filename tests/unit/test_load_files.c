@@ -239,18 +239,8 @@ static void test_mutations(void **state)
     }
 }
 
-int main(void)
-{
-    if (!mesh_fixture_begin("test_load_files"))
-        return 77;
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_extension_case),
-        cmocka_unit_test(test_file_errors),
-        cmocka_unit_test(test_unreadable_file),
-        cmocka_unit_test(test_file_shrunk_while_mapped),
-        cmocka_unit_test(test_core_installs_no_handler),
-        cmocka_unit_test(test_mappings_of_threads),
-        cmocka_unit_test(test_mutations),
-    };
-    return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);
-}
+MESH_FIXTURE_MAIN("test_load_files", cmocka_unit_test(test_extension_case), cmocka_unit_test(test_file_errors),
+                                     cmocka_unit_test(test_unreadable_file),
+                                     cmocka_unit_test(test_file_shrunk_while_mapped),
+                                     cmocka_unit_test(test_core_installs_no_handler),
+                                     cmocka_unit_test(test_mappings_of_threads), cmocka_unit_test(test_mutations))

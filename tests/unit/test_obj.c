@@ -17,10 +17,7 @@ static void test_obj_triangle(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
-    load_ok(&mesh, fixture("tri.obj"));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.vertex_count, 3);
-    assert_int_equal(mesh.triangle_count, 1);
+    load_counted(&mesh, fixture("tri.obj"), 3, 1);
     assert_int_equal(mesh.degenerate_count, 0);
     assert_triangle(&mesh, 0, 0, 1, 2);
     assert_vec3_near(mesh.positions[1], 1, 0, 0);
@@ -34,10 +31,7 @@ static void test_obj_polygon_fan(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
-    load_ok(&mesh, fixture("fan.obj"));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.vertex_count, 5);
-    assert_int_equal(mesh.triangle_count, 3);
+    load_counted(&mesh, fixture("fan.obj"), 5, 3);
     assert_triangle(&mesh, 0, 0, 1, 2);
     assert_triangle(&mesh, 1, 0, 2, 3);
     assert_triangle(&mesh, 2, 0, 3, 4);
@@ -53,10 +47,7 @@ static void test_obj_corner_forms(void **state)
     static const char *const names[] = {"forms_vt.obj", "forms_vn.obj", "forms_vtvn.obj"};
     for (size_t f = 0; f < 3; f++) {
         struct ao_mesh mesh;
-        load_ok(&mesh, fixture(names[f]));
-        assert_mesh_valid(&mesh);
-        assert_int_equal(mesh.vertex_count, 4);
-        assert_int_equal(mesh.triangle_count, 2);
+        load_counted(&mesh, fixture(names[f]), 4, 2);
         for (int i = 0; i < 4; i++)
             assert_vec3_near(mesh.normals[i], 0, 0, 1);
         assert_vec3_near(mesh.positions[mesh.indices[4]], 1, 1, 0);
@@ -69,10 +60,7 @@ static void test_obj_negative_indices(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
-    load_ok(&mesh, fixture("negative.obj"));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.vertex_count, 6);
-    assert_int_equal(mesh.triangle_count, 2);
+    load_counted(&mesh, fixture("negative.obj"), 6, 2);
     for (int k = 0; k < 3; k++) {
         struct ao_vec3 first = mesh.positions[mesh.indices[k]];
         struct ao_vec3 second = mesh.positions[mesh.indices[3 + k]];
@@ -89,10 +77,7 @@ static void test_obj_other_statements(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
-    load_ok(&mesh, fixture("statements.obj"));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.vertex_count, 3);
-    assert_int_equal(mesh.triangle_count, 1);
+    load_counted(&mesh, fixture("statements.obj"), 3, 1);
     assert_vec3_near(mesh.positions[2], 0, 1, 0);
     ao_mesh_finish(&mesh);
 }
@@ -102,10 +87,7 @@ static void test_obj_split_vertices(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
-    load_ok(&mesh, fixture("split.obj"));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.vertex_count, 6);
-    assert_int_equal(mesh.triangle_count, 2);
+    load_counted(&mesh, fixture("split.obj"), 6, 2);
     float h = sqrtf(0.5f);
     for (int k = 0; k < 3; k++) {
         assert_vec3_near(mesh.normals[mesh.indices[k]], 0, 0, 1);
@@ -161,54 +143,8 @@ static void test_obj_zero_normal(void **state)
     ao_mesh_finish(&mesh);
 }
 
-/* Each bad OBJ fixture, where its one error line must point, and what it must say. */
-static const struct {
-    const char *name, *location, *message;
-} bad_inputs[] = {
-    {"bad_number.obj", ":2: ", "bad number 'x'"},
-    {"bad_nan.obj", ":1: ", "bad number 'nan'"},
-    {"bad_inf.obj", ":3: ", "bad number '1e999'"},
-    {"bad_v_few.obj", ":2: ", "found 2 numbers"},
-    {"bad_v_many.obj", ":1: ", "too many numbers"},
-    {"bad_vn_count.obj", ":4: ", "expected 'vn x y z'"},
-    {"bad_index_range.obj", ":4: ", "'4': vertex index out of range (3 defined"},
-    {"bad_index_negative.obj", ":4: ", "'-4': vertex index out of range"},
-    {"bad_index_zero.obj", ":4: ", "bad face corner '0'"},
-    {"bad_index_huge.obj", ":4: ", "vertex index out of range"},
-    {"bad_forward_ref.obj", ":1: ", "(0 defined so far)"},
-    {"bad_normal_range.obj", ":5: ", "'2//2': normal index out of range"},
-    {"bad_texcoord_range.obj", ":5: ", "'3/2': texture coordinate index out of range"},
-    {"bad_corner_slash.obj", ":4: ", "bad face corner '1/'"},
-    {"bad_corner_fields.obj", ":6: ", "bad face corner '1/1/1/1'"},
-    {"bad_corner_text.obj", ":4: ", "bad face corner 'a'"},
-    {"bad_face_two.obj", ":4: ", "face with 2 vertices"},
-    {"bad_empty.obj", ": ", "no triangles"},
-    {"bad_no_faces.obj", ": ", "no triangles"},
-    {"bad_all_degenerate.obj", ": ", "no triangles (2 degenerate"},
-};
-
-/* Every bad fixture fails with its one line and an empty mesh. */
-static void test_bad_inputs(void **state)
-{
-    (void)state;
-    for (size_t i = 0; i < sizeof bad_inputs / sizeof bad_inputs[0]; i++)
-        expect_failure(fixture(bad_inputs[i].name), bad_inputs[i].location, bad_inputs[i].message);
-}
-
-int main(void)
-{
-    if (!mesh_fixture_begin("test_obj"))
-        return 77;
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_obj_triangle),
-        cmocka_unit_test(test_obj_polygon_fan),
-        cmocka_unit_test(test_obj_corner_forms),
-        cmocka_unit_test(test_obj_negative_indices),
-        cmocka_unit_test(test_obj_other_statements),
-        cmocka_unit_test(test_obj_split_vertices),
-        cmocka_unit_test(test_obj_mixed_normals),
-        cmocka_unit_test(test_obj_zero_normal),
-        cmocka_unit_test(test_bad_inputs),
-    };
-    return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);
-}
+MESH_FIXTURE_MAIN("test_obj", cmocka_unit_test(test_obj_triangle), cmocka_unit_test(test_obj_polygon_fan),
+                              cmocka_unit_test(test_obj_corner_forms), cmocka_unit_test(test_obj_negative_indices),
+                              cmocka_unit_test(test_obj_other_statements), cmocka_unit_test(test_obj_split_vertices),
+                              cmocka_unit_test(test_obj_mixed_normals), cmocka_unit_test(test_obj_zero_normal),
+                              bad_inputs_test(".obj"))

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "pages.h"
+#include "unit_main.h"
 
 enum { HUGE_PAGE = 2 << 20 };
 
@@ -115,12 +116,5 @@ static void test_given_back(void **state)
     }
 }
 
-int main(void)
-{
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_small_buffers),
-        cmocka_unit_test(test_big_buffers),
-        cmocka_unit_test(test_given_back),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
-}
+UNIT_TEST_MAIN(cmocka_unit_test(test_small_buffers), cmocka_unit_test(test_big_buffers),
+               cmocka_unit_test(test_given_back))

@@ -91,11 +91,8 @@ static void test_ply_ascii_cube(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
-    load_ok(&mesh, fixture("cube.ply"));
-    assert_mesh_valid(&mesh);
     /* At the default crease angle every corner splits in three, one per face, each face flat. */
-    assert_int_equal(mesh.vertex_count, 24);
-    assert_int_equal(mesh.triangle_count, 12);
+    load_counted(&mesh, fixture("cube.ply"), 24, 12);
     for (size_t t = 0; t < 12; t++) {
         struct ao_vec3 p[3], n = mesh.normals[mesh.indices[3 * t]];
         for (int k = 0; k < 3; k++)
@@ -126,10 +123,7 @@ static void test_ply_ascii_normals(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
-    load_ok(&mesh, fixture("normals.ply"));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.vertex_count, 4);
-    assert_int_equal(mesh.triangle_count, 2);
+    load_counted(&mesh, fixture("normals.ply"), 4, 2);
     assert_int_equal(mesh.degenerate_count, 1);
     assert_triangle(&mesh, 1, 1, 3, 2);
     assert_vec3_near(mesh.normals[0], 0, 0, 1);
@@ -145,10 +139,7 @@ static void test_ply_binary(void **state)
     (void)state;
     struct bytes b = binary_square();
     struct ao_mesh mesh;
-    load_ok(&mesh, temp_file("square.ply", b.data, b.size));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.vertex_count, 4);
-    assert_int_equal(mesh.triangle_count, 2);
+    load_counted(&mesh, temp_file("square.ply", b.data, b.size), 4, 2);
     assert_int_equal(mesh.degenerate_count, 1);
     assert_triangle(&mesh, 0, 0, 1, 2);
     assert_triangle(&mesh, 1, 0, 2, 3);
@@ -262,61 +253,7 @@ static void test_ply_layouts_agree(void **state)
     ao_mesh_finish(&bunny);
 }
 
-/* Each bad PLY fixture, where its one error line must point, and what it must say. */
-static const struct {
-    const char *name, *location, *message;
-} bad_inputs[] = {
-    {"bad_empty.ply", ": ", "empty file"},
-    {"bad_magic.ply", ":1: ", "not a PLY file"},
-    {"bad_big_endian.ply", ":2: ", "big-endian binary PLY is not supported"},
-    {"bad_format.ply", ":2: ", "unknown PLY format 'binary'"},
-    {"bad_version.ply", ":2: ", "unsupported PLY version '2.0'"},
-    {"bad_no_format.ply", ":3: ", "no format line"},
-    {"bad_no_end_header.ply", ":3: ", "without end_header"},
-    {"bad_property_first.ply", ":3: ", "property before any element"},
-    {"bad_type.ply", ":4: ", "unknown property type 'float128'"},
-    {"bad_keyword.ply", ":3: ", "unknown header keyword 'elemnt'"},
-    {"bad_count.ply", ":3: ", "bad element count '-3'"},
-    {"bad_count_overflow.ply", ":3: ", "bad element count"},
-    {"bad_no_z.ply", ":3: ", "needs x, y and z"},
-    {"bad_partial_normals.ply", ":3: ", "nx, ny and nz"},
-    {"bad_no_face.ply", ": ", "no 'face' element"},
-    {"bad_indices_scalar.ply", ":7: ", "'vertex_indices' must be a list"},
-    {"bad_few_values.ply", ":11: ", "too few values for a 'vertex' row"},
-    {"bad_many_values.ply", ":11: ", "more values than the header declares"},
-    {"bad_few_rows.ply", ":13: ", "'face' declares 2 rows, found 1"},
-    {"bad_extra_rows.ply", ":15: ", "data after the last element"},
-    {"bad_ply_index_range.ply", ":13: ", "vertex index 3 is not an integer in [0, 3)"},
-    {"bad_ply_index_negative.ply", ":13: ", "vertex index -1"},
-    {"bad_ply_index_fraction.ply", ":13: ", "vertex index 1.5"},
-    {"bad_ply_face_two.ply", ":13: ", "face with 2 vertices"},
-    {"bad_ply_list_count.ply", ":13: ", "bad list count -1"},
-    {"bad_ply_nan.ply", ":11: ", "not a finite float"},
-    {"bad_ply_number.ply", ":11: ", "bad number 'abc'"},
-    {"bad_ply_float_range.ply", ":11: ", "not a finite float"},
-    {"bad_ply_claims.ply", ":12: ", "'vertex' declares 4000000000 rows, found 3"},
-};
-
-/* Every bad fixture fails with its one line and an empty mesh. */
-static void test_bad_inputs(void **state)
-{
-    (void)state;
-    for (size_t i = 0; i < sizeof bad_inputs / sizeof bad_inputs[0]; i++)
-        expect_failure(fixture(bad_inputs[i].name), bad_inputs[i].location, bad_inputs[i].message);
-}
-
-int main(void)
-{
-    if (!mesh_fixture_begin("test_ply"))
-        return 77;
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_ply_ascii_cube),
-        cmocka_unit_test(test_ply_ascii_normals),
-        cmocka_unit_test(test_ply_binary),
-        cmocka_unit_test(test_ply_binary_errors),
-        cmocka_unit_test(test_ply_binary_truncated),
-        cmocka_unit_test(test_ply_layouts_agree),
-        cmocka_unit_test(test_bad_inputs),
-    };
-    return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);
-}
+MESH_FIXTURE_MAIN("test_ply", cmocka_unit_test(test_ply_ascii_cube), cmocka_unit_test(test_ply_ascii_normals),
+                              cmocka_unit_test(test_ply_binary), cmocka_unit_test(test_ply_binary_errors),
+                              cmocka_unit_test(test_ply_binary_truncated), cmocka_unit_test(test_ply_layouts_agree),
+                              bad_inputs_test(".ply"))

@@ -13,6 +13,7 @@
 #include <time.h>
 
 #include "pool.h"
+#include "unit_main.h"
 
 enum { THREADS = 4, RUNS = 2000 };
 
@@ -132,13 +133,5 @@ static void test_idle_team_sleeps(void **state)
     ao_pool_destroy(pool);
 }
 
-int main(void)
-{
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_every_thread_once),
-        cmocka_unit_test(test_run_waits_for_all),
-        cmocka_unit_test(test_team_of_one),
-        cmocka_unit_test(test_idle_team_sleeps),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
-}
+UNIT_TEST_MAIN(cmocka_unit_test(test_every_thread_once), cmocka_unit_test(test_run_waits_for_all),
+               cmocka_unit_test(test_team_of_one), cmocka_unit_test(test_idle_team_sleeps))

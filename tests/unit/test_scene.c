@@ -485,20 +485,10 @@ static void test_budget_builds_compact_where_only_that_fits(void **state)
     ao_scene_finish(&scene);
 }
 
-int main(void)
-{
-    if (!mesh_fixture_begin("test_scene"))
-        return 77;
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_parser_errors),
-        cmocka_unit_test(test_line_limits),
-        cmocka_unit_test(test_file_errors),
-        cmocka_unit_test(test_the_largest_scenes_are_framed_from_outside_them),
-        cmocka_unit_test(test_defaults),
-        cmocka_unit_test(test_bvh_through_every_entry),
-        cmocka_unit_test(test_budget_through_every_entry),
-        cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
-        cmocka_unit_test(test_budget_builds_compact_where_only_that_fits),
-    };
-    return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);
-}
+MESH_FIXTURE_MAIN("test_scene", cmocka_unit_test(test_parser_errors), cmocka_unit_test(test_line_limits),
+                                cmocka_unit_test(test_file_errors),
+                                cmocka_unit_test(test_the_largest_scenes_are_framed_from_outside_them),
+                                cmocka_unit_test(test_defaults), cmocka_unit_test(test_bvh_through_every_entry),
+                                cmocka_unit_test(test_budget_through_every_entry),
+                                cmocka_unit_test(test_scene_budget_covers_every_mesh_line),
+                                cmocka_unit_test(test_budget_builds_compact_where_only_that_fits))

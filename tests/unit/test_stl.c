@@ -80,34 +80,5 @@ static void test_stl_binary(void **state)
     ao_mesh_finish(&ascii);
 }
 
-/* Each bad STL fixture, where its one error line must point, and what it must say. */
-static const struct {
-    const char *name, *location, *message;
-} bad_inputs[] = {
-    {"bad_stl_outside.stl", ":3: ", "'vertex' outside 'outer loop'"},
-    {"bad_stl_two.stl", ":6: ", "loop with 2 vertices; at least 3 needed"},
-    {"bad_stl_keyword.stl", ":6: ", "unknown STL keyword 'vertx'"},
-    {"bad_stl_unended.stl", ":6: ", "file ends inside a facet"},
-    {"bad_stl_number.stl", ":4: ", "bad number 'nan'"},
-    {"bad_stl_size.stl", ": ", "declares 2 triangles (184 bytes) but the file has 134 bytes"},
-};
-
-/* Every bad fixture fails with its one line and an empty mesh. */
-static void test_bad_inputs(void **state)
-{
-    (void)state;
-    for (size_t i = 0; i < sizeof bad_inputs / sizeof bad_inputs[0]; i++)
-        expect_failure(fixture(bad_inputs[i].name), bad_inputs[i].location, bad_inputs[i].message);
-}
-
-int main(void)
-{
-    if (!mesh_fixture_begin("test_stl"))
-        return 77;
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_stl_ascii),
-        cmocka_unit_test(test_stl_binary),
-        cmocka_unit_test(test_bad_inputs),
-    };
-    return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);
-}
+MESH_FIXTURE_MAIN("test_stl", cmocka_unit_test(test_stl_ascii), cmocka_unit_test(test_stl_binary),
+                              bad_inputs_test(".stl"))

@@ -11,6 +11,7 @@
 
 #include "rng.h"
 #include "sum.h"
+#include "unit_main.h"
 
 /* A random 64-bit word from (stream, counter). */
 static uint64_t hash(uint64_t stream, uint64_t counter)
@@ -137,13 +138,5 @@ static void test_many_addends(void **state)
     assert_true(ao_sum_value(&s) == x * (double)(1 << 22));
 }
 
-int main(void)
-{
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_known_totals),
-        cmocka_unit_test(test_random_sums_round_once),
-        cmocka_unit_test(test_parts_combine_as_integers),
-        cmocka_unit_test(test_many_addends),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
-}
+UNIT_TEST_MAIN(cmocka_unit_test(test_known_totals), cmocka_unit_test(test_random_sums_round_once),
+               cmocka_unit_test(test_parts_combine_as_integers), cmocka_unit_test(test_many_addends))

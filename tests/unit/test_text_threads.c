@@ -30,7 +30,7 @@ enum { THREADS = 4, ROUNDS = 20 };
 /* The fixtures' folder and this run's scratch folder. */
 static char source_root[4096], temp_dir[4096];
 
-/* A bent strip of two triangles (tests/unit/test_scene_arrays.c's start). */
+/* A bent strip of two triangles (tests/unit/test_scene_load_arrays.c's start). */
 static const float POSITIONS[] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
 static const uint32_t INDICES[] = {2, 1, 0, 0, 2, 3};
 

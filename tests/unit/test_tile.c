@@ -10,6 +10,7 @@
 
 #include "rng.h"
 #include "tile.h"
+#include "unit_main.h"
 
 static void rect_clips_to_the_image(void **state)
 {
@@ -145,13 +146,5 @@ static void adaptive_rule(void **state)
     assert_true(ao_tile_wanted(&ts, 256, 100, true, 16, 1.0));
 }
 
-int main(void)
-{
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(rect_clips_to_the_image),
-        cmocka_unit_test(auto_passes_double),
-        cmocka_unit_test(error_estimate_is_unbiased),
-        cmocka_unit_test(adaptive_rule),
-    };
-    return cmocka_run_group_tests(tests, NULL, NULL);
-}
+UNIT_TEST_MAIN(cmocka_unit_test(rect_clips_to_the_image), cmocka_unit_test(auto_passes_double),
+               cmocka_unit_test(error_estimate_is_unbiased), cmocka_unit_test(adaptive_rule))

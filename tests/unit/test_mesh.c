@@ -59,10 +59,7 @@ static void test_degenerate_counted(void **state)
 {
     (void)state;
     struct ao_mesh mesh;
-    load_ok(&mesh, fixture("degenerate.obj"));
-    assert_mesh_valid(&mesh);
-    assert_int_equal(mesh.vertex_count, 5);
-    assert_int_equal(mesh.triangle_count, 1);
+    load_counted(&mesh, fixture("degenerate.obj"), 5, 1);
     assert_int_equal(mesh.degenerate_count, 3);
     assert_triangle(&mesh, 0, 0, 1, 2);
     assert_vec3_near(mesh.normals[0], 0, 0, 1);
@@ -376,20 +373,9 @@ static void test_bunny(void **state)
     ao_mesh_finish(&mesh);
 }
 
-int main(void)
-{
-    if (!mesh_fixture_begin("test_normals"))
-        return 77;
-    const struct CMUnitTest tests[] = {
-        cmocka_unit_test(test_degenerate_counted),
-        cmocka_unit_test(test_compute_normals),
-        cmocka_unit_test(test_normals_any_thread_count),
-        cmocka_unit_test(test_crease_cube),
-        cmocka_unit_test(test_crease_keeps_a_smooth_mesh),
-        cmocka_unit_test(test_crease_many_triangles_at_a_vertex),
-        cmocka_unit_test(test_crease_fans_without_a_shared_edge),
-        cmocka_unit_test(test_invalid_normals),
-        cmocka_unit_test(test_bunny),
-    };
-    return cmocka_run_group_tests(tests, mesh_fixture_setup, mesh_fixture_teardown);
-}
+MESH_FIXTURE_MAIN("test_mesh", cmocka_unit_test(test_degenerate_counted), cmocka_unit_test(test_compute_normals),
+                               cmocka_unit_test(test_normals_any_thread_count), cmocka_unit_test(test_crease_cube),
+                               cmocka_unit_test(test_crease_keeps_a_smooth_mesh),
+                               cmocka_unit_test(test_crease_many_triangles_at_a_vertex),
+                               cmocka_unit_test(test_crease_fans_without_a_shared_edge),
+                               cmocka_unit_test(test_invalid_normals), cmocka_unit_test(test_bunny))

@@ -798,7 +798,7 @@ static double polyhedron_form_factor(const double (*tri)[3][3], size_t count, co
     return total;
 }
 
-/* test_stability.c's contact test inside instances, far from the origin: a unit sphere mesh (a
+/* test_ao_stability.c's contact test inside instances, far from the origin: a unit sphere mesh (a
  * polyhedron of 180 rings of 360 vertices, radial normals) rotated and scaled to radius r, resting
  * on a ground quad of +-20 r, both placed at (T, T, T) by glTF node transforms and both instanced
  * (their own frames around (0, 0, 0), the node maps carrying them out to T); r = 1 at T = 0 (the

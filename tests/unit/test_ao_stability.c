@@ -356,6 +356,17 @@ static void test_sphere_on_ground_matches_the_closed_form_anywhere(void **state)
     }
 }
 
+/* The source tree, where the bunny is; the test is skipped without it. */
+static const char *bunny_root(void)
+{
+    const char *root = getenv("AO_SOURCE_ROOT");
+    if (!root) {
+        print_message("AO_SOURCE_ROOT is not set (run it through meson test): no bunny to load\n");
+        skip();
+    }
+    return root;
+}
+
 static void test_default_scene_renders_the_same_far_from_the_origin(void **state)
 {
     (void)state;
@@ -367,11 +378,7 @@ static void test_default_scene_renders_the_same_far_from_the_origin(void **state
      * agree but for a few values. Bound: at most 0.1 % of the values differ. (Placed in world
      * floats, where 1e6 is good to 0.06, 62 % of the values differed, by up to 0.68, at 160x120
      * and 256 samples.) */
-    const char *root = getenv("AO_SOURCE_ROOT");
-    if (!root) {
-        print_message("AO_SOURCE_ROOT is not set (run it through meson test): no bunny to load\n");
-        skip();
-    }
+    const char *root = bunny_root();
     enum { W = 80, H = 60, SPP = 64 };
     float *rgb[2];
     for (int k = 0; k < 2; k++) {
@@ -472,11 +479,7 @@ static void test_scenes_at_the_ends_of_the_size_range_render_as_at_size_1(void *
      * (docs/stability.md): the sphere's ground, a quarter of the smallest size across, occludes
      * itself (90.6 % of the values differ, mean 0.049 against 0.731); at twice the largest size the
      * normals overflow (90.2 %, mean 0.513). And one step outside the range, the scene is refused. */
-    const char *root = getenv("AO_SOURCE_ROOT");
-    if (!root) {
-        print_message("AO_SOURCE_ROOT is not set (run it through meson test): no bunny to load\n");
-        skip();
-    }
+    const char *root = bunny_root();
     enum { W = 64, H = 48, SPP = 32 };
     static const struct {
         int kind, log2_size;   /* the scene at 2^log2_size across */
