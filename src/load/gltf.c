@@ -28,7 +28,7 @@
 
 #include <json.h>
 
-#include "load/gltf.h"
+#include "gltf.h"
 
 /* JSON nesting depth accepted (glTF needs 6 or so; deep nesting is an attack on the parser). */
 #define MAX_DEPTH 64

@@ -9,11 +9,11 @@
 #include <strings.h>
 #include <unistd.h>
 
+#include "draco.h"
 #include "file.h"
-#include "load/draco.h"
-#include "load/gltf.h"
-#include "load/meshopt.h"
-#include "load/quantize.h"
+#include "gltf.h"
+#include "meshopt.h"
+#include "quantize.h"
 
 /* GLB container constants: magic "glTF", chunk types "JSON" and "BIN\0". */
 enum { GLB_MAGIC = 0x46546C67, GLB_JSON = 0x4E4F534A, GLB_BIN = 0x004E4942, GLB_HEADER = 12 };

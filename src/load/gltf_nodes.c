@@ -7,7 +7,7 @@
 
 #include <json.h>
 
-#include "load/gltf.h"
+#include "gltf.h"
 
 /* A node's place in the tree. */
 enum { NODE_UNSEEN, NODE_WALKING, NODE_CHECKED };

@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load/loader.h"
+#include "loader.h"
 
 /* Parsed indices saturate here, far above any possible vertex count. */
 #define INDEX_SATURATION 1000000000000000LL
