@@ -1,5 +1,5 @@
 /* What the mesh loaders share (see loader.h): growth arrays, line tokens, numbers, error lines. */
-#include "load/loader.h"
+#include "loader.h"
 
 #include <float.h>
 #include <math.h>

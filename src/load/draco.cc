@@ -8,7 +8,7 @@
 // ao_draco_decode, where each allocation is counted and one that would hold more than the cap at
 // once fails (std::bad_alloc, or NULL for the nothrow forms, which libdraco checks). So the scene
 // budget bounds what decoding takes, before it is allocated, whatever the stream claims.
-#include "load/draco.h"
+#include "draco.h"
 
 #include <malloc.h>
 

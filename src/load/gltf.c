@@ -28,7 +28,7 @@
 
 #include <json.h>
 
-#include "load/gltf_reader.h"
+#include "gltf_reader.h"
 #include "text.h"
 
 /* JSON nesting depth accepted (glTF needs 6 or so; deep nesting is an attack on the parser). */

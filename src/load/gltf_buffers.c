@@ -8,8 +8,8 @@
 #include <unistd.h>
 
 #include "file.h"
-#include "load/gltf_reader.h"
-#include "load/meshopt.h"
+#include "gltf_reader.h"
+#include "meshopt.h"
 
 /* GLB container constants: magic "glTF", chunk types "JSON" and "BIN\0". */
 enum { GLB_MAGIC = 0x46546C67, GLB_JSON = 0x4E4F534A, GLB_BIN = 0x004E4942, GLB_HEADER = 12 };

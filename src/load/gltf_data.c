@@ -7,9 +7,9 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load/draco.h"
-#include "load/gltf_reader.h"
-#include "load/quantize.h"
+#include "draco.h"
+#include "gltf_reader.h"
+#include "quantize.h"
 #include "text.h"
 
 /* Reports "path: message" and returns false. */

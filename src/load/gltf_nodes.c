@@ -7,7 +7,7 @@
 
 #include <json.h>
 
-#include "load/gltf_reader.h"
+#include "gltf_reader.h"
 
 /* A node's place in the tree. */
 enum { NODE_UNSEEN, NODE_WALKING, NODE_CHECKED };

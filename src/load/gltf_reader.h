@@ -11,8 +11,8 @@
 
 #include <json.h>
 
-#include "load/draco.h"
-#include "load/loader.h"
+#include "draco.h"
+#include "loader.h"
 
 /* The deepest node tree aoview reads: a node under more ancestors than this is refused (real files
  * nest a few dozen deep; the tree is walked without recursion, so this bounds nothing but trust). */

@@ -2,7 +2,7 @@
  * folder (one file per format, each given the file mapped), the common end of a load (degenerate
  * triangles dropped, the normals a file lacks made as its format means them: mesh.c), and a
  * model's placements applied for those who want one mesh. */
-#include "load/load.h"
+#include "load.h"
 
 #include <math.h>
 #include <stdarg.h>
@@ -14,7 +14,7 @@
 #include <sys/stat.h>
 
 #include "file.h"
-#include "load/loader.h"
+#include "loader.h"
 #include "text.h"
 
 /* ------------------------------------------------------------------ entry points */

@@ -2,7 +2,7 @@
  * for untrusted data (their documentation's word, and the fuzz targets replay such data), but
  * they assert their size arguments, and Debian builds them with assertions on: ao_meshopt_check
  * refuses what they would assert before any call. */
-#include "load/meshopt.h"
+#include "meshopt.h"
 
 #include <stdio.h>
 #include <string.h>

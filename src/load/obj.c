@@ -4,7 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load/loader.h"
+#include "loader.h"
 #include "text.h"
 
 /* Parsed indices saturate here, far above any possible vertex count. */

@@ -9,8 +9,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load/loader.h"
-#include "load/ply_reader.h"
+#include "loader.h"
+#include "ply_reader.h"
 #include "text.h"
 
 bool ao_ply_error(const struct ply_reader *r, const char *format, ...)

@@ -5,7 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load/ply_reader.h"
+#include "ply_reader.h"
 
 /* Names (classic and sized alias), byte sizes and signedness of the PLY scalar types. */
 const struct ply_type_info ao_ply_types[PLY_TYPE_COUNT] = {

@@ -8,7 +8,7 @@
 #include <stdint.h>
 
 #include "budget.h"
-#include "load/loader.h"
+#include "loader.h"
 
 /* PLY scalar types, indexing ao_ply_types. */
 enum ply_type { PLY_INT8, PLY_UINT8, PLY_INT16, PLY_UINT16, PLY_INT32, PLY_UINT32, PLY_FLOAT32,

@@ -1,5 +1,5 @@
 /* Accessor components as numbers (KHR_mesh_quantization); see quantize.h. */
-#include "load/quantize.h"
+#include "quantize.h"
 
 #include <stdint.h>
 #include <string.h>

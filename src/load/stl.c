@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load/loader.h"
+#include "loader.h"
 #include "text.h"
 
 /* Bytes of the binary header, of its triangle count and of one triangle record. */

@@ -7,7 +7,7 @@
  * so a symbolic link anywhere on the way is refused rather than followed, and no path is looked up
  * twice: what is checked is what is opened. (realpath and a prefix comparison would allow links
  * that stay inside, but the file could change between the check and the open.) */
-#include "load/loader.h"
+#include "loader.h"
 
 #include <errno.h>
 #include <fcntl.h>

@@ -14,6 +14,7 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
+#include "ao_shaders.h"
 #include "bench_util.h"
 #include "config.h"
 #include "display.h"
@@ -21,7 +22,6 @@
 #include "hud.h"
 #include "image.h"
 #include "program.h"
-#include "shaders/ao_shaders.h"
 
 enum { REPEATS = 9 };
 

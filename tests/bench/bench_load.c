@@ -14,7 +14,7 @@
 #include <string.h>
 
 #include "bench_util.h"
-#include "load/load.h"
+#include "load.h"
 #include "mesh.h"
 #include "program.h"
 

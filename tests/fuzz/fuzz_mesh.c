@@ -10,7 +10,7 @@
 #include <stdlib.h>
 
 #include "fuzz.h"
-#include "load/load.h"
+#include "load.h"
 #include "mesh.h"
 
 #ifndef AO_FUZZ_EXT

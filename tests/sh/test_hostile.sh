@@ -230,7 +230,7 @@ rm -rf model secret
 
 # ---- sizes the tracer cannot render: a mesh 1e18 across tripped Embree's assertion (status 134),
 # 1e14 rendered black, 1e20 blamed a camera the user never wrote, 1e-21 aborted too; a camera as
-# far out, or one aimed by a hair's breadth. The range is derived in src/scene_place.c.
+# far out, or one aimed by a hair's breadth. The range is derived in src/scene/scene_place.c.
 for size in 1e18 1e14 1e20 1e-21 1e9; do
   printf 'v 0 0 0\nv %s 0 0\nv 0 %s 0\nv 0 0 %s\nf 1 2 3\nf 1 3 4\nf 1 4 2\n' $size $size $size > big.obj
   across=$(python3 -c "print('%.3g' % (50 * $size))")

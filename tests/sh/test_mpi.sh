@@ -237,7 +237,7 @@ differ)
     cmp -s copy.scene "$spheres" || fail "--stats onto the scene was not refused once (status $status): $(cat mismatch.err)"
   ;;
 slow)
-  # Rank 1 sleeps 3 ms a tile (AO_MPI_TEST_DELAY_US, read by src/cluster.c for this test only),
+  # Rank 1 sleeps 3 ms a tile (AO_MPI_TEST_DELAY_US, read by src/mpi/cluster.c for this test only),
   # some 30 times a 16x16 tile's cost at these settings here. Rank 0 then traces most tiles: once
   # its own are done it borrows rank 1's untraced ones in proportion to their speeds (about 30 to
   # 1), so rank 1 traces the few it begins before a loan comes; without loans it would trace its

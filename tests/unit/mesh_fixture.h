@@ -13,7 +13,7 @@
 
 #include "budget.h"
 #include "capture.h"
-#include "load/load.h"
+#include "load.h"
 #include "mesh.h"
 
 /* Where the committed fixtures are, and the scratch folder of this run. */

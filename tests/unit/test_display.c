@@ -13,6 +13,7 @@
 
 #include <cmocka.h>
 
+#include "ao_shaders.h"
 #include "display.h"
 #include "glapi.h"
 #include "headless.h"
@@ -21,7 +22,6 @@
 #include "sampling.h"
 #include "scene.h"
 #include "scene_load.h"
-#include "shaders/ao_shaders.h"
 #include "tracer.h"
 
 /* After glcorearb.h (through glapi.h): the GL/gl.h it includes would hide the 1.1 typedefs. */

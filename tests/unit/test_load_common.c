@@ -11,7 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "load/loader.h"
+#include "loader.h"
 
 /* Checks one token against strtod and strtof: the same bits, and the same verdict. */
 static void assert_number_as_libc(const char *token)

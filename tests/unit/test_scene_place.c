@@ -15,7 +15,7 @@
 #include <unistd.h>
 
 #include "ao.h"
-#include "load/load.h"
+#include "load.h"
 #include "mesh.h"
 #include "render.h"
 #include "render_image.h"

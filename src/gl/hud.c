@@ -8,9 +8,9 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "ao_shaders.h"
 #include "progress.h"
 #include "sampling.h"
-#include "shaders/ao_shaders.h"
 
 /* stb_easy_font is a header of static functions, not all used here, written in an older style. */
 #pragma GCC diagnostic push

@@ -10,7 +10,7 @@
 
 #include <sys/stat.h>
 
-#include "load/load.h"
+#include "load.h"
 #include "text.h"
 
 bool ao_cursor_fail(const struct ao_cursor *c, const char *fmt, ...)

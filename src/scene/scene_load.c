@@ -8,7 +8,7 @@
 #include <strings.h>
 
 #include "file.h"
-#include "load/load.h"
+#include "load.h"
 #include "scene_parse.h"
 #include "scene_place.h"
 #include "text.h"

@@ -8,9 +8,9 @@
 #include <string.h>
 #include <time.h>
 
+#include "ao_shaders.h"
 #include "clock.h"
 #include "image.h"
-#include "shaders/ao_shaders.h"
 
 /* Letterbox bars: dark grey, so that they stay apart from fully occluded (black) pixels. */
 #define BAR_GREY 0.12f
