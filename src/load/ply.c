@@ -3,7 +3,6 @@
  * size before anything is allocated for them. Errors name the line (header, ascii) or the
  * element row (binary). */
 #include <math.h>
-#include <stdarg.h>
 #include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -11,33 +10,6 @@
 
 #include "loader.h"
 #include "ply_reader.h"
-#include "text.h"
-
-bool ao_ply_error(const struct ply_reader *r, const char *format, ...)
-{
-    /* In a binary body, the element's row where a text one has its line. */
-    bool row = r->binary && r->element;
-    char place[AO_TEXT_SIZE + 4096];
-    if (row)
-        snprintf(place, sizeof place, "%s: %.*s %llu", r->path, ao_load_span_length(r->element->name),
-                 r->element->name.begin, (unsigned long long)r->row_index);
-    va_list args;
-    va_start(args, format);
-    ao_text_vreport_at(row ? place : r->path, row ? 0 : r->line, format, args);
-    va_end(args);
-    return false;
-}
-
-bool ao_ply_within_budget(const struct ply_reader *r, uint64_t triangles, uint64_t vertices)
-{
-    uint64_t charge = ao_budget_charge(r->budget, triangles, vertices, 0);
-    if (ao_budget_fits(r->budget, charge))
-        return true;
-    char why[200];
-    ao_budget_explain(r->budget, charge, why, sizeof why);
-    return ao_ply_error(r, "%llu triangles and %llu vertices %s", (unsigned long long)triangles,
-                     (unsigned long long)vertices, why);
-}
 
 /* Decodes the little-endian bytes of one value of a PLY type. */
 static double decode(enum ply_type type, const unsigned char *bytes)

@@ -1,11 +1,14 @@
 /* The PLY reader's header (see ply_reader.h): the format line, the elements and their properties
  * read, the vertex and face elements and the properties aoview uses found, and a binary header's
- * counts checked against the file size before anything is allocated for them. */
+ * counts checked against the file size before anything is allocated for them; and the reader's
+ * error lines. */
+#include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "ply_reader.h"
+#include "text.h"
 
 /* Names (classic and sized alias), byte sizes and signedness of the PLY scalar types. */
 const struct ply_type_info ao_ply_types[PLY_TYPE_COUNT] = {
@@ -18,6 +21,32 @@ const struct ply_type_info ao_ply_types[PLY_TYPE_COUNT] = {
     [PLY_FLOAT32] = {"float", "float32", 4, false},
     [PLY_FLOAT64] = {"double", "float64", 8, false},
 };
+
+bool ao_ply_error(const struct ply_reader *r, const char *format, ...)
+{
+    /* In a binary body, the element's row where a text one has its line. */
+    bool row = r->binary && r->element;
+    char place[AO_TEXT_SIZE + 4096];
+    if (row)
+        snprintf(place, sizeof place, "%s: %.*s %llu", r->path, ao_load_span_length(r->element->name),
+                 r->element->name.begin, (unsigned long long)r->row_index);
+    va_list args;
+    va_start(args, format);
+    ao_text_vreport_at(row ? place : r->path, row ? 0 : r->line, format, args);
+    va_end(args);
+    return false;
+}
+
+bool ao_ply_within_budget(const struct ply_reader *r, uint64_t triangles, uint64_t vertices)
+{
+    uint64_t charge = ao_budget_charge(r->budget, triangles, vertices, 0);
+    if (ao_budget_fits(r->budget, charge))
+        return true;
+    char why[200];
+    ao_budget_explain(r->budget, charge, why, sizeof why);
+    return ao_ply_error(r, "%llu triangles and %llu vertices %s", (unsigned long long)triangles,
+                     (unsigned long long)vertices, why);
+}
 
 /* Vertex property names by role. */
 static const char *const role_names[ROLE_INDICES] = {NULL, "x", "y", "z", "nx", "ny", "nz"};

@@ -10,7 +10,7 @@
 
 #include "clock.h"
 #include "direct.h"
-#include "tracer_bench.h"
+#include "ray_recorder.h"
 #include "tracer_private.h"
 #if defined(__SSE__)
 #include <pmmintrin.h>

@@ -6,19 +6,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "ray.h"
+#include "ray_recorder.h"
 #include "tracer.h"
-
-/* Benchmark instrument: copies of every stride-th packet (eye rays) or whole batch (occlusion rays,
- * 16 to a packet) offered, up to capacity packets; an occlusion recorder also times Embree's calls
- * on all the rays it is offered. */
-struct ao_ray_recorder {
-    struct ao_packet *packets;
-    size_t count, capacity;
-    size_t stride, seen;
-    double embree_seconds;   /* inside rtcOccluded1M */
-    uint64_t embree_rays;
-};
 
 /* While set, ao_tracer_occluded offers `occlusion` its batches and times its Embree calls, and
  * ao_tracer_intersect offers `eye` its packets; NULL stops. For a renderer with one thread only

@@ -12,11 +12,11 @@
 #include <embree3/rtcore.h>
 
 #include "ray.h"
+#include "ray_recorder.h"
 #include "scene.h"
 #include "text.h"
 #include "tracer.h"
 
-struct ao_ray_recorder;
 
 /* One build of a scene's BVHs: the top level (flat meshes, instances, spheres) and, per scene mesh,
  * its own BVH when instances place it, else NULL. */
@@ -92,12 +92,5 @@ static inline void ao_embree_ray(float ox, float oy, float oz, float dx, float d
     out->flags = 0;
 }
 
-/* Offers the eye-ray recorder a packet: its slot for a copy when this is the stride-th packet
- * offered and there is room, else NULL (tracer_bench.c). */
-struct ao_packet *ao_ray_recorder_slot(struct ao_ray_recorder *rec);
-
-/* Offers the occlusion recorder the batch; it keeps every stride-th whole, in order, 16 rays to a
- * packet (so that a ceiling traced on the sample sees rays as coherent as aoview's batches). */
-void ao_ray_recorder_keep(struct ao_ray_recorder *rec, const struct ao_batch *rays);
 
 #endif
