@@ -1,5 +1,5 @@
 /* A triangle mesh given as arrays, with its own Embree BVH, for batches of rays: the Python module's
- * ray_mesh_intersect (python/aoview/_core.c). */
+ * ray_mesh_intersect (python/aoview/rays.c). */
 #ifndef AO_TRACER_ARRAYS_H
 #define AO_TRACER_ARRAYS_H
 
