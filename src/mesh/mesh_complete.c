@@ -31,7 +31,7 @@ bool ao_mesh_complete_normals(struct ao_mesh *mesh, const char *path, double cre
     struct cone cone = {.given = mesh->normals, .cos_half = cos(crease * degree / 2.0)};
     bool creased = crease < 180.0;
     if (creased) {
-        cone.at = malloc(n * sizeof *cone.at);
+        cone.at = calloc(n, sizeof *cone.at);
         cone.marked = malloc(n);
         if (cone.at)
             ao_mesh_advise_huge(cone.at, n * sizeof *cone.at);

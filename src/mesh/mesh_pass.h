@@ -48,15 +48,12 @@ struct mesh_pass {
     struct crease *crease;              /* the crease passes' arrays */
 };
 
-/* What a normals pass gathers at a vertex for the crease angle: the first of its triangles' unit
- * normals (f), the least dot product of the others with it, the sum of its corners' angles, the
- * sum of a hash of each corner's next neighbour less one of its previous neighbour, and its first
- * and last triangles (32 bits: a mesh with a crease has fewer than 2^32 corners). */
+/* What a normals pass gathers at a vertex for the crease angle, in 16 bytes (allocated zero): the
+ * sum of its corners' angles (W) and the least of them, each at least 2^-149 (float's least), and
+ * the sum of a hash of each corner's next neighbour less one of its previous neighbour. */
 struct cone_vertex {
-    float first[3], nearest;
-    double angle_sum;
+    float angle_sum, narrowest;
     uint64_t link;
-    uint32_t from, to;
 };
 
 /* The check a normals pass makes for the crease angle, when asked: per vertex what it gathers, and
