@@ -146,20 +146,26 @@ static void find_part(void *user, int k)
     const uint32_t *indices = pass->mesh->indices;
     size_t first = ao_mesh_part_start(pass->mesh->triangle_count, k, pass->threads);
     size_t end = ao_mesh_part_start(pass->mesh->triangle_count, k + 1, pass->threads);
-    for (size_t c = 3 * first; c < 3 * end; c++) {
-        if (!cr->marked[indices[c]])
+    const unsigned char *marked = cr->marked;
+    for (size_t t = first; t < end; t++) {
+        const uint32_t *v = indices + 3 * t;
+        if (!(marked[v[0]] | marked[v[1]] | marked[v[2]]))
             continue;
-        if (f->count == f->capacity) {
-            size_t capacity = f->capacity ? 2 * f->capacity : 1024;
-            uint64_t *pairs = realloc(f->pairs, capacity * sizeof *pairs);
-            if (!pairs) {
-                cr->failed = true;
-                return;
+        for (int j = 0; j < 3; j++) {
+            if (!marked[v[j]])
+                continue;
+            if (f->count == f->capacity) {
+                size_t capacity = f->capacity ? 2 * f->capacity : 1024;
+                uint64_t *pairs = realloc(f->pairs, capacity * sizeof *pairs);
+                if (!pairs) {
+                    cr->failed = true;
+                    return;
+                }
+                f->pairs = pairs, f->capacity = capacity;
+                ao_mesh_advise_huge(pairs, capacity * sizeof *pairs);
             }
-            f->pairs = pairs, f->capacity = capacity;
-            ao_mesh_advise_huge(pairs, capacity * sizeof *pairs);
+            f->pairs[f->count++] = (uint64_t)cr->slot[v[j]] << 32 | (3 * t + (size_t)j);
         }
-        f->pairs[f->count++] = (uint64_t)cr->slot[indices[c]] << 32 | c;
     }
 }
 

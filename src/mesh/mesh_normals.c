@@ -23,9 +23,9 @@ static inline uint64_t vertex_hash(uint32_t v)
  * neighbour's is link, to what the cone gathers there. */
 static inline void gather_corner(struct cone_vertex *at, double angle, uint64_t link)
 {
-    float a = (float)angle > FLT_TRUE_MIN ? (float)angle : FLT_TRUE_MIN;
-    at->narrowest = at->angle_sum == 0.0f || a < at->narrowest ? a : at->narrowest;
-    at->angle_sum += a;
+    float gap = (float)(4.0 - angle);
+    at->four_less_narrowest = gap > at->four_less_narrowest ? gap : at->four_less_narrowest;
+    at->angle_sum += (float)angle;
     at->link += link;
 }
 
@@ -43,19 +43,23 @@ static inline void gather_corner(struct cone_vertex *at, double angle, uint64_t 
  * (1) from the sums alone: for m the direction of S = sum a_j u_j and W = sum a_j,
  * sum a_j (1 - u_j . m) = W - |S|, each term at least 0, so 1 - u_j . m <= (W - |S|) / min a_j for
  * every j. The float figures are bounded: with k corners, k + 1 <= K = 1.02 W / min a_j + 2 while
- * K 2^-24 <= 0.01 and min a_j >= 2^-126 (else marked); W's float sum lies within a factor 1 + K 2^-23 of W, S's (its
- * shares and sums rounded) within 4 K 2^-24 W of S, min a_j within 2^-23 of its float; 1e-6 covers
- * the dot products' rounding in sides_of. A vertex without triangles is one side; one given a normal
- * is never split. */
+ * every j. The float figures are bounded: min a_j from below by 4 less its float, less 2^-21 (the
+ * rounding of floats near 4 is at most 2^-23), and marked where that is under 2^-126 (a corner
+ * under about 5e-7 radians); with k corners, k + 1 <= K = 1.02 W / min a_j + 2 while
+ * K 2^-24 <= 0.01 (else marked); W's float sum lies within a factor 1 + K 2^-23 of W, S's (its
+ * shares and sums rounded) within 4 K 2^-24 W of S; 1e-6 covers the dot products' rounding in
+ * sides_of. A vertex without triangles is one side; one given a normal is never split. */
 static bool needs_sides(const struct cone *cone, size_t i, struct ao_vec3 sum)
 {
     const struct cone_vertex *at = &cone->at[i];
-    if (at->angle_sum == 0.0f || (cone->given && !ao_mesh_normal_is_missing(cone->given[i])))
+    if (at->four_less_narrowest == 0.0f || (cone->given && !ao_mesh_normal_is_missing(cone->given[i])))
         return false;
     const double four_pi = 4.0 * 3.14159265358979323846, unit = 1.0 / 16777216.0;   /* 2^-24 */
-    double w = at->angle_sum, inverse = 1.0 / (at->narrowest * (1.0 - 2.0 * unit));
-    double k = 1.02 * w * inverse + 2.0;
-    if (!(k * unit <= 0.01) || at->link != 0 || at->narrowest < FLT_MIN)
+    double narrowest = 4.0 - at->four_less_narrowest - 8.0 * unit;   /* at most min a_j */
+    if (at->link != 0 || !(narrowest >= FLT_MIN))
+        return true;
+    double w = at->angle_sum, inverse = 1.0 / narrowest, k = 1.02 * w * inverse + 2.0;
+    if (!(k * unit <= 0.01))
         return true;
     double w_up = w * (1.0 + 2.0 * k * unit);
     double length = sqrt((double)sum.x * sum.x + (double)sum.y * sum.y + (double)sum.z * sum.z);

@@ -49,10 +49,11 @@ struct mesh_pass {
 };
 
 /* What a normals pass gathers at a vertex for the crease angle, in 16 bytes (allocated zero): the
- * sum of its corners' angles (W) and the least of them, each at least 2^-149 (float's least), and
- * the sum of a hash of each corner's next neighbour less one of its previous neighbour. */
+ * sum of its corners' angles (W); 4 less the least of them (0 until a corner comes: 4 > pi, so
+ * that the least is a maximum, kept without a branch); and the sum of a hash of each corner's next
+ * neighbour less one of its previous neighbour. */
 struct cone_vertex {
-    float angle_sum, narrowest;
+    float angle_sum, four_less_narrowest;
     uint64_t link;
 };
 
