@@ -31,10 +31,12 @@ bool ao_mesh_complete_normals(struct ao_mesh *mesh, const char *path, double cre
     struct cone cone = {.given = mesh->normals, .cos_half = cos(crease * degree / 2.0)};
     bool creased = crease < 180.0;
     if (creased) {
-        cone.at = malloc(n * sizeof *cone.at);
+        cone.at = calloc(n, sizeof *cone.at);
         cone.marked = malloc(n);
-        if (cone.at)
+        if (cone.at && cone.marked) {
             ao_mesh_advise_huge(cone.at, n * sizeof *cone.at);
+            ao_mesh_advise_huge(cone.marked, n);
+        }
     }
     bool ok = smooth && (!creased || (cone.at && cone.marked));
     size_t marked = 0;

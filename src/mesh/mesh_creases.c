@@ -25,9 +25,7 @@ struct found {
  * first new vertex of each. */
 struct crease {
     const unsigned char *marked;    /* vertex_count: 1 where the vertex's sides must be found */
-    const struct cone_vertex *at;   /* vertex_count: what the normals pass gathered */
     size_t count;                   /* marked vertices */
-    unsigned char *blocks;          /* per BLOCK triangles: 1 where a marked vertex has a triangle */
     uint32_t *ids;                  /* count: the marked vertices, ascending */
     uint32_t *slot;                 /* vertex_count: each marked vertex's slot (others: not set) */
     struct found found[AO_MESH_PASS_THREADS];
@@ -139,10 +137,6 @@ static uint32_t most_corners(const struct mesh_pass *pass, int k)
     return most;
 }
 
-/* The listing pass reads the triangles in blocks of so many, only those where a marked vertex has
- * triangles (between its first and its last). */
-enum { BLOCK = 4096 };
-
 /* The listing pass over part k of the triangles: the marked vertices' corners found there. */
 static void find_part(void *user, int k)
 {
@@ -152,12 +146,13 @@ static void find_part(void *user, int k)
     const uint32_t *indices = pass->mesh->indices;
     size_t first = ao_mesh_part_start(pass->mesh->triangle_count, k, pass->threads);
     size_t end = ao_mesh_part_start(pass->mesh->triangle_count, k + 1, pass->threads);
-    for (size_t t = first; t < end; t = (t / BLOCK + 1) * BLOCK) {
-        if (!cr->blocks[t / BLOCK])
+    const unsigned char *marked = cr->marked;
+    for (size_t t = first; t < end; t++) {
+        const uint32_t *v = indices + 3 * t;
+        if (!(marked[v[0]] | marked[v[1]] | marked[v[2]]))
             continue;
-        size_t stop = (t / BLOCK + 1) * BLOCK < end ? (t / BLOCK + 1) * BLOCK : end;
-        for (size_t c = 3 * t; c < 3 * stop; c++) {
-            if (!cr->marked[indices[c]])
+        for (int j = 0; j < 3; j++) {
+            if (!marked[v[j]])
                 continue;
             if (f->count == f->capacity) {
                 size_t capacity = f->capacity ? 2 * f->capacity : 1024;
@@ -169,7 +164,7 @@ static void find_part(void *user, int k)
                 f->pairs = pairs, f->capacity = capacity;
                 ao_mesh_advise_huge(pairs, capacity * sizeof *pairs);
             }
-            f->pairs[f->count++] = (uint64_t)cr->slot[indices[c]] << 32 | c;
+            f->pairs[f->count++] = (uint64_t)cr->slot[v[j]] << 32 | (3 * t + (size_t)j);
         }
     }
 }
@@ -187,25 +182,11 @@ static bool list_corners(struct mesh_pass *pass)
         return false;
     ao_mesh_advise_huge(cr->ids, cr->count * sizeof *cr->ids);
     ao_mesh_advise_huge(cr->slot, mesh->vertex_count * sizeof *cr->slot);
-    size_t blocks = mesh->triangle_count / BLOCK + 1;
-    int32_t *open = calloc(blocks + 1, sizeof *open);   /* marked vertices whose triangles begin, less end */
-    cr->blocks = malloc(blocks);
-    if (!open || !cr->blocks) {
-        free(open);
-        return false;
-    }
     for (size_t v = 0, m = 0; v < mesh->vertex_count; v++)
         if (cr->marked[v]) {
             cr->slot[v] = (uint32_t)m;
             cr->ids[m++] = (uint32_t)v;
-            open[cr->at[v].from / BLOCK]++;
-            open[cr->at[v].to / BLOCK + 1]--;
         }
-    for (size_t b = 0, inside = 0; b < blocks; b++) {
-        inside += (size_t)open[b];
-        cr->blocks[b] = inside > 0;
-    }
-    free(open);
     ao_mesh_run_parts(find_part, pass);
     size_t listed = 0;
     for (int k = 0; k < pass->threads; k++)
@@ -333,7 +314,7 @@ static bool add_split_vertices(struct ao_mesh *mesh, const struct crease *cr, si
 bool ao_mesh_split_creases(struct ao_mesh *mesh, const char *path, const struct cone *cone, size_t marked,
                            double cos_crease, const struct ao_budget *budget)
 {
-    struct crease crease = {.marked = cone->marked, .at = cone->at, .count = marked, .cos_crease = cos_crease};
+    struct crease crease = {.marked = cone->marked, .count = marked, .cos_crease = cos_crease};
     struct crease *cr = &crease;
     if (3 * (uint64_t)mesh->triangle_count > UINT32_MAX) {
         ao_text_report("%s: %zu triangles are too many for a crease angle (at most %u); --crease-angle 0 "
@@ -389,7 +370,6 @@ bool ao_mesh_split_creases(struct ao_mesh *mesh, const char *path, const struct 
         free(cr->found[k].pairs);
     free(cr->ids);
     free(cr->slot);
-    free(cr->blocks);
     free(cr->start);
     free(cr->corners);
     free(cr->side);

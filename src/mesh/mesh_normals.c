@@ -3,6 +3,8 @@
  * within its cone are marked for mesh_creases.c. */
 #include "mesh.h"
 
+#include <float.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -17,40 +19,52 @@ static inline uint64_t vertex_hash(uint32_t v)
     return (z ^ (z >> 29)) * 0xBF58476D1CE4E5B9u;
 }
 
-/* Adds a corner of triangle t, of unit normal u (in float) and angle `angle` at the vertex, whose
- * next neighbour's hash less its previous neighbour's is link, to what the cone gathers there. */
-static inline void gather_corner(struct cone_vertex *at, size_t t, struct ao_vec3 u, double angle, uint64_t link)
+/* Adds a corner of angle `angle` at the vertex, whose next neighbour's hash less its previous
+ * neighbour's is link, to what the cone gathers there. */
+static inline void gather_corner(struct cone_vertex *at, double angle, uint64_t link)
 {
-    if (at->angle_sum == 0.0) {
-        at->first[0] = u.x, at->first[1] = u.y, at->first[2] = u.z;
-        at->from = (uint32_t)t;
-    } else {
-        float d = u.x * at->first[0] + u.y * at->first[1] + u.z * at->first[2];
-        at->nearest = d < at->nearest ? d : at->nearest;
-    }
-    at->angle_sum += angle;
+    float gap = (float)(4.0 - angle);
+    at->four_less_narrowest = gap > at->four_less_narrowest ? gap : at->four_less_narrowest;
+    at->angle_sum += (float)angle;
     at->link += link;
-    at->to = (uint32_t)t;
 }
 
-/* Whether vertex i (gathered at `at`) must have its sides found edge by edge, or is one side for
- * certain, as sides_of would find it: where (1) every triangle's unit normal u_j lies within half
- * the crease angle (alpha) of the first's, f (dot products in float above cos alpha, with 1e-6
- * for their rounding), every two lie closer than the crease, and sides_of joins
- * every two corners that share an edge; (2) the corners' next and previous neighbours are the same
- * vertices as often (hash sums equal: a 2^-64 chance of being wrong otherwise), so that the corners
- * chain into closed fans, each corner's wedge ending on the edge where another's begins; and (3)
- * the angles sum to less than 4 pi cos alpha, the fans are one: seen along f, each wedge of angle a_j
- * and normal within alpha of f spans at most a_j / cos alpha (its unit sector's shadow, of area
+/* Whether vertex i (gathered at `at`, the sum of its normals' shares `sum` as the pass added it in
+ * float) must have its sides found edge by edge, or is one side for certain, as sides_of would
+ * find it: where (1) every triangle's unit normal u_j lies within half the crease angle (alpha) of
+ * one direction m, every two lie closer than the crease, and sides_of joins every two corners that
+ * share an edge; (2) the corners' next and previous neighbours are the same vertices as often
+ * (hash sums equal: a 2^-64 chance of being wrong otherwise), so that the corners chain into closed
+ * fans, each corner's wedge ending on the edge where another's begins; and (3) the angles sum to
+ * less than 4 pi cos alpha, the fans are one: seen along m, each wedge of angle a_j and normal
+ * within alpha of m spans at most a_j / cos alpha (its unit sector's shadow, of area
  * cos beta a_j / 2, holds the sector of radius cos beta of the shadow's angle), and each closed fan
- * at least 2 pi. A vertex without triangles is one side; one given a normal is never split. */
-static bool needs_sides(const struct cone *cone, size_t i)
+ * at least 2 pi.
+ * (1) from the sums alone: for m the direction of S = sum a_j u_j and W = sum a_j,
+ * sum a_j (1 - u_j . m) = W - |S|, each term at least 0, so 1 - u_j . m <= (W - |S|) / min a_j for
+ * every j. The float figures are bounded: with k corners, k + 1 <= K = 1.02 W / min a_j + 2 while
+ * every j. The float figures are bounded: min a_j from below by 4 less its float, less 2^-21 (the
+ * rounding of floats near 4 is at most 2^-23), and marked where that is under 2^-126 (a corner
+ * under about 5e-7 radians); with k corners, k + 1 <= K = 1.02 W / min a_j + 2 while
+ * K 2^-24 <= 0.01 (else marked); W's float sum lies within a factor 1 + K 2^-23 of W, S's (its
+ * shares and sums rounded) within 4 K 2^-24 W of S; 1e-6 covers the dot products' rounding in
+ * sides_of. A vertex without triangles is one side; one given a normal is never split. */
+static bool needs_sides(const struct cone *cone, size_t i, struct ao_vec3 sum)
 {
     const struct cone_vertex *at = &cone->at[i];
-    if (at->angle_sum == 0.0 || (cone->given && !ao_mesh_normal_is_missing(cone->given[i])))
+    if (at->four_less_narrowest == 0.0f || (cone->given && !ao_mesh_normal_is_missing(cone->given[i])))
         return false;
-    const double four_pi = 4.0 * 3.14159265358979323846;
-    return !(at->nearest > cone->cos_half + 1e-6 && at->link == 0 && at->angle_sum < four_pi * cone->cos_half);
+    const double four_pi = 4.0 * 3.14159265358979323846, unit = 1.0 / 16777216.0;   /* 2^-24 */
+    double narrowest = 4.0 - at->four_less_narrowest - 8.0 * unit;   /* at most min a_j */
+    if (at->link != 0 || !(narrowest >= FLT_MIN))
+        return true;
+    double w = at->angle_sum, inverse = 1.0 / narrowest, k = 1.02 * w * inverse + 2.0;
+    if (!(k * unit <= 0.01))
+        return true;
+    double w_up = w * (1.0 + 2.0 * k * unit);
+    double length = sqrt((double)sum.x * sum.x + (double)sum.y * sum.y + (double)sum.z * sum.z);
+    double least_dot = 1.0 - (w_up * (1.0 + 4.0 * k * unit) - length) * inverse;
+    return !(least_dot > cone->cos_half + 1e-6 && w_up < four_pi * cone->cos_half);
 }
 
 /* Angle-weighted vertex normals (Thürmer and Wüthrich 1998) of part k of the vertices: each
@@ -67,8 +81,6 @@ static inline void normals_of(struct mesh_pass *pass, int k, struct cone *cone)
     uint32_t first = (uint32_t)ao_mesh_part_start(mesh->vertex_count, k, pass->threads);
     uint32_t count = (uint32_t)ao_mesh_part_start(mesh->vertex_count, k + 1, pass->threads) - first;
     memset(out + first, 0, count * sizeof *out);
-    for (uint32_t i = first; cone && i < first + count; i++)
-        cone->at[i] = (struct cone_vertex){.nearest = 1.0f};
     for (size_t t = 0; t < mesh->triangle_count; t++) {
         const uint32_t *v = mesh->indices + 3 * t;
         bool mine[3] = {v[0] - first < count, v[1] - first < count, v[2] - first < count};
@@ -81,17 +93,16 @@ static inline void normals_of(struct mesh_pass *pass, int k, struct cone *cone)
                 out[v[c]] = ao_vec3_add(out[v[c]], ao_mesh_corner_share(&terms, c, &angles[c]));
         if (!cone)
             continue;
-        struct ao_vec3 u = ao_dvec3_narrow(ao_dvec3_scale(terms.n, terms.scale));
         uint64_t h0 = vertex_hash(v[0]), h1 = vertex_hash(v[1]), h2 = vertex_hash(v[2]);
         uint64_t links[3] = {h1 - h2, h2 - h0, h0 - h1};   /* next less previous, at each corner */
         for (int c = 0; c < 3; c++)
             if (mine[c])
-                gather_corner(&cone->at[v[c]], t, u, angles[c], links[c]);
+                gather_corner(&cone->at[v[c]], angles[c], links[c]);
     }
     size_t marked = 0;
     for (uint32_t i = first; i < first + count; i++) {
         if (cone)
-            marked += cone->marked[i] = needs_sides(cone, i);
+            marked += cone->marked[i] = needs_sides(cone, i, out[i]);
         out[i] = ao_mesh_unit(out[i].x, out[i].y, out[i].z);
     }
     pass->counts[k] = marked;

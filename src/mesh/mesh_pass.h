@@ -48,15 +48,13 @@ struct mesh_pass {
     struct crease *crease;              /* the crease passes' arrays */
 };
 
-/* What a normals pass gathers at a vertex for the crease angle: the first of its triangles' unit
- * normals (f), the least dot product of the others with it, the sum of its corners' angles, the
- * sum of a hash of each corner's next neighbour less one of its previous neighbour, and its first
- * and last triangles (32 bits: a mesh with a crease has fewer than 2^32 corners). */
+/* What a normals pass gathers at a vertex for the crease angle, in 16 bytes (allocated zero): the
+ * sum of its corners' angles (W); 4 less the least of them (0 until a corner comes: 4 > pi, so
+ * that the least is a maximum, kept without a branch); and the sum of a hash of each corner's next
+ * neighbour less one of its previous neighbour. */
 struct cone_vertex {
-    float first[3], nearest;
-    double angle_sum;
+    float angle_sum, four_less_narrowest;
     uint64_t link;
-    uint32_t from, to;
 };
 
 /* The check a normals pass makes for the crease angle, when asked: per vertex what it gathers, and

@@ -85,11 +85,6 @@ static inline struct ao_vec3 hemisphere(const struct ao_basis *f, float u1, floa
     return ao_basis_to_world(f, r * c, r * s, z);
 }
 
-struct ao_vec3 ao_sample_hemisphere(const struct ao_basis *f, float u1, float u2)
-{
-    return hemisphere(f, u1, u2);
-}
-
 float ao_hemisphere_pdf(struct ao_vec3 n, struct ao_vec3 w)
 {
     return ao_vec3_dot(n, w) > 0.0f ? 1.0f / (2.0f * PI) : 0.0f;
@@ -107,11 +102,6 @@ static inline struct ao_vec3 cosine(const struct ao_basis *f, float u1, float u2
     float c, s;
     cos_sin_2pi(u2, &c, &s);
     return ao_basis_to_world(f, r * c, r * s, z);
-}
-
-struct ao_vec3 ao_sample_cosine(const struct ao_basis *f, float u1, float u2)
-{
-    return cosine(f, u1, u2);
 }
 
 float ao_cosine_pdf(struct ao_vec3 n, struct ao_vec3 w)

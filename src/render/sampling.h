@@ -19,17 +19,12 @@ struct ao_vec3 ao_sample_uniform_sphere(float u1, float u2);
 /* Density of ao_sample_uniform_sphere: 1/4pi everywhere. */
 float ao_uniform_sphere_pdf(void);
 
-/* Uniform direction on the hemisphere about f->n. */
-struct ao_vec3 ao_sample_hemisphere(const struct ao_basis *f, float u1, float u2);
-
-/* Density of ao_sample_hemisphere at w: 1/2pi above the surface, 0 below. */
+/* Density of hemisphere sampling (uniform about the normal n) at w: 1/2pi above the surface, 0
+ * below. */
 float ao_hemisphere_pdf(struct ao_vec3 n, struct ao_vec3 w);
 
-/* Cosine-weighted direction about f->n: normalize(n + uniform sphere sample), evaluated in closed
- * form so that it has no degenerate case. */
-struct ao_vec3 ao_sample_cosine(const struct ao_basis *f, float u1, float u2);
-
-/* Density of ao_sample_cosine at w: max(0, n.w)/pi. */
+/* Density of cosine-weighted sampling about the normal n (normalize(n + a uniform sphere sample),
+ * evaluated in closed form so that it has no degenerate case) at w: max(0, n.w)/pi. */
 float ao_cosine_pdf(struct ao_vec3 n, struct ao_vec3 w);
 
 /* Draws n directions of the given mode, the k-th about the unit normal (nx, ny, nz)[k] from

@@ -14,6 +14,7 @@
 #include <string.h>
 
 #include "mesh_fixture.h"
+#include "mesh_pass.h"
 
 /* A bumpy grid of 2 n^2 triangles whose vertices are numbered in a shuffled order, so that every
  * part of a parallel normals pass meets triangles that it shares with the others. */
@@ -293,6 +294,95 @@ static void test_crease_fans_without_a_shared_edge(void **state)
     ao_mesh_finish(&mesh);
 }
 
+/* A copy of mesh's positions and triangles, without normals. */
+static void copy_without_normals(struct ao_mesh *copy, const struct ao_mesh *mesh)
+{
+    *copy = (struct ao_mesh){.vertex_count = mesh->vertex_count, .triangle_count = mesh->triangle_count};
+    copy->positions = malloc(mesh->vertex_count * sizeof *copy->positions);
+    copy->indices = malloc(3 * mesh->triangle_count * sizeof *copy->indices);
+    assert_non_null(copy->positions);
+    assert_non_null(copy->indices);
+    memcpy(copy->positions, mesh->positions, mesh->vertex_count * sizeof *copy->positions);
+    memcpy(copy->indices, mesh->indices, 3 * mesh->triangle_count * sizeof *copy->indices);
+}
+
+/* Mesh's normals at crease degrees with every vertex that has a triangle looked at edge by edge:
+ * the normals pass, then the crease passes with all its vertices marked (none skipped by the
+ * cone's certificate). */
+static void complete_marking_all(struct ao_mesh *mesh, double crease)
+{
+    const double degree = 3.14159265358979323846 / 180.0;
+    size_t n = mesh->vertex_count, marked = 0;
+    struct cone cone = {.cos_half = cos(crease * degree / 2.0), .at = calloc(n, sizeof *cone.at), .marked = malloc(n)};
+    mesh->normals = malloc(n * sizeof *mesh->normals);
+    assert_non_null(cone.at);
+    assert_non_null(cone.marked);
+    assert_non_null(mesh->normals);
+    ao_mesh_angle_weighted_normals(mesh, mesh->normals, 0, &cone);
+    for (size_t v = 0; v < n; v++)
+        marked += cone.marked[v] = cone.at[v].angle_sum > 0;
+    struct ao_budget budget = {.limit = AO_BUDGET_LEAST};
+    assert_true(ao_mesh_split_creases(mesh, "marked", &cone, marked, cos(crease * degree), &budget));
+    free(cone.at);
+    free(cone.marked);
+}
+
+/* The cone's certificate only saves work: at every crease angle tried, the normals made with it
+ * are, bit for bit, those made looking at every vertex edge by edge (the same vertices, triangles
+ * and normals), on a grid whose heights are jittered so that its folds take every angle near each
+ * crease tried, and on the bunny; and on the grid made gentle (its heights a tenth, every
+ * triangle's normal within 8 degrees of the vertical) it settles every vertex at once but those on
+ * its border (open fans). */
+static void test_crease_certificate_only_saves_work(void **state)
+{
+    (void)state;
+    struct ao_mesh grid, bunny;
+    shuffled_grid(&grid, 40);
+    uint64_t seed = 777;
+    for (size_t v = 0; v < grid.vertex_count; v++) {
+        seed = seed * 6364136223846793005u + 1442695040888963407u;
+        grid.positions[v].z += (float)((double)(seed >> 11) / 9007199254740992.0 - 0.5);
+    }
+    char path[4200];
+    snprintf(path, sizeof path, "%s/assets/bunny.obj", getenv("AO_SOURCE_ROOT"));
+    load_at_crease(&bunny, path, 0.0);
+    const struct ao_mesh *meshes[2] = {&grid, &bunny};
+    const double creases[] = {2.0, 10.0, 25.0, AO_MESH_CREASE_DEFAULT, 70.0, 120.0, 179.0};
+    for (int m = 0; m < 2; m++)
+        for (size_t c = 0; c < sizeof creases / sizeof *creases; c++) {
+            struct ao_mesh fast, all;
+            struct ao_budget budget = {.limit = AO_BUDGET_LEAST};
+            copy_without_normals(&fast, meshes[m]);
+            copy_without_normals(&all, meshes[m]);
+            assert_true(ao_mesh_complete_normals(&fast, "fast", creases[c], &budget));
+            complete_marking_all(&all, creases[c]);
+            assert_int_equal(fast.vertex_count, all.vertex_count);
+            assert_memory_equal(fast.indices, all.indices, 3 * all.triangle_count * sizeof *all.indices);
+            assert_memory_equal(fast.normals, all.normals, all.vertex_count * sizeof *all.normals);
+            ao_mesh_finish(&fast);
+            ao_mesh_finish(&all);
+        }
+    ao_mesh_finish(&grid);
+    ao_mesh_finish(&bunny);
+
+    shuffled_grid(&grid, 40);
+    size_t n = grid.vertex_count;
+    for (size_t v = 0; v < n; v++)
+        grid.positions[v].z *= 0.1f;
+    struct cone cone = {.cos_half = cos(AO_MESH_CREASE_DEFAULT / 2.0 * 3.14159265358979323846 / 180.0),
+                        .at = calloc(n, sizeof *cone.at), .marked = malloc(n)};
+    struct ao_vec3 *normals = malloc(n * sizeof *normals);
+    assert_non_null(cone.at);
+    assert_non_null(cone.marked);
+    assert_non_null(normals);
+    size_t marked = ao_mesh_angle_weighted_normals(&grid, normals, 0, &cone);
+    assert_int_equal(marked, 4 * 40);
+    free(cone.at);
+    free(cone.marked);
+    free(normals);
+    ao_mesh_finish(&grid);
+}
+
 /* Normals given as NaN, infinite or zero are made as if not given (counted, and noted with the
  * count by the model): an OBJ's from its triangle (smooth up to the crease angle), a glTF's flat. */
 static void test_invalid_normals(void **state)
@@ -378,4 +468,5 @@ MESH_FIXTURE_MAIN("test_mesh", cmocka_unit_test(test_degenerate_counted), cmocka
                                cmocka_unit_test(test_crease_keeps_a_smooth_mesh),
                                cmocka_unit_test(test_crease_many_triangles_at_a_vertex),
                                cmocka_unit_test(test_crease_fans_without_a_shared_edge),
+                               cmocka_unit_test(test_crease_certificate_only_saves_work),
                                cmocka_unit_test(test_invalid_normals), cmocka_unit_test(test_bunny))
