@@ -102,7 +102,7 @@ static const char usage[] =
     "  -o, --output FILE     .png (displayed image), .pfm or .exr (linear float);\n"
     "                        default aoview.png with --headless\n"
     "  --spp N               total AO samples per pixel (default 256)\n"
-    "  --spppp N|auto        AO samples per pixel per pass; auto: 1, 8, then doubling\n"
+    "  --spppp N|auto        AO samples per pixel per pass; auto: 8, then doubling\n"
     "                        to about 2^22 samples a pass (at least 8), 8 per eye ray\n"
     "                        (default auto)\n"
     "  --adaptive on|off     samples go where the estimated error is (default on)\n"

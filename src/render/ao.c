@@ -23,12 +23,10 @@ static const uint64_t EYE_STREAM = UINT64_MAX - 1, AO_STREAM = UINT64_MAX;
 /* The pass slot of a stream for the given half of the passes. Random numbers are independent in
  * any split, so both halves share one stream and its numbering; an Owen-scrambled Sobol sequence
  * split by parity would leave each half on its own part of the square, so the odd half draws from
- * a second, independently scrambled sequence and the two halves are independent estimates. Half 2
- * is the even half's first sample under auto passes (pass.c), from a third sequence, so that the
- * even half's own sequence is taken in aligned blocks from its start. */
+ * a second, independently scrambled sequence and the two halves are independent estimates. */
 static uint64_t stream_for_half(const struct ao_context *ctx, uint64_t stream, int half)
 {
-    return ctx->sequence == AO_SEQUENCE_SOBOL && half ? stream - 2 * (uint64_t)half : stream;
+    return ctx->sequence == AO_SEQUENCE_SOBOL && half ? stream - 2 : stream;
 }
 
 /* The unit vector along v, or zero when v is zero (or not finite). */

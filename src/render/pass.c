@@ -9,12 +9,11 @@
 #include "sum.h"
 #include "text.h"
 
-/* --spppp auto: the first pass after a restart takes one sample per pixel, so that the first
- * frame comes at once; then each pass of a half (even, odd) takes AUTO_PER_RAY samples, then
- * doubles what that half's sequence has given (ao_tile_work_of), up to about AUTO_SAMPLES samples
- * over the pixels it traces (8 spp a pass at 640x480, 128 at 160x120) but never less than one
- * round, in rounds of one eye ray with AUTO_PER_RAY AO samples; both chosen by time to 1 % and
- * 0.5 % RMSE (docs/adaptive.md, docs/estimator.md). The schedule depends on samples, not on
+/* --spppp auto: each pass of a half (even, odd) takes AUTO_PER_RAY samples, then doubles what that
+ * half's sequence has given (ao_tile_work_of), up to about AUTO_SAMPLES samples over the pixels it
+ * traces (8 spp a pass at 640x480, 128 at 160x120) but never less than one round, in rounds of one
+ * eye ray with AUTO_PER_RAY AO samples; both chosen by time to 1 % and 0.5 % RMSE
+ * (docs/adaptive.md, docs/estimator.md). The schedule depends on samples, not on
  * seconds, so that the image stays a function of the seed and settings alone. */
 enum { AUTO_SAMPLES = 1 << 22, AUTO_PER_RAY = 8 };
 
@@ -89,9 +88,9 @@ struct ao_tile ao_pass_tile_rect(const struct ao_run *r, int t)
     return ao_tile_rect(r->width, r->height, t);
 }
 
-struct ao_tile_work ao_pass_tile_work(const struct ao_run *r, int t, uint32_t *next)
+struct ao_tile_work ao_pass_tile_work(const struct ao_run *r, int t)
 {
-    return ao_tile_work_of(&r->tiles[t], &r->pass.tile_pass, next);
+    return ao_tile_work_of(&r->tiles[t], &r->pass.tile_pass);
 }
 
 /* Stamps tile t's change and resolves the tile into the frame begun, if any. */
@@ -102,11 +101,10 @@ static void changed(struct ao_run *r, int t, struct ao_tile rect)
         ao_accum_resolve_rect(&r->accum, rect.x0, rect.y0, rect.x1, rect.y1, r->frame->rgb);
 }
 
-void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, uint32_t next,
-                      const struct ao_vec3 *sums)
+void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, const struct ao_vec3 *sums)
 {
     struct ao_tile rect = ao_pass_tile_rect(r, t);
-    ao_tile_add(&r->tiles[t], &r->accum, r->width, rect, work, next, sums);
+    ao_tile_add(&r->tiles[t], &r->accum, r->width, rect, work, sums);
     changed(r, t, rect);
 }
 
@@ -121,14 +119,13 @@ void ao_pass_render_tile(struct ao_run *r, int n, uint64_t *eye, uint64_t *shado
 {
     int t = r->pass.work[n];
     struct ao_tile rect = ao_pass_tile_rect(r, t);
-    uint32_t next;
-    struct ao_tile_work work = ao_pass_tile_work(r, t, &next);
+    struct ao_tile_work work = ao_pass_tile_work(r, t);
     struct ao_vec3 sums[AO_TILE_PIXELS];
     double start = ao_phases_clock();
     if (ao_estimate_tile(&r->pass.ctx, &rect, &work, sums, eye, shadow)) { /* else cut: the pass is aborted */
         double traced = ao_phases_clock();
         ao_phases_add(AO_PHASE_TRACE, traced - start);
-        ao_pass_add_tile(r, t, &work, next, sums);
+        ao_pass_add_tile(r, t, &work, sums);
         ao_phases_add(AO_PHASE_ADD, ao_phases_clock() - traced);
     }
 }
@@ -376,7 +373,7 @@ static uint32_t largest_share(const struct ao_run *r)
     struct ao_tile_pass uncapped = r->pass.tile_pass;
     uncapped.target_spp = UINT32_MAX;
     for (int n = 0; n < r->pass.lanes[r->config.threads - 1].end; n++) {
-        struct ao_tile_work w = ao_tile_work_of(&r->tiles[r->pass.work[n]], &uncapped, NULL);
+        struct ao_tile_work w = ao_tile_work_of(&r->tiles[r->pass.work[n]], &uncapped);
         uint32_t samples = (uint32_t)(w.rounds * w.count);
         most = samples > most ? samples : most;
     }

@@ -165,16 +165,13 @@ bool ao_pass_aborted(const struct ao_run *r);
 /* The pixels of tile t, clipped to the image. */
 struct ao_tile ao_pass_tile_rect(const struct ao_run *r, int t);
 
-/* The part of its pixels' streams tile t traces in this pass; *next (unless NULL) gets the half's
- * next sample number after it. */
-struct ao_tile_work ao_pass_tile_work(const struct ao_run *r, int t, uint32_t *next);
+/* The part of its pixels' streams tile t traces in this pass. */
+struct ao_tile_work ao_pass_tile_work(const struct ao_run *r, int t);
 
-/* Adds tile t's sums of one pass (the work it was given, after which its half's next sample is
- * `next`) to the accumulation and brings its state up to date, stamped for ao_pass_resolve (and
- * resolved into the frame begun, while its sums are in this core's cache). The thread that traced
- * it. */
-void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, uint32_t next,
-                      const struct ao_vec3 *sums);
+/* Adds tile t's sums of one pass (the work it was given) to the accumulation and brings its state
+ * up to date, stamped for ao_pass_resolve (and resolved into the frame begun, while its sums are in
+ * this core's cache). The thread that traced it. */
+void ao_pass_add_tile(struct ao_run *r, int t, const struct ao_tile_work *work, const struct ao_vec3 *sums);
 
 /* Clears tile t's sums (a tile not traced in this run, whose sums an earlier run left). Render
  * thread, between passes. */

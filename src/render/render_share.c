@@ -60,9 +60,8 @@ static void add_entries(struct shared *st, int begin, int end)
     struct ao_run *r = st->run;
     for (int n = begin; n < end; n++) {
         int t = r->pass.work[n];
-        uint32_t next;
-        struct ao_tile_work work = ao_pass_tile_work(r, t, &next);
-        ao_pass_add_tile(r, t, &work, next, st->pass_sums + (size_t)n * AO_TILE * AO_TILE);
+        struct ao_tile_work work = ao_pass_tile_work(r, t);
+        ao_pass_add_tile(r, t, &work, st->pass_sums + (size_t)n * AO_TILE * AO_TILE);
     }
 }
 
@@ -107,7 +106,7 @@ static int lend_entries(void *renderer, int most, int *first, int *tiles, struct
     *first = (int)(back - count);
     for (uint32_t k = 0; k < count; k++) {
         tiles[k] = st->run->pass.work[*first + (int)k];
-        works[k] = ao_pass_tile_work(st->run, tiles[k], NULL);
+        works[k] = ao_pass_tile_work(st->run, tiles[k]);
     }
     return (int)count;
 }

@@ -48,55 +48,48 @@ bool ao_tile_wanted(const struct ao_tile_state *ts, int pixels, uint32_t target_
     return (gain > 0.0 && gain >= SKIP_BELOW * fastest) || (uint64_t)spp * RECHECK < busiest;
 }
 
-struct ao_tile_work ao_tile_work_of(const struct ao_tile_state *ts, const struct ao_tile_pass *p, uint32_t *next)
+struct ao_tile_work ao_tile_work_of(const struct ao_tile_state *ts, const struct ao_tile_pass *p)
 {
     int half = (int)(ts->passes & 1);
     uint32_t spp = ao_tile_spp(ts), left = p->target_spp - spp;
     int samples = (uint32_t)p->samples < left ? p->samples : (int)left;
-    uint32_t start = ts->next[half]; /* the half's next sample number */
-    bool first = p->per_ray && ts->passes == 0;
+    uint32_t start = ts->spp[half]; /* the half's next sample number */
     struct ao_tile_work w = {.half = half, .rounds = 1, .count = samples};
     if (p->per_ray) {
-        /* Auto passes: the first pass takes one sample, so that the first frame comes at once;
-         * after it each pass of a half takes as many samples as the half's sequence has given
-         * (per_ray at first): 1, 8, 8, 8, 8, 16, 16, 32, ... With Sobol numbers that first sample
-         * comes from a sequence of its own (half 2 in ao.c), so each later pass of a half, and each
-         * eye ray's per_ray samples within it, is an aligned block of the half's sequence from
-         * its start: a stratified net of directions. (Passes of 1, 1, 1, 1, 2, 2, 4, 4 at first
-         * gave many eye rays few AO samples: docs/adaptive.md.) A tile rejoining late grows by
-         * doubling, its halves balanced. Whole rounds of per_ray samples (the rest in a later
-         * pass), or its eye rays would be too few for AA; at least one round however large the
-         * image (a 1920x1080 pass of about 2^22 samples would give 2 per eye ray, where the eye
-         * rays cost more than the AO rays: docs/estimator.md). */
+        /* Auto passes: each pass of a half takes as many samples as the half's sequence has given
+         * (per_ray at first): 8, 8, 8, 8, 16, 16, 32, ... With Sobol numbers each pass of a half,
+         * and each eye ray's per_ray samples within it, is then an aligned block of the half's
+         * sequence from its start: a stratified net of directions. (A first pass of one sample,
+         * from a sequence of its own, took 3 % more rays to 1 % RMSE: docs/adaptive.md; passes of
+         * 1, 1, 1, 1, 2, 2, 4, 4 at first gave many eye rays few AO samples.) A tile rejoining late
+         * grows by doubling, its halves balanced. Whole rounds of per_ray samples (the rest in a
+         * later pass), or its eye rays would be too few for AA; at least one round however large
+         * the image (a 1920x1080 pass of about 2^22 samples would give 2 per eye ray, where the
+         * eye rays cost more than the AO rays: docs/estimator.md). */
         int most = p->samples > p->per_ray ? p->samples : p->per_ray; /* at least a round: eye rays cost */
         samples = most < (int)left ? most : (int)left;
-        uint32_t grow = first ? 1 : start ? start : (uint32_t)p->per_ray;
+        uint32_t grow = start ? start : (uint32_t)p->per_ray;
         samples = (uint32_t)samples <= grow ? samples : (int)grow;
         if (samples > p->per_ray)
             w.rounds = samples / p->per_ray, w.count = p->per_ray;
         else
             w.count = samples;
-        if (first && p->sobol)
-            w.half = 2;
     }
     /* Random streams are numbered since the restart; Sobol ones within the half (see ao.h). */
-    w.first_ray = w.half == 2 ? 0 : p->sobol ? ts->rays[half] : ts->rays[0] + ts->rays[1];
-    w.first_sample = w.half == 2 ? 0 : p->sobol ? start : spp;
-    if (next) /* the first sample is outside the half's sequence (or, random, not counted in it) */
-        *next = first ? start : start + (uint32_t)(w.rounds * w.count);
+    w.first_ray = p->sobol ? ts->rays[half] : ts->rays[0] + ts->rays[1];
+    w.first_sample = p->sobol ? start : spp;
     return w;
 }
 
 void ao_tile_add(struct ao_tile_state *ts, struct ao_accum *accum, int width, struct ao_tile rect,
-                 const struct ao_tile_work *work, uint32_t next, const struct ao_vec3 *sums)
+                 const struct ao_tile_work *work, const struct ao_vec3 *sums)
 {
     uint32_t samples = (uint32_t)(work->rounds * work->count);
-    int half = work->half & 1; /* half 2 belongs to the even half */
+    int half = work->half;
     if (ts->passes++ == 0) /* a run clears its sums tile by tile, as each is first traced */
         ao_accum_clear(accum, rect.x0, rect.y0, rect.x1, rect.y1);
-    ts->rays[half] += work->half == 2 ? 0u : (uint32_t)work->rounds;
+    ts->rays[half] += (uint32_t)work->rounds;
     ts->spp[half] += samples;
-    ts->next[half] = next;
     /* Every pixel of a tile has the even and odd sample counts n_a and n_b of the tile. */
     double n_a = ts->spp[0], n_b = ts->spp[1], total = 0.0, squares = 0.0;
     for (int j = rect.y0; j < rect.y1; j++)

@@ -22,8 +22,7 @@ struct ao_tile {
 /* Which part of its pixels' random streams a tile traces in one pass: `rounds` eye rays per pixel
  * (numbered from first_ray), each with `count` AO samples (numbered on from first_sample). `half`
  * is the pass's half of the accumulation (0 even, 1 odd); with Sobol numbers each half has streams
- * of its own, numbered within the half, so that the halves are independent estimates (2: streams
- * of a third sequence, for a sample of the even half outside its own sequence). */
+ * of its own, numbered within the half, so that the halves are independent estimates. */
 struct ao_tile_work {
     uint64_t first_ray, first_sample;
     int rounds, count, half;
@@ -33,7 +32,6 @@ struct ao_tile_work {
 struct ao_tile_state {
     uint32_t passes;
     uint32_t rays[2], spp[2];            /* eye rays and AO samples per pixel, even and odd passes */
-    uint32_t next[2];                    /* the next sample number of each half (auto passes skip some) */
     double variance;                     /* over its pixels, the sum of their estimated variances */
     double mean;                         /* over its pixels, the sum of their averages */
 };
@@ -65,13 +63,12 @@ double ao_tile_gain(const struct ao_tile_state *ts, int pixels);
 bool ao_tile_wanted(const struct ao_tile_state *ts, int pixels, uint32_t target_spp, bool adaptive,
                     uint32_t busiest, double fastest);
 
-/* The part of its pixels' streams tile ts traces in pass p; *next (unless NULL) gets the half's
- * next sample number after it. */
-struct ao_tile_work ao_tile_work_of(const struct ao_tile_state *ts, const struct ao_tile_pass *p, uint32_t *next);
+/* The part of its pixels' streams tile ts traces in pass p. */
+struct ao_tile_work ao_tile_work_of(const struct ao_tile_state *ts, const struct ao_tile_pass *p);
 
-/* Adds the sums of one pass over tile ts at rect (the work it was given, after which its half's
- * next sample is `next`) to accum, an image `width` pixels wide, and updates its error estimate. */
+/* Adds the sums of one pass over tile ts at rect (the work it was given) to accum, an image
+ * `width` pixels wide, and updates its error estimate. */
 void ao_tile_add(struct ao_tile_state *ts, struct ao_accum *accum, int width, struct ao_tile rect,
-                 const struct ao_tile_work *work, uint32_t next, const struct ao_vec3 *sums);
+                 const struct ao_tile_work *work, const struct ao_vec3 *sums);
 
 #endif

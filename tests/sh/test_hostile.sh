@@ -815,7 +815,7 @@ front 1 "--stats: cannot write stats.fifo: a FIFO that no process reads" "" --st
 rm -f stats.fifo
 # stderr closed: --stats must not become descriptor 2, or the "wrote" line lands in the CSV
 rm -f closed.csv closed.pfm
-"$bin" --headless --size 16x12 --spp 2 --stats closed.csv -o closed.pfm "$root/assets/scenes/spheres.scene" 2>&-
+"$bin" --headless --size 16x12 --spp 16 --stats closed.csv -o closed.pfm "$root/assets/scenes/spheres.scene" 2>&-
 status=$?
 [ "$status" = 0 ] || fail "stderr closed: exit status $status"
 grep -v '^[0-9a-z_,.]*$' closed.csv && fail "stderr closed: --stats holds more than CSV"
