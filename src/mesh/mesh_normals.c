@@ -87,17 +87,17 @@ static inline void normals_of(struct mesh_pass *pass, int k, struct cone *cone)
         struct triangle_terms terms;
         if (!(mine[0] | mine[1] | mine[2]) || !ao_mesh_triangle_terms(mesh, v, &terms))
             continue;
-        double angles[3] = {0.0, 0.0, 0.0};   /* set where mine[c], read only there */
-        for (int c = 0; c < 3; c++)
-            if (mine[c])
-                out[v[c]] = ao_vec3_add(out[v[c]], ao_mesh_corner_share(&terms, c, &angles[c]));
-        if (!cone)
-            continue;
-        uint64_t h0 = vertex_hash(v[0]), h1 = vertex_hash(v[1]), h2 = vertex_hash(v[2]);
-        uint64_t links[3] = {h1 - h2, h2 - h0, h0 - h1};   /* next less previous, at each corner */
-        for (int c = 0; c < 3; c++)
-            if (mine[c])
-                gather_corner(&cone->at[v[c]], angles[c], links[c]);
+        uint64_t h[3] = {0, 0, 0};
+        if (cone)
+            h[0] = vertex_hash(v[0]), h[1] = vertex_hash(v[1]), h[2] = vertex_hash(v[2]);
+        for (int c = 0; c < 3; c++) {
+            if (!mine[c])
+                continue;
+            double angle;
+            out[v[c]] = ao_vec3_add(out[v[c]], ao_mesh_corner_share(&terms, c, &angle));
+            if (cone)   /* the link: the next neighbour's hash less the previous one's */
+                gather_corner(&cone->at[v[c]], angle, h[(c + 1) % 3] - h[(c + 2) % 3]);
+        }
     }
     size_t marked = 0;
     for (uint32_t i = first; i < first + count; i++) {
