@@ -42,10 +42,9 @@ static inline void gather_corner(struct cone_vertex *at, double angle, uint64_t 
  * at least 2 pi.
  * (1) from the sums alone: for m the direction of S = sum a_j u_j and W = sum a_j,
  * sum a_j (1 - u_j . m) = W - |S|, each term at least 0, so 1 - u_j . m <= (W - |S|) / min a_j for
- * every j. The float figures are bounded: with k corners, k + 1 <= K = 1.02 W / min a_j + 2 while
- * every j. The float figures are bounded: min a_j from below by 4 less its float, less 2^-21 (the
- * rounding of floats near 4 is at most 2^-23), and marked where that is under 2^-126 (a corner
- * under about 5e-7 radians); with k corners, k + 1 <= K = 1.02 W / min a_j + 2 while
+ * every j. The float figures are bounded: min a_j from below by 4 less the float kept for
+ * 4 - min a_j, less 2^-21 (the rounding of floats near 4 is at most 2^-23), and marked where that
+ * is under 2^-126 (a corner under about 5e-7 radians); with k corners, k + 1 <= K = 1.02 W / min a_j + 2 while
  * K 2^-24 <= 0.01 (else marked); W's float sum lies within a factor 1 + K 2^-23 of W, S's (its
  * shares and sums rounded) within 4 K 2^-24 W of S; 1e-6 covers the dot products' rounding in
  * sides_of. A vertex without triangles is one side; one given a normal is never split. */
