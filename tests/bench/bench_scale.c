@@ -9,17 +9,20 @@
  * 4 samples, peak RSS (getrusage) and peak RSS per triangle. Asserts nothing; docs/formats.md has
  * the figures.
  * With --builds, the binary PLY alone under each build, interleaved per round: `default` (what
- * aoview does with its defaults: under the machine's default budget, a big scene LOW first, MEDIUM
- * built beside it and switched to between passes, where the budget holds both), then medium,
- * compact and low alone; it prints the medians of first image, Mrays/s and peak RSS as
- * above, and of the time to 1 % estimated error at GOAL_WIDTH x GOAL_HEIGHT with aoview's defaults
- * (auto passes, adaptive sampling), from the start of loading, in a process of its own.
+ * headless aoview does with its defaults under the machine's default budget: where the budget holds
+ * both BVHs a big scene's one-pass run, the first image, on LOW alone, a longer one, the time to 1 %,
+ * on MEDIUM alone), `progressive` (the window's way: LOW first, MEDIUM built beside it and switched
+ * to between passes), then medium, compact and low alone; it prints the medians of first image,
+ * Mrays/s (after the first image, on the same tracer) and peak RSS as above, and of the time to 1 %
+ * estimated error at GOAL_WIDTH x GOAL_HEIGHT with aoview's defaults (Sobol numbers, auto passes,
+ * adaptive sampling), from the start of loading, in a process of its own.
  * Run: build/tests/bench_scale [--rounds N] [--reuse] [--bvh B] [--builds] DIR   (writes about 1 GB
  *      into DIR; --reuse keeps files written by an earlier run; --bvh as aoview's, low-compact,
- *      progressive (auto under a budget that holds everything) or default (aoview's defaults);
+ *      progressive (auto under a budget that holds everything, the window's way) or default
+ *      (headless aoview's defaults);
  *      default medium)
- *      build/tests/bench_scale [--bvh B] [--goal] --one FILE   (one measurement, one line: what each
- *      round runs; --goal: the seconds to 1 % alone) */
+ *      build/tests/bench_scale [--bvh B] [--goal [--error E]] --one FILE   (one measurement, one line:
+ *      what each round runs; --goal: the seconds to 1 % alone, or to E: a relative error, as 0.03) */
 #include <errno.h>
 #include <math.h>
 #include <stdint.h>
@@ -43,16 +46,17 @@
 enum { RINGS = 1581 };
 enum { WIDTH = 640, HEIGHT = 480, RATE_SPPPP = 4, RATE_PASSES = 4, MAX_ROUNDS = 21, FILES = 4, PHASES = 8 };
 enum { GOAL_WIDTH = 1280, GOAL_HEIGHT = 960, GOAL_SPP = 100000 };
-static const double GOAL_ERROR = 0.01;
 
 static const char *const names[FILES] = {"sphere.ply", "sphere_ascii.ply", "sphere.obj", "sphere.glb"};
 /* --bvh's names, in modes.h's order, then PROGRESSIVE (AUTO under a budget that holds everything:
- * LOW first where the scene is big) and DEFAULT (aoview's defaults: AUTO under the machine's default
- * budget), and the one asked for. */
-enum { PROGRESSIVE = AO_BVH_LOW_COMPACT + 1, DEFAULT, BUILDS = 4 };
+ * LOW first where the scene is big) and DEFAULT (headless aoview's defaults: AUTO under the
+ * machine's default budget, progressive only for a one-pass run), and the one asked for. */
+enum { PROGRESSIVE = AO_BVH_LOW_COMPACT + 1, DEFAULT, BUILDS = 5 };
 static const char *const bvh_names[] = {"auto", "medium", "compact", "low", "low-compact", "progressive", "default"};
 static int bvh = AO_BVH_MEDIUM;
-static const int builds[BUILDS] = {DEFAULT, AO_BVH_MEDIUM, AO_BVH_COMPACT, AO_BVH_LOW};
+/* The estimated error --goal runs to: --error's, or 1 %. */
+static double goal_error = 0.01;
+static const int builds[BUILDS] = {DEFAULT, PROGRESSIVE, AO_BVH_MEDIUM, AO_BVH_COMPACT, AO_BVH_LOW};
 
 static const char *const phase_names[PHASES] = {"load s", "normals s", "build s", "first s", "total s",
                                                 "Mrays/s", "peak MB", "B/tri"};
@@ -115,7 +119,7 @@ static void write_files(const char *dir, const struct bench_mesh *m)
 }
 
 /* One measurement of path in this process; prints the PHASES figures on one line, or with `goal`
- * the seconds from the start of loading to GOAL_ERROR. */
+ * the seconds from the start of loading to goal_error. */
 static int measure(const char *path, bool goal)
 {
     struct ao_scene scene;
@@ -126,23 +130,23 @@ static int measure(const char *path, bool goal)
     if (!ao_scene_load(&scene, path, &options))
         return 1;
     double loaded = bench_now();
-    bool progressive = automatic && scene.progressive;
+    bool progressive = (bvh == PROGRESSIVE || (bvh == DEFAULT && !goal)) && scene.progressive;
     struct ao_tracer *tracer = progressive ? ao_tracer_create_progressive(&scene) : ao_tracer_create(&scene);
     if (!tracer)
         return 1;
     struct ao_tracer *upgrade = progressive ? tracer : NULL;
     double built = bench_now();
     if (goal) {
-        bench_render_until(&scene, tracer, upgrade, GOAL_WIDTH, GOAL_HEIGHT, 0, true, GOAL_SPP, GOAL_ERROR);
+        bench_render_until(&scene, tracer, upgrade, GOAL_WIDTH, GOAL_HEIGHT, 0, true, AO_SEQUENCE_SOBOL, GOAL_SPP, goal_error);
         printf("%.6f\n", bench_now() - start);
         ao_tracer_destroy(tracer);
         ao_scene_finish(&scene);
         return 0;
     }
-    bench_render_until(&scene, tracer, upgrade, WIDTH, HEIGHT, 1, false, 1, 0.0);
+    bench_render_until(&scene, tracer, upgrade, WIDTH, HEIGHT, 1, false, AO_SEQUENCE_SOBOL, 1, 0.0);
     double first = bench_now();
     struct ao_frame_info info = bench_render_until(&scene, tracer, upgrade, WIDTH, HEIGHT, RATE_SPPPP, false,
-                                                   RATE_SPPPP * RATE_PASSES, 0.0);
+                                                   AO_SEQUENCE_SOBOL, RATE_SPPPP * RATE_PASSES, 0.0);
     struct ao_mesh *big = &scene.meshes[0];
     for (size_t m = 1; m < scene.mesh_count; m++)
         big = scene.meshes[m].triangle_count > big->triangle_count ? &scene.meshes[m] : big;
@@ -247,14 +251,16 @@ int main(int argc, char **argv)
             one = true;
         else if (strcmp(argv[first], "--goal") == 0)
             goal = true;
+        else if (strcmp(argv[first], "--error") == 0 && first + 2 < argc)
+            goal_error = atof(argv[++first]);
         else if (strcmp(argv[first], "--builds") == 0)
             by_build = true;
         else
             break;
     }
-    if (first != argc - 1 || rounds < 1 || rounds > MAX_ROUNDS || bvh < 0) {
+    if (first != argc - 1 || rounds < 1 || rounds > MAX_ROUNDS || bvh < 0 || !(goal_error > 0.0)) {
         fprintf(stderr, "usage: bench_scale [--rounds 1..%d] [--reuse] [--bvh auto|medium|compact|low|low-compact|"
-                        "progressive|default] [--builds] DIR | bench_scale [--bvh B] [--goal] --one FILE\n", MAX_ROUNDS);
+                        "progressive|default] [--builds] DIR | bench_scale [--bvh B] [--goal [--error E]] --one FILE\n", MAX_ROUNDS);
         return 2;
     }
     if (one)

@@ -43,19 +43,18 @@ static inline struct ao_tracer *bench_load(const char *path, struct ao_scene *sc
     return tracer;
 }
 
-/* Renders scene at width x height (2 threads, seed 1, cosine, AA, its own camera) in passes of
- * spppp samples until target_spp; the last frame's facts. Exits when the renderer cannot start. */
-/* Renders scene with 2 threads (seed 1, cosine, AA) at width x height, spppp samples a pass (0:
- * auto) and adaptive sampling as asked, until target_spp or the estimated error target_error (0:
- * none), switching to upgrade's better BVH between passes (NULL: none); returns the last frame's
- * facts, or exits. */
+/* Renders scene with 2 threads (seed 1, cosine, AA, its own camera) at width x height, spppp
+ * samples a pass (0: auto), adaptive sampling and sequence as asked (aoview's defaults: 0, true,
+ * Sobol), until target_spp or the estimated error target_error (0: none), switching to upgrade's
+ * better BVH between passes (NULL: none); returns the last frame's facts, or exits. */
 static inline struct ao_frame_info bench_render_until(const struct ao_scene *scene, const struct ao_tracer *tracer,
                                                       struct ao_tracer *upgrade, int width, int height, int spppp,
-                                                      bool adaptive, uint32_t target_spp, double target_error)
+                                                      bool adaptive, enum ao_sequence sequence, uint32_t target_spp,
+                                                      double target_error)
 {
     struct ao_render_config config = {.scene = scene, .tracer = tracer, .upgrade = upgrade, .threads = 2, .seed = 1,
                                       .target_spp = target_spp, .target_error = target_error,
-                                      .ao_distance = scene->ao_distance};
+                                      .ao_distance = scene->ao_distance, .sequence = sequence};
     struct ao_settings settings = {.width = width, .height = height, .sampling = AO_SAMPLING_COSINE, .aa = true,
                                    .spppp = spppp, .adaptive = adaptive, .camera = scene->camera};
     struct ao_render *r = ao_render_create(&config, &settings);
@@ -66,11 +65,11 @@ static inline struct ao_frame_info bench_render_until(const struct ao_scene *sce
     return info;
 }
 
-/* bench_render_until with spppp samples a pass, no adaptive sampling, to target_spp. */
+/* bench_render_until with spppp samples a pass, no adaptive sampling, random numbers, to target_spp. */
 static inline struct ao_frame_info bench_render(const struct ao_scene *scene, const struct ao_tracer *tracer,
                                                 int width, int height, int spppp, uint32_t target_spp)
 {
-    return bench_render_until(scene, tracer, NULL, width, height, spppp, false, target_spp, 0.0);
+    return bench_render_until(scene, tracer, NULL, width, height, spppp, false, AO_SEQUENCE_RANDOM, target_spp, 0.0);
 }
 
 #endif
