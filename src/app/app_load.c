@@ -61,8 +61,12 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
         return AO_EXIT_RUNTIME;
     app->reference_width = width;
     app->reference_height = height;
-    /* A big scene traces a LOW BVH while its MEDIUM one is built, unless two renderers share it. */
-    bool progressive = app->scene.progressive && !opts->compare;
+    /* A big scene traces a LOW BVH first where that is sooner: in the window, whose first image
+     * comes at LOW's time while MEDIUM is built beside (unless two renderers share the tracer), and
+     * in a one-pass headless run, which never starts that build; a longer headless run builds
+     * MEDIUM alone, which ends it sooner (docs/formats.md). */
+    bool one_pass = opts->spp <= ao_render_first_pass_spp(&(struct ao_settings){.spppp = (int)opts->spppp});
+    bool progressive = app->scene.progressive && !opts->compare && (!opts->headless || one_pass);
     if (!(app->tracer = progressive ? ao_tracer_create_progressive(&app->scene) : ao_tracer_create(&app->scene)))
         return AO_EXIT_RUNTIME;
     if (!opts->quiet)

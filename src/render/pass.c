@@ -9,14 +9,6 @@
 #include "sum.h"
 #include "text.h"
 
-/* --spppp auto: each pass of a half (even, odd) takes AUTO_PER_RAY samples, then doubles what that
- * half's sequence has given (ao_tile_work_of), up to about AUTO_SAMPLES samples over the pixels it
- * traces (8 spp a pass at 640x480, 128 at 160x120) but never less than one round, in rounds of one
- * eye ray with AUTO_PER_RAY AO samples; both chosen by time to 1 % and 0.5 % RMSE
- * (docs/adaptive.md, docs/estimator.md). The schedule depends on samples, not on
- * seconds, so that the image stays a function of the seed and settings alone. */
-enum { AUTO_SAMPLES = 1 << 22, AUTO_PER_RAY = 8 };
-
 /* The normals view's picture is final, and its run done, once its estimated error (its
  * anti-aliasing's: each pass's eye rays are jittered) is below this: an RMSE of a fifth of an 8-bit
  * step at the image's mean, which no further pass changes visibly. Without anti-aliasing the error
@@ -360,7 +352,7 @@ static int pass_samples(const struct ao_settings *s, size_t pixels)
     if (s->spppp > 0)
         return s->spppp;
     int cap = 1;
-    while ((size_t)cap * 2 * pixels <= AUTO_SAMPLES)
+    while ((size_t)cap * 2 * pixels <= AO_AUTO_SAMPLES)
         cap *= 2;
     return cap;
 }
@@ -384,7 +376,7 @@ uint32_t ao_pass_prepare(struct ao_run *r, const struct ao_settings *s, uint64_t
 {
     select_tiles(r, s->adaptive);
     r->pass.tile_pass = (struct ao_tile_pass){.target_spp = r->config.target_spp, .samples = pass_samples(s, pixels),
-                                         .per_ray = s->spppp > 0 ? 0 : AUTO_PER_RAY,
+                                         .per_ray = s->spppp > 0 ? 0 : AO_AUTO_PER_RAY,
                                          .sobol = r->pass.ctx.sequence == AO_SEQUENCE_SOBOL};
     return largest_share(r);
 }

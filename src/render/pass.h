@@ -20,6 +20,14 @@
 #include "share.h"
 #include "tile.h"
 
+/* --spppp auto: each pass of a half (even, odd) takes AO_AUTO_PER_RAY samples, then doubles what that
+ * half's sequence has given (ao_tile_work_of), up to about AO_AUTO_SAMPLES samples over the pixels it
+ * traces (8 spp a pass at 640x480, 128 at 160x120) but never less than one round, in rounds of one
+ * eye ray with AO_AUTO_PER_RAY AO samples; both chosen by time to 1 % and 0.5 % RMSE
+ * (docs/adaptive.md, docs/estimator.md). The schedule depends on samples, not on
+ * seconds, so that the image stays a function of the seed and settings alone. */
+enum { AO_AUTO_SAMPLES = 1 << 22, AO_AUTO_PER_RAY = 8 };
+
 /* A thread's share of a pass: the tiles of the pass's work list in tile rows k, k + threads,
  * k + 2 threads, ... for thread k, taken in order from `next`. Each thread keeps the same pixels
  * pass after pass, so their sums stay in its own cache (handed round between threads, they crossed

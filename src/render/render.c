@@ -373,6 +373,11 @@ void ao_render_destroy(struct ao_render *render)
     free(render);
 }
 
+uint32_t ao_render_first_pass_spp(const struct ao_settings *s)
+{
+    return s->spppp > 0 ? (uint32_t)s->spppp : AO_AUTO_PER_RAY;
+}
+
 const struct ao_frame *ao_render_take_frame(struct ao_render *render)
 {
     return ao_frames_take(&render->run.frames);

@@ -18,6 +18,7 @@
 #include "app_fixture.h"
 #include "app_load.h"
 #include "app_report.h"
+#include "tracer.h"
 
 /* A scene of the ground and a mesh read from tri.obj beside it: the path of scene.scene in the
  * scratch folder (a static buffer). */
@@ -160,6 +161,66 @@ static void test_load(void **state)
     assert_int_not_equal(access(stats, F_OK), 0);
 }
 
+/* A binary PLY grid of GRID x GRID squares, 1,051,250 triangles (over 2^20, a big scene for
+ * `--bvh auto`), in the scratch folder; its path (a static buffer). */
+static const char *big_grid(void)
+{
+    enum { GRID = 725, SIDE = GRID + 1 };
+    static char path[8192];
+    snprintf(path, sizeof path, "%s", scratch_path("grid.ply"));
+    FILE *f = fopen(path, "wb");
+    assert_non_null(f);
+    fprintf(f, "ply\nformat binary_little_endian 1.0\nelement vertex %d\nproperty float x\nproperty float y\n"
+               "property float z\nelement face %d\nproperty list uchar int vertex_indices\nend_header\n",
+            SIDE * SIDE, 2 * GRID * GRID);
+    for (int z = 0; z < SIDE; z++)
+        for (int x = 0; x < SIDE; x++) {
+            float v[3] = {(float)x / GRID - 0.5f, 0.0f, (float)z / GRID - 0.5f};
+            assert_int_equal(fwrite(v, sizeof v, 1, f), 1);
+        }
+    for (int z = 0; z < GRID; z++)
+        for (int x = 0; x < GRID; x++) {
+            int32_t a = z * SIDE + x, corners[2][3] = {{a, a + SIDE, a + 1}, {a + 1, a + SIDE, a + SIDE + 1}};
+            for (int t = 0; t < 2; t++) {
+                unsigned char three = 3;
+                assert_int_equal(fwrite(&three, 1, 1, f), 1);
+                assert_int_equal(fwrite(corners[t], sizeof corners[t], 1, f), 1);
+            }
+        }
+    assert_int_equal(fclose(f), 0);
+    return path;
+}
+
+/* A big scene starts on a LOW BVH (the tracer's MEDIUM build still to come, config.upgrade set)
+ * where that is sooner: in the window and in a one-pass headless run (--spp at most the first
+ * pass's samples: --spppp's, or auto passes' 8); a longer headless run builds MEDIUM alone. */
+static void test_big_scene_bvh_by_run(void **state)
+{
+    (void)state;
+    const char *grid = big_grid();
+    static const struct {
+        const char *options;
+        bool low_first;
+    } cases[] = {
+        {"--size 16x12", true},
+        {"--headless --size 16x12 --spp 8", true},
+        {"--headless --size 16x12 --spp 4 --spppp 4", true},
+        {"--headless --size 16x12 --spp 9", false},
+        {"--headless --size 16x12 --spp 8 --spppp 4", false},
+        {"--headless --size 16x12", false},
+    };
+    for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+        struct loaded l = {0};
+        int status = load_line(&l, "aoview --quiet --scene-budget 1G %s %s", cases[k].options, grid);
+        print_message("%s: %s\n", cases[k].options, l.config.upgrade ? "LOW first" : "MEDIUM alone");
+        assert_int_equal(status, 0);
+        assert_true(l.app.scene.progressive);   /* the budget holds both BVHs */
+        assert_int_equal(l.config.upgrade != NULL, cases[k].low_first);
+        assert_int_equal(ao_tracer_upgrading(l.app.tracer), cases[k].low_first);
+        assert_int_equal(ao_app_finish(&l.app, 0), 0);
+    }
+}
+
 /* A scene that is not there, and a --reference of another size: one line each, AO_EXIT_RUNTIME,
  * and ao_app_finish releases what was made. */
 static void test_load_refused(void **state)
@@ -217,6 +278,7 @@ int main(void)
         cmocka_unit_test(test_output_is_a_mesh),
         cmocka_unit_test(test_load),
         cmocka_unit_test(test_load_refused),
+        cmocka_unit_test(test_big_scene_bvh_by_run),
         cmocka_unit_test(test_finish_after_failed_stats),
     };
     return cmocka_run_group_tests(tests, app_fixture_setup, app_fixture_teardown);
