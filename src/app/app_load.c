@@ -65,7 +65,7 @@ int ao_app_load(struct ao_app *app, const struct ao_options *opts, struct ao_ren
      * comes at LOW's time while MEDIUM is built beside (unless two renderers share the tracer), and
      * in a one-pass headless run, which never starts that build; a longer headless run builds
      * MEDIUM alone, which ends it sooner (docs/formats.md). */
-    bool one_pass = opts->spp <= ao_render_first_pass_spp(&(struct ao_settings){.spppp = (int)opts->spppp});
+    bool one_pass = opts->spp <= ao_render_first_pass_spp(opts->spppp);
     bool progressive = app->scene.progressive && !opts->compare && (!opts->headless || one_pass);
     if (!(app->tracer = progressive ? ao_tracer_create_progressive(&app->scene) : ao_tracer_create(&app->scene)))
         return AO_EXIT_RUNTIME;

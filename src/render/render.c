@@ -373,9 +373,9 @@ void ao_render_destroy(struct ao_render *render)
     free(render);
 }
 
-uint32_t ao_render_first_pass_spp(const struct ao_settings *s)
+uint32_t ao_render_first_pass_spp(uint32_t spppp)
 {
-    return s->spppp > 0 ? (uint32_t)s->spppp : AO_AUTO_PER_RAY;
+    return spppp ? spppp : AO_AUTO_PER_RAY;
 }
 
 const struct ao_frame *ao_render_take_frame(struct ao_render *render)

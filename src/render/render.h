@@ -21,9 +21,9 @@ struct ao_render *ao_render_create(const struct ao_render_config *config,
 /* Stops the pass in flight at the next tile, joins every thread, frees everything; accepts NULL. */
 void ao_render_destroy(struct ao_render *render);
 
-/* The samples a pixel takes in a run's first pass under settings s: its spppp, or auto passes'
- * first round; a run to no more samples a pixel is one pass. Any thread. */
-uint32_t ao_render_first_pass_spp(const struct ao_settings *s);
+/* The samples a pixel takes in a run's first pass with samples per pixel per pass spppp (0: auto
+ * passes, their first round); a run to no more samples a pixel is one pass. Any thread. */
+uint32_t ao_render_first_pass_spp(uint32_t spppp);
 
 /* Copies the current settings into *out. Any thread. */
 void ao_render_get_settings(struct ao_render *render, struct ao_settings *out);

@@ -137,7 +137,8 @@ static int measure(const char *path, bool goal)
     struct ao_tracer *upgrade = progressive ? tracer : NULL;
     double built = bench_now();
     if (goal) {
-        bench_render_until(&scene, tracer, upgrade, GOAL_WIDTH, GOAL_HEIGHT, 0, true, AO_SEQUENCE_SOBOL, GOAL_SPP, goal_error);
+        bench_render_until(&scene, tracer, upgrade, GOAL_WIDTH, GOAL_HEIGHT, 0, true, AO_SEQUENCE_SOBOL, GOAL_SPP,
+                           goal_error);
         printf("%.6f\n", bench_now() - start);
         ao_tracer_destroy(tracer);
         ao_scene_finish(&scene);
@@ -260,7 +261,8 @@ int main(int argc, char **argv)
     }
     if (first != argc - 1 || rounds < 1 || rounds > MAX_ROUNDS || bvh < 0 || !(goal_error > 0.0)) {
         fprintf(stderr, "usage: bench_scale [--rounds 1..%d] [--reuse] [--bvh auto|medium|compact|low|low-compact|"
-                        "progressive|default] [--builds] DIR | bench_scale [--bvh B] [--goal [--error E]] --one FILE\n", MAX_ROUNDS);
+                        "progressive|default] [--builds] DIR | bench_scale [--bvh B] [--goal [--error E]] --one FILE\n",
+                MAX_ROUNDS);
         return 2;
     }
     if (one)
